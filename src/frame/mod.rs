@@ -1,0 +1,244 @@
+//! The native imuprep wire format, version 1 (documented in `docs/frame-format.md`).
+//!
+//! ```text
+//! offset size  field
+//!  0     2     sync word 0xA5 0x5A
+//!  2     1     format version (1)
+//!  3     1     message type (1 descriptor, 2 sample, 3 clean sample)
+//!  4     2     payload length N, u16 little-endian (≤ MAX_PAYLOAD)
+//!  6     4     sequence counter, u32 LE (samples; descriptors carry 0)
+//! 10     2     header check: CRC-16/IBM-3740 of bytes 0..10, LE
+//! 12     N     payload (little-endian)
+//! 12+N   4     CRC-32C (Castagnoli) of bytes 0..12+N, LE
+//! ```
+//!
+//! The header check lets the decoder reject a corrupt length before it waits for a bogus payload;
+//! the trailer protects the whole frame. A recorded log is [`LOG_MAGIC`], a u16 log version, a u16
+//! reserved field, then exactly the frames a serial port carries (starting with a descriptor).
+
+pub mod codec;
+
+use crate::sample::{Sample, flags};
+use bytes::{BufMut, BytesMut};
+use crc::{CRC_16_IBM_3740, CRC_32_ISCSI, Crc};
+
+pub use codec::{DecoderStats, FrameDecoder, FrameEncoder};
+
+/// Two sync bytes that open every frame.
+pub const SYNC: [u8; 2] = [0xA5, 0x5A];
+/// Wire format version carried in every frame.
+pub const VERSION: u8 = 1;
+/// Bytes before the payload.
+pub const HEADER_LEN: usize = 12;
+/// CRC-32C trailer length.
+pub const TRAILER_LEN: usize = 4;
+/// Largest payload any version-1 message has; longer lengths are rejected as corrupt.
+pub const MAX_PAYLOAD: usize = 256;
+
+/// Message type: sensor descriptor.
+pub const MSG_DESCRIPTOR: u8 = 1;
+/// Message type: one raw or processed sample.
+pub const MSG_SAMPLE: u8 = 2;
+/// Message type: a sample with the bias estimate and its uncertainty (output of the bias stage).
+pub const MSG_CLEAN_SAMPLE: u8 = 3;
+
+/// Payload sizes per message type.
+pub const DESCRIPTOR_PAYLOAD: usize = 24;
+pub const SAMPLE_PAYLOAD: usize = 40;
+pub const CLEAN_SAMPLE_PAYLOAD: usize = SAMPLE_PAYLOAD + 48;
+
+/// Bytes of one raw sample frame on the wire.
+pub const SAMPLE_FRAME_LEN: usize = HEADER_LEN + SAMPLE_PAYLOAD + TRAILER_LEN;
+
+/// Magic bytes at the start of a recorded log.
+pub const LOG_MAGIC: [u8; 8] = *b"IMUPLOG\0";
+/// Recorded-log container version.
+pub const LOG_VERSION: u16 = 1;
+/// Bytes of the log file header before the first frame.
+pub const LOG_HEADER_LEN: usize = 12;
+
+pub(crate) const CRC16: Crc<u16> = Crc::<u16>::new(&CRC_16_IBM_3740);
+pub(crate) const CRC32C: Crc<u32> = Crc::<u32>::new(&CRC_32_ISCSI);
+
+/// Axis convention of the body frame, as declared by the sensor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AxisConvention {
+    #[default]
+    Unknown,
+    /// x forward, y right, z down.
+    Frd,
+    /// x forward, y left, z up.
+    Flu,
+}
+
+impl AxisConvention {
+    fn to_u8(self) -> u8 {
+        match self {
+            AxisConvention::Unknown => 0,
+            AxisConvention::Frd => 1,
+            AxisConvention::Flu => 2,
+        }
+    }
+    fn from_u8(v: u8) -> Self {
+        match v {
+            1 => AxisConvention::Frd,
+            2 => AxisConvention::Flu,
+            _ => AxisConvention::Unknown,
+        }
+    }
+}
+
+/// What the sensor says about itself: rate, ranges (for saturation detection), axes, identity.
+#[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize)]
+pub struct Descriptor {
+    /// Nominal output rate, Hz (0 = unknown).
+    pub sample_rate_hz: f64,
+    /// Gyro full-scale range, rad/s (0 = unknown: no saturation detection).
+    pub gyro_range_rad_s: f32,
+    /// Accelerometer full-scale range, m/s² (0 = unknown).
+    pub accel_range_m_s2: f32,
+    pub axes: AxisConvention,
+    pub device_id: u32,
+}
+
+/// A decoded message.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Message {
+    Descriptor(Descriptor),
+    Sample(Sample),
+}
+
+fn put_header(buf: &mut BytesMut, msg_type: u8, payload_len: usize, seq: u32) {
+    let start = buf.len();
+    buf.put_slice(&SYNC);
+    buf.put_u8(VERSION);
+    buf.put_u8(msg_type);
+    buf.put_u16_le(payload_len as u16);
+    buf.put_u32_le(seq);
+    let hc = CRC16.checksum(&buf[start..start + 10]);
+    buf.put_u16_le(hc);
+}
+
+fn put_trailer(buf: &mut BytesMut, start: usize) {
+    let c = CRC32C.checksum(&buf[start..]);
+    buf.put_u32_le(c);
+}
+
+/// Append one descriptor frame.
+pub fn encode_descriptor(d: &Descriptor, buf: &mut BytesMut) {
+    buf.reserve(HEADER_LEN + DESCRIPTOR_PAYLOAD + TRAILER_LEN);
+    let start = buf.len();
+    put_header(buf, MSG_DESCRIPTOR, DESCRIPTOR_PAYLOAD, 0);
+    buf.put_f64_le(d.sample_rate_hz);
+    buf.put_f32_le(d.gyro_range_rad_s);
+    buf.put_f32_le(d.accel_range_m_s2);
+    buf.put_u8(d.axes.to_u8());
+    buf.put_bytes(0, 3);
+    buf.put_u32_le(d.device_id);
+    put_trailer(buf, start);
+}
+
+/// Append one sample frame: a clean-sample frame (with bias and its σ) when the bias stage
+/// removed a bias, else a plain sample frame.
+pub fn encode_sample(s: &Sample, buf: &mut BytesMut) {
+    let with_bias = s.flags & flags::BIAS_REMOVED != 0;
+    let (ty, len) = if with_bias {
+        (MSG_CLEAN_SAMPLE, CLEAN_SAMPLE_PAYLOAD)
+    } else {
+        (MSG_SAMPLE, SAMPLE_PAYLOAD)
+    };
+    buf.reserve(HEADER_LEN + len + TRAILER_LEN);
+    let start = buf.len();
+    put_header(buf, ty, len, s.seq);
+    buf.put_u64_le(s.t_ns);
+    for v in s.channels() {
+        buf.put_f32_le(v as f32);
+    }
+    buf.put_f32_le(s.temp_c.map_or(f32::NAN, |t| t as f32));
+    buf.put_u32_le(s.flags);
+    if with_bias {
+        for v in s.bias {
+            buf.put_f32_le(v);
+        }
+        for v in s.bias_sd {
+            buf.put_f32_le(v);
+        }
+    }
+    put_trailer(buf, start);
+}
+
+/// Append the recorded-log file header (magic, version, reserved) and the descriptor frame.
+pub fn encode_log_header(d: &Descriptor, buf: &mut BytesMut) {
+    buf.put_slice(&LOG_MAGIC);
+    buf.put_u16_le(LOG_VERSION);
+    buf.put_u16_le(0);
+    encode_descriptor(d, buf);
+}
+
+/// Why a log file header was refused.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum LogHeaderError {
+    #[error("file is too short to hold a log header ({0} bytes, need {LOG_HEADER_LEN})")]
+    TooShort(usize),
+    #[error("not an imuprep log: wrong magic {0:02x?} (expected \"IMUPLOG\\0\")")]
+    BadMagic([u8; 8]),
+    #[error("unsupported log version {0} (this build reads version {LOG_VERSION})")]
+    BadVersion(u16),
+}
+
+/// Check the 12-byte log file header.
+pub fn check_log_header(h: &[u8]) -> Result<(), LogHeaderError> {
+    if h.len() < LOG_HEADER_LEN {
+        return Err(LogHeaderError::TooShort(h.len()));
+    }
+    let mut magic = [0u8; 8];
+    magic.copy_from_slice(&h[..8]);
+    if magic != LOG_MAGIC {
+        return Err(LogHeaderError::BadMagic(magic));
+    }
+    let v = u16::from_le_bytes([h[8], h[9]]);
+    if v != LOG_VERSION {
+        return Err(LogHeaderError::BadVersion(v));
+    }
+    Ok(())
+}
+
+fn f32_at(p: &[u8], o: usize) -> f32 {
+    f32::from_le_bytes([p[o], p[o + 1], p[o + 2], p[o + 3]])
+}
+
+/// Parse a descriptor payload (length already checked).
+pub(crate) fn parse_descriptor(p: &[u8]) -> Descriptor {
+    Descriptor {
+        sample_rate_hz: f64::from_le_bytes(p[0..8].try_into().expect("8 bytes")),
+        gyro_range_rad_s: f32_at(p, 8),
+        accel_range_m_s2: f32_at(p, 12),
+        axes: AxisConvention::from_u8(p[16]),
+        device_id: u32::from_le_bytes(p[20..24].try_into().expect("4 bytes")),
+    }
+}
+
+/// Parse a sample or clean-sample payload (length already checked).
+pub(crate) fn parse_sample(seq: u32, p: &[u8], with_bias: bool) -> Sample {
+    let mut s = Sample {
+        seq,
+        t_ns: u64::from_le_bytes(p[0..8].try_into().expect("8 bytes")),
+        ..Sample::default()
+    };
+    let mut ch = [0.0f64; 6];
+    for (i, c) in ch.iter_mut().enumerate() {
+        *c = f32_at(p, 8 + 4 * i) as f64;
+    }
+    s.set_channels(&ch);
+    let t = f32_at(p, 32);
+    s.temp_c = if t.is_nan() { None } else { Some(t as f64) };
+    s.flags = u32::from_le_bytes(p[36..40].try_into().expect("4 bytes"));
+    if with_bias {
+        for i in 0..6 {
+            s.bias[i] = f32_at(p, 40 + 4 * i);
+            s.bias_sd[i] = f32_at(p, 64 + 4 * i);
+        }
+    }
+    s
+}

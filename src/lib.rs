@@ -1,0 +1,20 @@
+//! imuprep — a real-time preprocessor for low-cost MEMS inertial sensors.
+//!
+//! ```text
+//!  serial port ─┐                                          ┌─► TCP clients (each its own bounded queue)
+//!  replay file ─┼─► FrameDecoder ─► Pipeline (sync) ───────┼─► UDP / file / stdout
+//!  stdin       ─┘   bytes → Sample    │  GrossError (ARIMA) └─► health counters, model status
+//!                   faults = counted  │  Bias (FOS/AR)
+//!                                     ▼
+//!                               Sample + flags
+//! ```
+//!
+//! Async lives only at the edges ([`io`], [`runtime`]); the numerical stages ([`stage`]) are
+//! synchronous and pure, and the offline tools share their models.
+
+pub mod frame;
+pub mod rng;
+pub mod sample;
+pub mod stage;
+
+pub use sample::{Sample, flags};

@@ -1,0 +1,152 @@
+//! The unit that flows through imuprep: one IMU measurement with its flags.
+//!
+//! Channels are indexed 0..6 as `gx, gy, gz, ax, ay, az` (see [`CHANNEL_NAMES`]); per-channel
+//! stages use [`Sample::channel`] / [`Sample::set_channel`] so they need not know which sensor a
+//! channel belongs to. Gyro in rad/s, accel (specific force) in m/s², temperature in °C.
+
+use nalgebra::Vector3;
+
+/// Number of inertial channels in a sample (3 gyro + 3 accel).
+pub const N_CHANNELS: usize = 6;
+/// Channel names in index order, as used in CSV headers, configs and reports.
+pub const CHANNEL_NAMES: [&str; N_CHANNELS] = ["gx", "gy", "gz", "ax", "ay", "az"];
+
+/// Index of a channel by its name (`gx` … `az`).
+pub fn channel_index(name: &str) -> Option<usize> {
+    CHANNEL_NAMES.iter().position(|n| *n == name)
+}
+
+/// Status and processing flags carried on every sample (and on the wire as a `u32`).
+///
+/// Bits 0–7 come from the sensor (or the import / simulator acting as one); bits 8 and up are
+/// set by imuprep itself.
+pub mod flags {
+    /// Gyro x/y/z saturated (at or beyond the descriptor's range). Bit `i` for axis `i`.
+    pub const SAT_GYRO_X: u32 = 1 << 0;
+    pub const SAT_GYRO_Y: u32 = 1 << 1;
+    pub const SAT_GYRO_Z: u32 = 1 << 2;
+    /// Accel x/y/z saturated. Bit `3 + i` for axis `i`.
+    pub const SAT_ACCEL_X: u32 = 1 << 3;
+    pub const SAT_ACCEL_Y: u32 = 1 << 4;
+    pub const SAT_ACCEL_Z: u32 = 1 << 5;
+    /// All six saturation bits.
+    pub const SAT_ANY: u32 = 0x3f;
+    /// The sensor reported an internal fault for this sample.
+    pub const SENSOR_FAULT: u32 = 1 << 6;
+    /// One or more frames are missing before this sample (sequence gap).
+    pub const GAP: u32 = 1 << 8;
+    /// This sample repeats the sequence number of one already seen.
+    pub const DUPLICATE: u32 = 1 << 9;
+    /// At least one channel held NaN or ±Inf on arrival.
+    pub const NON_FINITE: u32 = 1 << 10;
+    /// The bias stage subtracted its estimate from this sample.
+    pub const BIAS_REMOVED: u32 = 1 << 11;
+    /// A stage is still identifying its model; its correction was not applied.
+    pub const WARMING_UP: u32 = 1 << 12;
+    /// The gross-error stage gave up on a run longer than its limit and accepted a level change.
+    pub const LEVEL_CHANGE: u32 = 1 << 13;
+    /// The stillness detector considers the sensor at rest.
+    pub const STILL: u32 = 1 << 14;
+    /// At least one channel was replaced by the gross-error stage (see the per-channel bits).
+    pub const REPLACED: u32 = 1 << 15;
+    /// Per-channel replaced bits: bit `16 + c` for channel `c` (gx..az).
+    pub const REPLACED_CH0: u32 = 1 << 16;
+    /// A learned effect (temperature, vibration line, g-sensitivity, step) was compensated.
+    pub const EFFECT_COMPENSATED: u32 = 1 << 22;
+
+    /// Per-channel replaced bit for channel `c`.
+    #[inline]
+    pub const fn replaced_ch(c: usize) -> u32 {
+        REPLACED_CH0 << c
+    }
+    /// Saturation bit for channel `c`.
+    #[inline]
+    pub const fn sat_ch(c: usize) -> u32 {
+        1 << c
+    }
+}
+
+/// One IMU measurement.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Frame sequence counter from the wire (wraps at `u32::MAX`).
+    pub seq: u32,
+    /// Sensor time, ns (monotonic, from the sensor; never the host clock).
+    pub t_ns: u64,
+    /// Angular rate, rad/s, body frame.
+    pub gyro: Vector3<f64>,
+    /// Specific force, m/s², body frame (gravity included).
+    pub accel: Vector3<f64>,
+    /// Sensor temperature, °C; `None` when the sensor does not report it.
+    pub temp_c: Option<f64>,
+    /// Bit set of [`flags`].
+    pub flags: u32,
+    /// Bias estimate subtracted by the bias stage, per channel (rad/s or m/s²); zero if none.
+    pub bias: [f32; N_CHANNELS],
+    /// 1-σ uncertainty of `bias`, per channel; zero if no estimate.
+    pub bias_sd: [f32; N_CHANNELS],
+}
+
+impl Default for Sample {
+    fn default() -> Self {
+        Sample {
+            seq: 0,
+            t_ns: 0,
+            gyro: Vector3::zeros(),
+            accel: Vector3::zeros(),
+            temp_c: None,
+            flags: 0,
+            bias: [0.0; N_CHANNELS],
+            bias_sd: [0.0; N_CHANNELS],
+        }
+    }
+}
+
+impl Sample {
+    /// Value of channel `c` (0..6: gx gy gz ax ay az).
+    #[inline]
+    pub fn channel(&self, c: usize) -> f64 {
+        if c < 3 { self.gyro[c] } else { self.accel[c - 3] }
+    }
+
+    /// Set channel `c` (0..6: gx gy gz ax ay az).
+    #[inline]
+    pub fn set_channel(&mut self, c: usize, v: f64) {
+        if c < 3 {
+            self.gyro[c] = v
+        } else {
+            self.accel[c - 3] = v
+        }
+    }
+
+    /// All six channels as an array.
+    #[inline]
+    pub fn channels(&self) -> [f64; N_CHANNELS] {
+        [
+            self.gyro[0],
+            self.gyro[1],
+            self.gyro[2],
+            self.accel[0],
+            self.accel[1],
+            self.accel[2],
+        ]
+    }
+
+    /// Build from six channel values.
+    #[inline]
+    pub fn set_channels(&mut self, v: &[f64; N_CHANNELS]) {
+        self.gyro = Vector3::new(v[0], v[1], v[2]);
+        self.accel = Vector3::new(v[3], v[4], v[5]);
+    }
+
+    /// Sensor time in seconds.
+    #[inline]
+    pub fn t_s(&self) -> f64 {
+        self.t_ns as f64 * 1e-9
+    }
+
+    #[inline]
+    pub fn has(&self, flag: u32) -> bool {
+        self.flags & flag != 0
+    }
+}
