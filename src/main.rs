@@ -1,1 +1,226 @@
-fn main() {}
+//! imuprep command line: raw flags → validated settings in one step; `anyhow` only here.
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use imuprep::config::{Config, SourceConfig};
+use imuprep::io::csv::{self as csvio, AccelUnit, GyroUnit, ImportOptions, TimeUnit};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "imuprep",
+    version,
+    about = "Real-time preprocessor for low-cost MEMS IMUs"
+)]
+struct Cli {
+    /// Log level filter (error, warn, info, debug) for messages on stderr.
+    #[arg(long = "log-level", global = true, default_value = "info")]
+    log_level: String,
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// The daemon: source from config (serial or replay) → pipeline → sinks, until SIGINT/SIGTERM.
+    Run {
+        /// Config file (default: the embedded config/default.toml).
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Extra outputs: stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR.
+        #[arg(long = "out")]
+        out: Vec<String>,
+        /// Also write the final health summary as JSON to this file.
+        #[arg(long)]
+        summary_json: Option<PathBuf>,
+    },
+    /// Run the daemon's pipeline on a recorded log and print a health summary.
+    Replay {
+        log: PathBuf,
+        #[arg(long)]
+        config: Option<PathBuf>,
+        #[arg(long = "out")]
+        out: Vec<String>,
+        /// Pace by sensor time at this speed factor (0 = as fast as possible).
+        #[arg(long, default_value_t = 0.0)]
+        speed: f64,
+        #[arg(long)]
+        summary_json: Option<PathBuf>,
+    },
+    /// Convert a CSV recording (canonical or vendor layout, optionally .gz) into a replay log.
+    Import {
+        input: PathBuf,
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Column mapping, repeatable: --col gx=gyro_x_dps (keys: t gx gy gz ax ay az temp).
+        #[arg(long = "col")]
+        cols: Vec<String>,
+        #[arg(long, value_enum)]
+        gyro_unit: Option<GyroUnit>,
+        #[arg(long, value_enum)]
+        accel_unit: Option<AccelUnit>,
+        #[arg(long, value_enum)]
+        time_unit: Option<TimeUnit>,
+        /// Ignore the time column; time = row index / RATE (Hz).
+        #[arg(long)]
+        rate: Option<f64>,
+        /// Start the log at t = 0 (subtract the first time stamp).
+        #[arg(long)]
+        rebase_time: bool,
+        /// Gyro full-scale range, deg/s (enables saturation flags on replay).
+        #[arg(long, default_value_t = 0.0)]
+        gyro_range_dps: f64,
+        /// Accelerometer full-scale range, g.
+        #[arg(long, default_value_t = 0.0)]
+        accel_range_g: f64,
+    },
+    /// Write a log's samples as canonical CSV plus seq and flags.
+    Export {
+        log: PathBuf,
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let filter = tracing_subscriber::EnvFilter::try_new(&cli.log_level)
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .init();
+    match run(cli.cmd) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("imuprep: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn load_config(path: &Option<PathBuf>) -> Result<Config> {
+    let c = match path {
+        Some(p) => Config::from_file(p),
+        None => Config::default_embedded(),
+    };
+    c.map_err(|e| anyhow::anyhow!("{e}"))
+}
+
+fn run(cmd: Cmd) -> Result<ExitCode> {
+    match cmd {
+        Cmd::Run {
+            config,
+            out,
+            summary_json,
+        } => {
+            let mut cfg = load_config(&config)?;
+            add_outs(&mut cfg, &out)?;
+            daemon(cfg, summary_json)
+        }
+        Cmd::Replay {
+            log,
+            config,
+            out,
+            speed,
+            summary_json,
+        } => {
+            let mut cfg = load_config(&config)?;
+            anyhow::ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
+            cfg.source = SourceConfig::Replay { path: log, speed };
+            add_outs(&mut cfg, &out)?;
+            daemon(cfg, summary_json)
+        }
+        Cmd::Import {
+            input,
+            output,
+            cols,
+            gyro_unit,
+            accel_unit,
+            time_unit,
+            rate,
+            rebase_time,
+            gyro_range_dps,
+            accel_range_g,
+        } => {
+            let mut o = ImportOptions {
+                gyro_unit,
+                accel_unit,
+                time_unit,
+                time_from_index_hz: rate,
+                rebase_time,
+                gyro_range_rad_s: gyro_range_dps.to_radians() as f32,
+                accel_range_m_s2: (accel_range_g * csvio::G0) as f32,
+                ..Default::default()
+            };
+            if let Some(r) = rate {
+                anyhow::ensure!(r.is_finite() && r > 0.0, "--rate must be > 0 Hz");
+            }
+            for c in &cols {
+                let (k, v) = c
+                    .split_once('=')
+                    .with_context(|| format!("--col {c:?}: expected KEY=COLUMN"))?;
+                let i = ["t", "gx", "gy", "gz", "ax", "ay", "az", "temp"]
+                    .iter()
+                    .position(|x| *x == k)
+                    .with_context(|| {
+                        format!("--col {c:?}: key must be one of t gx gy gz ax ay az temp")
+                    })?;
+                o.columns[i] = Some(v.to_string());
+            }
+            let (d, samples) = csvio::read_csv(&input, &o)?;
+            csvio::write_log(&output, &d, &samples)?;
+            eprintln!(
+                "imported {} samples ({:.1} s at {:.2} Hz) from {} into {}",
+                samples.len(),
+                samples.last().map_or(0.0, |s| s.t_s() - samples[0].t_s()),
+                d.sample_rate_hz,
+                input.display(),
+                output.display()
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Export { log, output } => {
+            let (_, samples, stats) = csvio::read_log(&log)?;
+            csvio::write_csv(&output, &samples)?;
+            eprintln!(
+                "exported {} samples to {} ({} CRC errors, {} resyncs in the log)",
+                samples.len(),
+                output.display(),
+                stats.crc_errors,
+                stats.resyncs
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+    }
+}
+
+fn add_outs(cfg: &mut Config, outs: &[String]) -> Result<()> {
+    let mut errs = Vec::new();
+    for o in outs {
+        match imuprep::runtime::parse_out_spec(o) {
+            Ok(s) => cfg.sinks.push(s),
+            Err(e) => errs.push(format!("--out {o}: {e}")),
+        }
+    }
+    anyhow::ensure!(errs.is_empty(), "{}", errs.join("\n"));
+    Ok(())
+}
+
+fn daemon(cfg: Config, summary_json: Option<PathBuf>) -> Result<ExitCode> {
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()?;
+    let pipeline = cfg.stages.build();
+    tracing::info!(stages = ?pipeline.stage_names(), "pipeline ready");
+    let health = rt.block_on(imuprep::runtime::run(&cfg, pipeline))?;
+    eprint!("{}", health.text());
+    if let Some(p) = summary_json {
+        std::fs::write(&p, serde_json::to_string_pretty(&health)?)
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    Ok(ExitCode::SUCCESS)
+}

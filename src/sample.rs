@@ -106,7 +106,11 @@ impl Sample {
     /// Value of channel `c` (0..6: gx gy gz ax ay az).
     #[inline]
     pub fn channel(&self, c: usize) -> f64 {
-        if c < 3 { self.gyro[c] } else { self.accel[c - 3] }
+        if c < 3 {
+            self.gyro[c]
+        } else {
+            self.accel[c - 3]
+        }
     }
 
     /// Set channel `c` (0..6: gx gy gz ax ay az).

@@ -352,7 +352,10 @@ mod tests {
         encode_descriptor(&d, &mut b);
         let s = sample(3);
         encode_sample(&s, &mut b);
-        assert_eq!(b.len(), HEADER_LEN + DESCRIPTOR_PAYLOAD + 4 + SAMPLE_FRAME_LEN);
+        assert_eq!(
+            b.len(),
+            HEADER_LEN + DESCRIPTOR_PAYLOAD + 4 + SAMPLE_FRAME_LEN
+        );
         let mut dec = FrameDecoder::new();
         assert_eq!(dec.decode(&mut b).unwrap(), Some(Message::Descriptor(d)));
         let Some(Message::Sample(got)) = dec.decode(&mut b).unwrap() else {
@@ -422,7 +425,10 @@ mod tests {
         let hc = CRC16.checksum(&b[..10]);
         b[10..12].copy_from_slice(&hc.to_le_bytes());
         let (got, st) = decode_all(&b, 5);
-        assert_eq!(got.iter().map(|s| s.seq).collect::<Vec<_>>(), vec![1, 2, 3, 4]);
+        assert_eq!(
+            got.iter().map(|s| s.seq).collect::<Vec<_>>(),
+            vec![1, 2, 3, 4]
+        );
         assert_eq!(st.crc_errors, 1);
     }
 

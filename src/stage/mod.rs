@@ -3,6 +3,8 @@
 //! A stage is plain Rust: no I/O, no clock reads (time arrives in the sample), no allocation and
 //! no `tracing` per sample. Health is read from it at report intervals through [`Stage::counters`].
 
+pub mod build;
+
 use crate::sample::Sample;
 
 /// One synchronous processing step.

@@ -1,0 +1,407 @@
+//! Configuration: TOML → raw serde structs (`deny_unknown_fields`) → validated [`Config`], in one
+//! step, with every error reported together with its key path.
+//!
+//! serde stops at the first structural error inside one table, so each section (and each sink)
+//! is deserialised on its own: mistakes in different sections are all reported in one run. Value
+//! checks (`validate`) then run on every section that parsed.
+
+use serde::Deserialize;
+use std::fmt;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+
+/// The embedded default configuration (`config/default.toml`).
+pub const DEFAULT_TOML: &str = include_str!("../config/default.toml");
+
+/// One configuration mistake, located by its key path (e.g. `sinks[1].bind`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConfigError {
+    pub path: String,
+    pub message: String,
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.path, self.message)
+    }
+}
+
+/// All mistakes found in one configuration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConfigErrors(pub Vec<ConfigError>);
+
+impl fmt::Display for ConfigErrors {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "{} configuration error(s):", self.0.len())?;
+        for e in &self.0 {
+            writeln!(f, "  - {e}")?;
+        }
+        Ok(())
+    }
+}
+impl std::error::Error for ConfigErrors {}
+
+/// Collects errors while validating.
+#[derive(Default)]
+pub struct Errors(Vec<ConfigError>);
+
+impl Errors {
+    pub fn push(&mut self, path: impl Into<String>, message: impl Into<String>) {
+        self.0.push(ConfigError {
+            path: path.into(),
+            message: message.into(),
+        });
+    }
+    /// Record `message` at `path` unless `ok`.
+    pub fn check(&mut self, ok: bool, path: impl Into<String>, message: impl Into<String>) {
+        if !ok {
+            self.push(path, message);
+        }
+    }
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+    pub fn into_vec(self) -> Vec<ConfigError> {
+        self.0
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Raw sections
+
+/// Where samples come from.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, tag = "kind", rename_all = "lowercase")]
+pub enum SourceConfig {
+    /// A serial port carrying native frames.
+    Serial {
+        /// Device path, e.g. `/dev/ttyUSB0`.
+        port: String,
+        /// Line rate, baud.
+        #[serde(default = "default_baud")]
+        baud: u32,
+        /// First reconnect delay after the port vanishes, ms; doubles per failure.
+        #[serde(default = "default_retry_initial_ms")]
+        retry_initial_ms: u64,
+        /// Longest reconnect delay, ms.
+        #[serde(default = "default_retry_max_ms")]
+        retry_max_ms: u64,
+    },
+    /// A recorded log (file header + frames).
+    Replay {
+        path: PathBuf,
+        /// 0 = as fast as possible; otherwise paced by sensor time at this speed factor.
+        #[serde(default)]
+        speed: f64,
+    },
+    /// Frames (or a whole log) on standard input.
+    Stdin,
+}
+
+fn default_baud() -> u32 {
+    921_600
+}
+fn default_retry_initial_ms() -> u64 {
+    100
+}
+fn default_retry_max_ms() -> u64 {
+    5_000
+}
+
+/// Text/binary encodings a sink can write.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Format {
+    /// Native frames (a file sink adds the log header).
+    #[default]
+    Native,
+    /// Canonical CSV (see `export`).
+    Csv,
+    /// One JSON object per line.
+    Jsonl,
+}
+
+/// Where cleaned samples go. Several at once.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, tag = "kind", rename_all = "lowercase")]
+pub enum SinkConfig {
+    Stdout {
+        #[serde(default = "csv")]
+        format: Format,
+    },
+    File {
+        path: PathBuf,
+        #[serde(default)]
+        format: Format,
+    },
+    /// A TCP server; each client gets its own bounded queue.
+    Tcp {
+        /// Listen address, e.g. `127.0.0.1:7700`.
+        bind: String,
+        #[serde(default)]
+        format: Format,
+        /// Per-client queue length, in batches of samples; a client further behind loses batches
+        /// (counted) and never stalls the stream.
+        #[serde(default = "default_queue")]
+        queue: usize,
+    },
+    /// UDP datagrams to fixed addresses (one sample per datagram).
+    Udp {
+        targets: Vec<String>,
+        #[serde(default)]
+        format: Format,
+    },
+}
+
+fn csv() -> Format {
+    Format::Csv
+}
+fn default_queue() -> usize {
+    256
+}
+
+/// Health reporting.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct HealthConfig {
+    /// Interval between health log lines, s (0 = only the final summary).
+    #[serde(default = "default_interval")]
+    pub interval_s: f64,
+}
+fn default_interval() -> f64 {
+    10.0
+}
+impl Default for HealthConfig {
+    fn default() -> Self {
+        HealthConfig {
+            interval_s: default_interval(),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validated
+
+/// Output sink, validated.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Sink {
+    Stdout {
+        format: Format,
+    },
+    File {
+        path: PathBuf,
+        format: Format,
+    },
+    Tcp {
+        bind: SocketAddr,
+        format: Format,
+        queue: usize,
+    },
+    Udp {
+        targets: Vec<SocketAddr>,
+        format: Format,
+    },
+}
+
+/// A validated configuration: it can only exist if every check passed.
+#[derive(Debug, Clone)]
+pub struct Config {
+    pub source: SourceConfig,
+    pub sinks: Vec<Sink>,
+    pub health: HealthConfig,
+    pub stages: crate::stage::build::StagesConfig,
+}
+
+impl Config {
+    /// The embedded default configuration.
+    pub fn default_embedded() -> Result<Config, ConfigErrors> {
+        Config::from_toml_str(DEFAULT_TOML, Path::new("."))
+    }
+
+    /// Read and validate a config file; relative paths in it are taken from its directory.
+    pub fn from_file(path: &Path) -> Result<Config, ConfigErrors> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            ConfigErrors(vec![ConfigError {
+                path: path.display().to_string(),
+                message: format!("cannot read config: {e}"),
+            }])
+        })?;
+        let base = path.parent().unwrap_or(Path::new("."));
+        Config::from_toml_str(&text, base)
+    }
+
+    /// Parse and validate; `base` resolves relative paths (model files, replay logs).
+    pub fn from_toml_str(text: &str, base: &Path) -> Result<Config, ConfigErrors> {
+        let mut errs = Errors::default();
+        let table: toml::Table = match text.parse() {
+            Ok(t) => t,
+            Err(e) => {
+                errs.push("<toml>", e.to_string());
+                return Err(ConfigErrors(errs.into_vec()));
+            }
+        };
+        for k in table.keys() {
+            if !["source", "sinks", "health", "gross_error", "bias"].contains(&k.as_str()) {
+                errs.push(
+                    k.clone(),
+                    "unknown section (expected source, sinks, health, gross_error, bias)",
+                );
+            }
+        }
+        let source: Option<SourceConfig> = section(&table, "source", &mut errs);
+        let source = match source {
+            Some(s) => Some(s),
+            None if !table.contains_key("source") => {
+                errs.push("source", "missing section [source]");
+                None
+            }
+            None => None,
+        };
+        if let Some(s) = &source {
+            validate_source(s, base, &mut errs);
+        }
+        let mut sinks = Vec::new();
+        if let Some(v) = table.get("sinks") {
+            match v.as_array() {
+                None => errs.push("sinks", "must be an array of tables ([[sinks]])"),
+                Some(arr) => {
+                    for (i, item) in arr.iter().enumerate() {
+                        let path = format!("sinks[{i}]");
+                        match item.clone().try_into::<SinkConfig>() {
+                            Ok(s) => {
+                                if let Some(s) = validate_sink(&s, base, &path, &mut errs) {
+                                    sinks.push(s)
+                                }
+                            }
+                            Err(e) => errs.push(path, clean_serde(&e.to_string())),
+                        }
+                    }
+                }
+            }
+        }
+        let health: HealthConfig = section(&table, "health", &mut errs).unwrap_or_default();
+        errs.check(
+            health.interval_s.is_finite() && health.interval_s >= 0.0,
+            "health.interval_s",
+            format!("must be ≥ 0 s, got {}", health.interval_s),
+        );
+        let stages = crate::stage::build::StagesConfig::from_table(&table, base, &mut errs);
+        if errs.is_empty() {
+            Ok(Config {
+                source: source.expect("no errors means the source parsed"),
+                sinks,
+                health,
+                stages: stages.expect("no errors means the stages parsed"),
+            })
+        } else {
+            Err(ConfigErrors(errs.into_vec()))
+        }
+    }
+}
+
+/// Deserialise one top-level section, recording its error under its name.
+pub fn section<T: serde::de::DeserializeOwned>(
+    table: &toml::Table,
+    key: &str,
+    errs: &mut Errors,
+) -> Option<T> {
+    let v = table.get(key)?;
+    match v.clone().try_into::<T>() {
+        Ok(t) => Some(t),
+        Err(e) => {
+            errs.push(key, clean_serde(&e.to_string()));
+            None
+        }
+    }
+}
+
+/// serde's TOML messages span lines; keep them on one.
+pub fn clean_serde(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Resolve `p` against `base` unless absolute.
+pub fn resolve(base: &Path, p: &Path) -> PathBuf {
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        base.join(p)
+    }
+}
+
+fn validate_source(s: &SourceConfig, _base: &Path, errs: &mut Errors) {
+    match s {
+        SourceConfig::Serial {
+            port,
+            baud,
+            retry_initial_ms,
+            retry_max_ms,
+        } => {
+            errs.check(!port.is_empty(), "source.port", "must name a device");
+            errs.check(*baud > 0, "source.baud", "must be > 0");
+            errs.check(
+                *retry_initial_ms > 0 && retry_initial_ms <= retry_max_ms,
+                "source.retry_initial_ms",
+                "must be > 0 and ≤ retry_max_ms",
+            );
+        }
+        SourceConfig::Replay { speed, .. } => {
+            errs.check(
+                speed.is_finite() && *speed >= 0.0,
+                "source.speed",
+                format!("must be ≥ 0 (0 = as fast as possible), got {speed}"),
+            );
+        }
+        SourceConfig::Stdin => {}
+    }
+}
+
+fn validate_sink(s: &SinkConfig, base: &Path, path: &str, errs: &mut Errors) -> Option<Sink> {
+    match s {
+        SinkConfig::Stdout { format } => Some(Sink::Stdout { format: *format }),
+        SinkConfig::File { path: p, format } => Some(Sink::File {
+            path: resolve(base, p),
+            format: *format,
+        }),
+        SinkConfig::Tcp {
+            bind,
+            format,
+            queue,
+        } => {
+            let addr = bind.parse::<SocketAddr>();
+            if addr.is_err() {
+                errs.push(format!("{path}.bind"), format!("not an address: {bind:?}"));
+            }
+            errs.check(*queue > 0, format!("{path}.queue"), "must be > 0");
+            Some(Sink::Tcp {
+                bind: addr.ok()?,
+                format: *format,
+                queue: *queue,
+            })
+        }
+        SinkConfig::Udp { targets, format } => {
+            let mut out = Vec::new();
+            for (i, t) in targets.iter().enumerate() {
+                match t.parse::<SocketAddr>() {
+                    Ok(a) => out.push(a),
+                    Err(_) => errs.push(
+                        format!("{path}.targets[{i}]"),
+                        format!("not an address: {t:?}"),
+                    ),
+                }
+            }
+            errs.check(
+                !targets.is_empty(),
+                format!("{path}.targets"),
+                "needs at least one address",
+            );
+            Some(Sink::Udp {
+                targets: out,
+                format: *format,
+            })
+        }
+    }
+}

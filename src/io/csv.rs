@@ -1,0 +1,423 @@
+//! CSV import (canonical and vendor column layouts) and export.
+//!
+//! Canonical CSV: header `t,gx,gy,gz,ax,ay,az,temp` in s, rad/s, m/s², °C; `temp` may be empty
+//! or missing; extra columns are ignored. Other layouts are matched by column name (e.g.
+//! `gyro_x_dps`, `Accelerometer X (g)`), with units read from the name or given as options.
+
+use crate::frame::{Descriptor, FrameDecoder, Message, encode_log_header, encode_sample};
+use crate::io::format::{CSV_HEADER, write_csv_row};
+use crate::sample::Sample;
+use bytes::BytesMut;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::path::{Path, PathBuf};
+use tokio_util::codec::Decoder;
+
+/// Standard gravity, m/s² per g.
+pub const G0: f64 = 9.80665;
+
+/// Angular-rate unit of the input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GyroUnit {
+    #[value(name = "rad/s")]
+    RadS,
+    #[value(name = "deg/s")]
+    DegS,
+}
+/// Specific-force unit of the input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum AccelUnit {
+    #[value(name = "m/s2")]
+    MS2,
+    #[value(name = "g")]
+    G,
+}
+/// Time unit of the input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum TimeUnit {
+    S,
+    Ms,
+    Us,
+    Ns,
+}
+
+impl TimeUnit {
+    fn ns_per_unit(self) -> f64 {
+        match self {
+            TimeUnit::S => 1e9,
+            TimeUnit::Ms => 1e6,
+            TimeUnit::Us => 1e3,
+            TimeUnit::Ns => 1.0,
+        }
+    }
+}
+
+/// How to read a CSV. `None` fields are detected from the header.
+#[derive(Clone, Debug, Default)]
+pub struct ImportOptions {
+    /// Column names for t, gx, gy, gz, ax, ay, az, temp (in that order); `None` = detect.
+    pub columns: [Option<String>; 8],
+    pub gyro_unit: Option<GyroUnit>,
+    pub accel_unit: Option<AccelUnit>,
+    pub time_unit: Option<TimeUnit>,
+    /// Ignore the time column and use index / rate (for bursty host timestamps).
+    pub time_from_index_hz: Option<f64>,
+    /// Subtract the first time stamp so the log starts at t = 0.
+    pub rebase_time: bool,
+    pub gyro_range_rad_s: f32,
+    pub accel_range_m_s2: f32,
+    pub device_id: u32,
+}
+
+/// Why an import or export failed.
+#[derive(Debug, thiserror::Error)]
+pub enum CsvError {
+    #[error("{path}: {err}")]
+    Io { path: PathBuf, err: std::io::Error },
+    #[error("{path}: empty file (no header line)")]
+    Empty { path: PathBuf },
+    #[error("{path}: {msg}; header columns are: {header}")]
+    Columns {
+        path: PathBuf,
+        msg: String,
+        header: String,
+    },
+    #[error("{path}:{line}:{col}: cannot read {cell:?} as a number (column {name})")]
+    Cell {
+        path: PathBuf,
+        line: usize,
+        col: usize,
+        cell: String,
+        name: String,
+    },
+    #[error("{path}:{line}: {msg}")]
+    Row {
+        path: PathBuf,
+        line: usize,
+        msg: String,
+    },
+    #[error("{path}: {err}")]
+    Log {
+        path: PathBuf,
+        err: crate::frame::LogHeaderError,
+    },
+}
+
+const CANON: [&str; 8] = ["t", "gx", "gy", "gz", "ax", "ay", "az", "temp"];
+
+fn tokens(name: &str) -> Vec<String> {
+    name.to_ascii_lowercase()
+        .split(|c: char| !c.is_ascii_alphanumeric())
+        .filter(|t| !t.is_empty())
+        .map(str::to_string)
+        .collect()
+}
+
+/// Units read from a column name: `dps`/`deg` → deg/s, `rps`/`rad` → rad/s; `g` → g,
+/// `mps2`/`ms2`/`m` → m/s²; `ms` → ms for time.
+fn gyro_unit_of(t: &[String]) -> Option<GyroUnit> {
+    if t.iter().any(|x| x == "dps" || x.starts_with("deg")) {
+        Some(GyroUnit::DegS)
+    } else if t.iter().any(|x| x == "rps" || x.starts_with("rad")) {
+        Some(GyroUnit::RadS)
+    } else {
+        None
+    }
+}
+fn accel_unit_of(t: &[String]) -> Option<AccelUnit> {
+    if t.iter().any(|x| x == "g") {
+        Some(AccelUnit::G)
+    } else if t.iter().any(|x| x == "mps2" || x == "ms2" || x == "m") {
+        Some(AccelUnit::MS2)
+    } else {
+        None
+    }
+}
+
+/// Resolved column indices and units.
+#[derive(Debug, Clone)]
+struct Layout {
+    idx: [Option<usize>; 8],
+    gyro: GyroUnit,
+    accel: AccelUnit,
+    time: TimeUnit,
+}
+
+fn detect(header: &[String], o: &ImportOptions, path: &Path) -> Result<Layout, CsvError> {
+    let err = |msg: String| CsvError::Columns {
+        path: path.into(),
+        msg,
+        header: header.join(","),
+    };
+    let toks: Vec<Vec<String>> = header.iter().map(|h| tokens(h)).collect();
+    let mut idx = [None; 8];
+    for (k, canon) in CANON.iter().enumerate() {
+        if let Some(name) = &o.columns[k] {
+            idx[k] = Some(
+                header
+                    .iter()
+                    .position(|h| h.trim() == name)
+                    .ok_or_else(|| err(format!("no column named {name:?} (given for {canon})")))?,
+            );
+            continue;
+        }
+        if let Some(p) = header.iter().position(|h| h.trim() == *canon) {
+            idx[k] = Some(p);
+            continue;
+        }
+        // Vendor layouts: the first column whose name tokens match; "bias" columns are estimates
+        // of the sensor, not the sensor, so they never match.
+        let found = toks.iter().position(|t| {
+            if t.iter().any(|x| x == "bias") {
+                return false;
+            }
+            match k {
+                0 => {
+                    matches!(
+                        t.first().map(String::as_str),
+                        Some("t" | "time" | "timestamp" | "gpst" | "t_s")
+                    ) && !t.iter().any(|x| x == "tick")
+                }
+                7 => t.iter().any(|x| x.starts_with("temp")),
+                _ => {
+                    let family = if k <= 3 { "gyr" } else { "acc" };
+                    let axis = ["x", "y", "z"][(k - 1) % 3];
+                    t.iter().any(|x| x.starts_with(family)) && t.iter().any(|x| x == axis)
+                }
+            }
+        });
+        idx[k] = found;
+    }
+    for k in 1..7 {
+        if idx[k].is_none() {
+            return Err(err(format!(
+                "missing column for {} (name it {:?}, or pass --col {}=NAME)",
+                CANON[k], CANON[k], CANON[k]
+            )));
+        }
+    }
+    if idx[0].is_none() && o.time_from_index_hz.is_none() {
+        return Err(err(
+            "missing time column (name it \"t\", or pass --col t=NAME, or --rate HZ to time by index)".into(),
+        ));
+    }
+    let canon_named = |k: usize| {
+        idx[k]
+            .map(|p| header[p].trim() == CANON[k])
+            .unwrap_or(false)
+    };
+    let gyro = o.gyro_unit.map(Ok).unwrap_or_else(|| {
+        if canon_named(1) {
+            return Ok(GyroUnit::RadS);
+        }
+        gyro_unit_of(&toks[idx[1].expect("checked")]).ok_or_else(|| {
+            err("cannot tell the gyro unit from the column name: pass --gyro-unit".into())
+        })
+    })?;
+    let accel = o.accel_unit.map(Ok).unwrap_or_else(|| {
+        if canon_named(4) {
+            return Ok(AccelUnit::MS2);
+        }
+        accel_unit_of(&toks[idx[4].expect("checked")]).ok_or_else(|| {
+            err("cannot tell the accel unit from the column name: pass --accel-unit".into())
+        })
+    })?;
+    let time = o.time_unit.unwrap_or_else(|| match idx[0] {
+        Some(p) if toks[p].iter().any(|x| x == "ms") => TimeUnit::Ms,
+        Some(p) if toks[p].iter().any(|x| x == "ns") => TimeUnit::Ns,
+        Some(p) if toks[p].iter().any(|x| x == "us") => TimeUnit::Us,
+        _ => TimeUnit::S,
+    });
+    Ok(Layout {
+        idx,
+        gyro,
+        accel,
+        time,
+    })
+}
+
+fn open_text(path: &Path) -> Result<Box<dyn BufRead>, CsvError> {
+    let f = std::fs::File::open(path).map_err(|err| CsvError::Io {
+        path: path.into(),
+        err,
+    })?;
+    let r: Box<dyn Read> = if path.extension().is_some_and(|e| e == "gz") {
+        Box::new(flate2::read::MultiGzDecoder::new(f))
+    } else {
+        Box::new(f)
+    };
+    Ok(Box::new(BufReader::with_capacity(1 << 16, r)))
+}
+
+/// Read a CSV into samples (seq = row index) and the descriptor it implies.
+pub fn read_csv(path: &Path, o: &ImportOptions) -> Result<(Descriptor, Vec<Sample>), CsvError> {
+    let mut lines = open_text(path)?.lines();
+    let io = |err| CsvError::Io {
+        path: path.into(),
+        err,
+    };
+    let header_line = match lines.next() {
+        Some(l) => l.map_err(io)?,
+        None => return Err(CsvError::Empty { path: path.into() }),
+    };
+    let header: Vec<String> = header_line
+        .trim_start_matches('\u{feff}')
+        .split(',')
+        .map(|s| s.trim().to_string())
+        .collect();
+    let lay = detect(&header, o, path)?;
+    let gscale = if lay.gyro == GyroUnit::DegS {
+        std::f64::consts::PI / 180.0
+    } else {
+        1.0
+    };
+    let ascale = if lay.accel == AccelUnit::G { G0 } else { 1.0 };
+    let mut out = Vec::new();
+    let mut t0: Option<f64> = None;
+    for (i, line) in lines.enumerate() {
+        let line = line.map_err(io)?;
+        let lineno = i + 2;
+        if line.trim().is_empty() {
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').collect();
+        let get = |k: usize| -> Result<Option<f64>, CsvError> {
+            let Some(p) = lay.idx[k] else { return Ok(None) };
+            let cell = cells
+                .get(p)
+                .map(|c| c.trim())
+                .ok_or_else(|| CsvError::Row {
+                    path: path.into(),
+                    line: lineno,
+                    msg: format!(
+                        "{} cells, column {} ({}) missing",
+                        cells.len(),
+                        p + 1,
+                        header[p]
+                    ),
+                })?;
+            if cell.is_empty() && k == 7 {
+                return Ok(None);
+            }
+            cell.parse::<f64>().map(Some).map_err(|_| CsvError::Cell {
+                path: path.into(),
+                line: lineno,
+                col: p + 1,
+                cell: cell.to_string(),
+                name: header[p].clone(),
+            })
+        };
+        let mut s = Sample {
+            seq: out.len() as u32,
+            ..Sample::default()
+        };
+        let t_ns = if let Some(hz) = o.time_from_index_hz {
+            (out.len() as f64 / hz * 1e9).round()
+        } else {
+            let raw = get(0)?.expect("time column resolved") * lay.time.ns_per_unit();
+            let base = if o.rebase_time {
+                *t0.get_or_insert(raw)
+            } else {
+                0.0
+            };
+            (raw - base).round()
+        };
+        if !(t_ns >= 0.0 && t_ns < u64::MAX as f64) {
+            return Err(CsvError::Row {
+                path: path.into(),
+                line: lineno,
+                msg: format!(
+                    "time {t_ns} ns is negative or not finite (use --rebase-time or --rate)"
+                ),
+            });
+        }
+        s.t_ns = t_ns as u64;
+        let mut ch = [0.0; 6];
+        for (c, v) in ch.iter_mut().enumerate() {
+            let scale = if c < 3 { gscale } else { ascale };
+            *v = get(c + 1)?.expect("channel column resolved") * scale;
+        }
+        s.set_channels(&ch);
+        s.temp_c = get(7)?;
+        out.push(s);
+    }
+    // Nominal rate from the mean interval: robust to bursty host time stamps, where the median
+    // interval describes the bursts, not the sensor.
+    let span_ns = match (out.first(), out.last()) {
+        (Some(a), Some(b)) => b.t_ns.saturating_sub(a.t_ns),
+        _ => 0,
+    };
+    let rate = match o.time_from_index_hz {
+        Some(hz) => hz,
+        None if span_ns > 0 => (out.len() - 1) as f64 * 1e9 / span_ns as f64,
+        None => 0.0,
+    };
+    let d = Descriptor {
+        sample_rate_hz: rate,
+        gyro_range_rad_s: o.gyro_range_rad_s,
+        accel_range_m_s2: o.accel_range_m_s2,
+        axes: Default::default(),
+        device_id: o.device_id,
+    };
+    Ok((d, out))
+}
+
+/// Write a recorded log: file header, descriptor, sample frames.
+pub fn write_log(path: &Path, d: &Descriptor, samples: &[Sample]) -> Result<(), CsvError> {
+    let mut buf = BytesMut::with_capacity(64 + samples.len() * crate::frame::SAMPLE_FRAME_LEN);
+    encode_log_header(d, &mut buf);
+    for s in samples {
+        encode_sample(s, &mut buf);
+    }
+    std::fs::write(path, &buf).map_err(|err| CsvError::Io {
+        path: path.into(),
+        err,
+    })
+}
+
+/// Read every sample of a recorded log (through the live decoder), with its decoder counters.
+pub fn read_log(
+    path: &Path,
+) -> Result<(Option<Descriptor>, Vec<Sample>, crate::frame::DecoderStats), CsvError> {
+    let bytes = std::fs::read(path).map_err(|err| CsvError::Io {
+        path: path.into(),
+        err,
+    })?;
+    crate::frame::check_log_header(&bytes).map_err(|err| CsvError::Log {
+        path: path.into(),
+        err,
+    })?;
+    let mut buf = BytesMut::from(&bytes[crate::frame::LOG_HEADER_LEN..]);
+    let mut dec = FrameDecoder::new();
+    let mut out = Vec::new();
+    let mut desc = None;
+    loop {
+        let m = dec.decode_eof(&mut buf).map_err(|err| CsvError::Io {
+            path: path.into(),
+            err,
+        })?;
+        match m {
+            Some(Message::Sample(s)) => out.push(s),
+            Some(Message::Descriptor(d)) => desc = desc.or(Some(d)),
+            None => break,
+        }
+    }
+    Ok((desc, out, dec.stats()))
+}
+
+/// Write samples as canonical CSV plus `seq` and `flags`.
+pub fn write_csv(path: &Path, samples: &[Sample]) -> Result<(), CsvError> {
+    let io = |err| CsvError::Io {
+        path: path.into(),
+        err,
+    };
+    let f = std::fs::File::create(path).map_err(io)?;
+    let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
+    writeln!(w, "{CSV_HEADER}").map_err(io)?;
+    let mut line = String::new();
+    for s in samples {
+        line.clear();
+        write_csv_row(s, &mut line);
+        w.write_all(line.as_bytes()).map_err(io)?;
+    }
+    w.flush().map_err(io)
+}

@@ -1,0 +1,123 @@
+//! Text and binary encodings of output samples, shared by every sink and by `export`.
+
+use crate::config::Format;
+use crate::frame::{Descriptor, encode_descriptor, encode_log_header, encode_sample};
+use crate::sample::Sample;
+use bytes::{BufMut, BytesMut};
+use std::fmt::Write as _;
+
+/// Header line of the canonical CSV export (sensor columns, then `seq` and the flag bits).
+pub const CSV_HEADER: &str = "t,gx,gy,gz,ax,ay,az,temp,seq,flags";
+
+/// Sensor time as seconds with all nine decimals, exact from the ns counter.
+pub fn t_seconds(t_ns: u64) -> String {
+    format!("{}.{:09}", t_ns / 1_000_000_000, t_ns % 1_000_000_000)
+}
+
+/// Append one CSV row (values at the f32 precision of the wire, shortest round-trip form).
+pub fn write_csv_row(s: &Sample, out: &mut String) {
+    out.push_str(&t_seconds(s.t_ns));
+    for v in s.channels() {
+        let _ = write!(out, ",{}", v as f32);
+    }
+    out.push(',');
+    if let Some(t) = s.temp_c {
+        let _ = write!(out, "{}", t as f32);
+    }
+    let _ = writeln!(out, ",{},{}", s.seq, s.flags);
+}
+
+fn json_num(out: &mut String, v: f32) {
+    if v.is_finite() {
+        let _ = write!(out, "{v}");
+    } else {
+        out.push_str("null");
+    }
+}
+
+/// Append one JSON line: time, channels, temperature, flags, and the bias estimate with its σ.
+pub fn write_json_row(s: &Sample, out: &mut String) {
+    let _ = write!(out, "{{\"seq\":{},\"t_ns\":{},\"gyro\":[", s.seq, s.t_ns);
+    let ch = s.channels();
+    for (i, v) in ch[..3].iter().enumerate() {
+        if i > 0 {
+            out.push(',');
+        }
+        json_num(out, *v as f32);
+    }
+    out.push_str("],\"accel\":[");
+    for (i, v) in ch[3..].iter().enumerate() {
+        if i > 0 {
+            out.push(',');
+        }
+        json_num(out, *v as f32);
+    }
+    out.push_str("],\"temp\":");
+    json_num(out, s.temp_c.map_or(f32::NAN, |t| t as f32));
+    let _ = write!(out, ",\"flags\":{},\"bias\":[", s.flags);
+    for (i, v) in s.bias.iter().enumerate() {
+        if i > 0 {
+            out.push(',');
+        }
+        json_num(out, *v);
+    }
+    out.push_str("],\"bias_sd\":[");
+    for (i, v) in s.bias_sd.iter().enumerate() {
+        if i > 0 {
+            out.push(',');
+        }
+        json_num(out, *v);
+    }
+    out.push_str("]}\n");
+}
+
+/// Encodes batches of samples in one format, with the stream preamble each format needs.
+pub struct Encoder {
+    format: Format,
+    text: String,
+}
+
+impl Encoder {
+    pub fn new(format: Format) -> Self {
+        Encoder {
+            format,
+            text: String::new(),
+        }
+    }
+
+    /// What a consumer must read first: the log header (native file), the CSV header, or nothing.
+    pub fn preamble(&self, d: &Descriptor, as_file: bool, buf: &mut BytesMut) {
+        match self.format {
+            Format::Native if as_file => encode_log_header(d, buf),
+            Format::Native => encode_descriptor(d, buf),
+            Format::Csv => {
+                buf.put_slice(CSV_HEADER.as_bytes());
+                buf.put_u8(b'\n');
+            }
+            Format::Jsonl => {}
+        }
+    }
+
+    /// A descriptor met mid-stream (only the native format carries it).
+    pub fn descriptor(&self, d: &Descriptor, buf: &mut BytesMut) {
+        if self.format == Format::Native {
+            encode_descriptor(d, buf);
+        }
+    }
+
+    pub fn sample(&mut self, s: &Sample, buf: &mut BytesMut) {
+        match self.format {
+            Format::Native => encode_sample(s, buf),
+            Format::Csv => {
+                self.text.clear();
+                write_csv_row(s, &mut self.text);
+                buf.put_slice(self.text.as_bytes());
+            }
+            Format::Jsonl => {
+                self.text.clear();
+                write_json_row(s, &mut self.text);
+                buf.put_slice(self.text.as_bytes());
+            }
+        }
+    }
+}

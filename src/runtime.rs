@@ -1,0 +1,328 @@
+//! The one async loop in the middle: receive from the source, run the synchronous pipeline,
+//! offer the result to every sink — and publish health beside the data.
+
+use crate::config::{Config, Sink, SourceConfig};
+use crate::frame::{DecoderStats, Descriptor};
+use crate::io::sink::{self, SinkHandle, SinkItem, SinkReport};
+use crate::io::source::{self, SourceEvent};
+use crate::sample::{Sample, flags};
+use crate::stage::Pipeline;
+use serde::Serialize;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use tokio::sync::mpsc;
+
+/// Health of one run: published at intervals and at the end.
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct Health {
+    pub elapsed_s: f64,
+    pub decoder: DecoderStats,
+    pub descriptor: Option<Descriptor>,
+    pub samples_in: u64,
+    pub samples_out: u64,
+    /// Output samples carrying each flag of interest.
+    pub flagged_replaced: u64,
+    pub flagged_gap: u64,
+    pub flagged_duplicate: u64,
+    pub flagged_non_finite: u64,
+    pub flagged_saturated: u64,
+    pub flagged_warming_up: u64,
+    pub flagged_bias_removed: u64,
+    pub source_outages: u64,
+    pub stages: Vec<(String, u64)>,
+    pub sinks: Vec<SinkReport>,
+    /// Why the run ended: "end of input", "signal", ...
+    pub ended_by: String,
+}
+
+impl Health {
+    fn count(&mut self, s: &Sample) {
+        self.samples_out += 1;
+        let f = s.flags;
+        self.flagged_replaced += u64::from(f & flags::REPLACED != 0);
+        self.flagged_gap += u64::from(f & flags::GAP != 0);
+        self.flagged_duplicate += u64::from(f & flags::DUPLICATE != 0);
+        self.flagged_non_finite += u64::from(f & flags::NON_FINITE != 0);
+        self.flagged_saturated += u64::from(f & flags::SAT_ANY != 0);
+        self.flagged_warming_up += u64::from(f & flags::WARMING_UP != 0);
+        self.flagged_bias_removed += u64::from(f & flags::BIAS_REMOVED != 0);
+    }
+
+    /// Human-readable summary (several lines).
+    pub fn text(&self) -> String {
+        use std::fmt::Write;
+        let d = &self.decoder;
+        let mut o = String::new();
+        let _ = writeln!(
+            o,
+            "imuprep summary ({}; {:.3} s)",
+            self.ended_by, self.elapsed_s
+        );
+        if let Some(desc) = &self.descriptor {
+            let _ = writeln!(
+                o,
+                "  sensor     : device {} at {} Hz, gyro range {} rad/s, accel range {} m/s², axes {:?}",
+                desc.device_id,
+                desc.sample_rate_hz,
+                desc.gyro_range_rad_s,
+                desc.accel_range_m_s2,
+                desc.axes
+            );
+        }
+        let _ = writeln!(
+            o,
+            "  frames     : {} bytes in, {} good frames ({} samples, {} descriptors)",
+            d.bytes_in, d.frames_ok, d.samples, d.descriptors
+        );
+        let _ = writeln!(
+            o,
+            "  faults     : {} CRC errors, {} header errors, {} bad lengths, {} resyncs, {} garbage bytes, {} truncated, {} unknown type, {} bad payload",
+            d.crc_errors,
+            d.header_errors,
+            d.bad_length,
+            d.resyncs,
+            d.garbage_bytes,
+            d.truncated,
+            d.unknown_type,
+            d.bad_payload
+        );
+        let _ = writeln!(
+            o,
+            "  sequence   : {} gaps ({} frames missing), {} duplicates, {} restarts",
+            d.gaps, d.missing_frames, d.duplicates, d.seq_restarts
+        );
+        let _ = writeln!(
+            o,
+            "  samples    : {} in, {} out; flagged: {} replaced, {} non-finite, {} saturated, {} warming up, {} bias removed",
+            self.samples_in,
+            self.samples_out,
+            self.flagged_replaced,
+            self.flagged_non_finite,
+            self.flagged_saturated,
+            self.flagged_warming_up,
+            self.flagged_bias_removed
+        );
+        if self.source_outages > 0 {
+            let _ = writeln!(o, "  source     : {} outages", self.source_outages);
+        }
+        for (k, v) in &self.stages {
+            let _ = writeln!(o, "  stage      : {k} = {v}");
+        }
+        for s in &self.sinks {
+            let _ = writeln!(
+                o,
+                "  sink       : {} — {} out, {} dropped, {} errors",
+                s.name, s.samples_out, s.dropped, s.errors
+            );
+            for c in &s.clients {
+                let _ = writeln!(
+                    o,
+                    "               client {} — {} sent, {} dropped (lag){}",
+                    c.peer,
+                    c.samples_sent,
+                    c.samples_dropped,
+                    if c.connected { "" } else { ", gone" }
+                );
+            }
+        }
+        o
+    }
+
+    /// One-line form for interval logging.
+    fn line(&self) -> String {
+        let dropped: u64 = self
+            .sinks
+            .iter()
+            .map(|s| s.dropped + s.clients.iter().map(|c| c.samples_dropped).sum::<u64>())
+            .sum();
+        format!(
+            "in={} out={} crc_err={} resyncs={} gaps={} dup={} nan={} sat={} replaced={} outages={} sink_dropped={}",
+            self.samples_in,
+            self.samples_out,
+            self.decoder.crc_errors,
+            self.decoder.resyncs,
+            self.decoder.gaps,
+            self.decoder.duplicates,
+            self.flagged_non_finite,
+            self.flagged_saturated,
+            self.flagged_replaced,
+            self.source_outages,
+            dropped
+        )
+    }
+}
+
+/// Run source → pipeline → sinks until the input ends or a signal arrives.
+pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health> {
+    // Sinks first: a bad address or path fails before any data is read.
+    let mut sinks = Vec::new();
+    for s in &cfg.sinks {
+        sinks.push(sink::start(s).await?);
+    }
+    let (tx, mut rx) = mpsc::channel::<SourceEvent>(16);
+    let src = match &cfg.source {
+        SourceConfig::Replay { path, speed } => {
+            let f = source::open_log(path).await?;
+            tokio::spawn(source::replay(f, *speed, tx))
+        }
+        SourceConfig::Stdin => tokio::spawn(source::stdin(tx)),
+        SourceConfig::Serial {
+            port,
+            baud,
+            retry_initial_ms,
+            retry_max_ms,
+        } => tokio::spawn(source::serial(
+            port.clone(),
+            *baud,
+            Duration::from_millis(*retry_initial_ms),
+            Duration::from_millis(*retry_max_ms),
+            tx,
+        )),
+    };
+    let started = Instant::now();
+    let mut health = Health::default();
+    let interval = cfg.health.interval_s;
+    let mut tick = tokio::time::interval(Duration::from_secs_f64(if interval > 0.0 {
+        interval
+    } else {
+        3600.0
+    }));
+    tick.tick().await;
+    let mut shutdown = Box::pin(shutdown_signal());
+    loop {
+        tokio::select! {
+            ev = rx.recv() => match ev {
+                Some(SourceEvent::Samples(batch, stats)) => {
+                    health.decoder = stats;
+                    health.samples_in += batch.len() as u64;
+                    let mut out = batch;
+                    for s in out.iter_mut() {
+                        *s = pipeline.process(*s);
+                        health.count(s);
+                    }
+                    let out = Arc::new(out);
+                    for k in &sinks {
+                        k.offer(SinkItem::Samples(out.clone())).await;
+                    }
+                }
+                Some(SourceEvent::Descriptor(d)) => {
+                    health.descriptor = Some(d);
+                    for k in &sinks {
+                        k.offer(SinkItem::Descriptor(d)).await;
+                    }
+                }
+                Some(SourceEvent::Outage { reason, outages }) => {
+                    health.source_outages = outages;
+                    tracing::warn!("source outage #{outages}: {reason}");
+                }
+                Some(SourceEvent::Connected { name }) => tracing::info!("source connected: {name}"),
+                Some(SourceEvent::End(stats)) => {
+                    health.decoder = stats;
+                    health.ended_by = "end of input".into();
+                    break;
+                }
+                None => {
+                    health.ended_by = "source stopped".into();
+                    break;
+                }
+            },
+            _ = tick.tick(), if interval > 0.0 => {
+                fill(&mut health, &pipeline, &sinks, started);
+                tracing::info!("health: {}", health.line());
+            }
+            sig = &mut shutdown => {
+                health.ended_by = format!("signal {sig}");
+                break;
+            }
+        }
+    }
+    src.abort();
+    // Dropping each sink's sender closes its queue; the task flushes and ends.
+    let mut closing: Vec<_> = sinks
+        .into_iter()
+        .map(|k| (k.name, k.stats, k.task))
+        .collect();
+    for (_, _, task) in closing.iter_mut() {
+        // Network sinks may hold clients open; give them a moment, then stop.
+        let _ = tokio::time::timeout(Duration::from_secs(2), task).await;
+    }
+    health.elapsed_s = started.elapsed().as_secs_f64();
+    health.stages = pipeline.counters();
+    health.sinks = closing.iter().map(|(n, s, _)| s.report(n)).collect();
+    Ok(health)
+}
+
+fn fill(h: &mut Health, p: &Pipeline, sinks: &[SinkHandle], started: Instant) {
+    h.elapsed_s = started.elapsed().as_secs_f64();
+    h.stages = p.counters();
+    h.sinks = sinks.iter().map(|s| s.stats.report(&s.name)).collect();
+}
+
+/// Resolves on SIGINT or SIGTERM with the signal's name.
+async fn shutdown_signal() -> &'static str {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{SignalKind, signal};
+        let mut term = match signal(SignalKind::terminate()) {
+            Ok(s) => s,
+            Err(_) => {
+                let _ = tokio::signal::ctrl_c().await;
+                return "SIGINT";
+            }
+        };
+        tokio::select! {
+            _ = tokio::signal::ctrl_c() => "SIGINT",
+            _ = term.recv() => "SIGTERM",
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = tokio::signal::ctrl_c().await;
+        "SIGINT"
+    }
+}
+
+/// Sinks given on the command line (`--out SPEC`), e.g. `csv:out.csv`, `stdout:jsonl`,
+/// `file:clean.log`, `tcp:127.0.0.1:7700`, `udp:127.0.0.1:7701`.
+pub fn parse_out_spec(spec: &str) -> Result<Sink, String> {
+    use crate::config::Format;
+    let (kind, rest) = spec.split_once(':').unwrap_or((spec, ""));
+    let fmt = |s: &str| match s {
+        "" | "csv" => Ok(Format::Csv),
+        "jsonl" | "json" => Ok(Format::Jsonl),
+        "native" => Ok(Format::Native),
+        o => Err(format!("unknown stdout format {o:?} (csv, jsonl, native)")),
+    };
+    match kind {
+        "stdout" | "-" => Ok(Sink::Stdout { format: fmt(rest)? }),
+        "file" | "log" => Ok(Sink::File {
+            path: rest.into(),
+            format: Format::Native,
+        }),
+        "csv" => Ok(Sink::File {
+            path: rest.into(),
+            format: Format::Csv,
+        }),
+        "jsonl" => Ok(Sink::File {
+            path: rest.into(),
+            format: Format::Jsonl,
+        }),
+        "tcp" => Ok(Sink::Tcp {
+            bind: rest
+                .parse()
+                .map_err(|_| format!("bad tcp address {rest:?}"))?,
+            format: Format::Native,
+            queue: 256,
+        }),
+        "udp" => Ok(Sink::Udp {
+            targets: vec![
+                rest.parse()
+                    .map_err(|_| format!("bad udp address {rest:?}"))?,
+            ],
+            format: Format::Native,
+        }),
+        _ => Err(format!(
+            "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR"
+        )),
+    }
+}
