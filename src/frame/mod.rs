@@ -20,7 +20,7 @@ pub mod codec;
 
 use crate::sample::{Sample, flags};
 use bytes::{BufMut, BytesMut};
-use crc::{CRC_16_IBM_3740, CRC_32_ISCSI, Crc};
+use crc::{CRC_16_IBM_3740, CRC_32_ISCSI, Crc, Table};
 
 pub use codec::{DecoderStats, FrameDecoder, FrameEncoder};
 
@@ -57,8 +57,8 @@ pub const LOG_VERSION: u16 = 1;
 /// Bytes of the log file header before the first frame.
 pub const LOG_HEADER_LEN: usize = 12;
 
-pub(crate) const CRC16: Crc<u16> = Crc::<u16>::new(&CRC_16_IBM_3740);
-pub(crate) const CRC32C: Crc<u32> = Crc::<u32>::new(&CRC_32_ISCSI);
+pub(crate) const CRC16: Crc<u16, Table<16>> = Crc::<u16, Table<16>>::new(&CRC_16_IBM_3740);
+pub(crate) const CRC32C: Crc<u32, Table<16>> = Crc::<u32, Table<16>>::new(&CRC_32_ISCSI);
 
 /// Axis convention of the body frame, as declared by the sensor.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -141,31 +141,43 @@ pub fn encode_descriptor(d: &Descriptor, buf: &mut BytesMut) {
 
 /// Append one sample frame: a clean-sample frame (with bias and its σ) when the bias stage
 /// removed a bias, else a plain sample frame.
+///
+/// The frame is assembled in a stack array and appended once: one capacity check per frame
+/// instead of one per field.
 pub fn encode_sample(s: &Sample, buf: &mut BytesMut) {
+    const MAX: usize = HEADER_LEN + CLEAN_SAMPLE_PAYLOAD + TRAILER_LEN;
     let with_bias = s.flags & flags::BIAS_REMOVED != 0;
     let (ty, len) = if with_bias {
         (MSG_CLEAN_SAMPLE, CLEAN_SAMPLE_PAYLOAD)
     } else {
         (MSG_SAMPLE, SAMPLE_PAYLOAD)
     };
-    buf.reserve(HEADER_LEN + len + TRAILER_LEN);
-    let start = buf.len();
-    put_header(buf, ty, len, s.seq);
-    buf.put_u64_le(s.t_ns);
-    for v in s.channels() {
-        buf.put_f32_le(v as f32);
+    let mut f = [0u8; MAX];
+    f[0..2].copy_from_slice(&SYNC);
+    f[2] = VERSION;
+    f[3] = ty;
+    f[4..6].copy_from_slice(&(len as u16).to_le_bytes());
+    f[6..10].copy_from_slice(&s.seq.to_le_bytes());
+    let hc = CRC16.checksum(&f[..10]);
+    f[10..12].copy_from_slice(&hc.to_le_bytes());
+    let p = HEADER_LEN;
+    f[p..p + 8].copy_from_slice(&s.t_ns.to_le_bytes());
+    for (i, v) in s.channels().iter().enumerate() {
+        f[p + 8 + 4 * i..p + 12 + 4 * i].copy_from_slice(&(*v as f32).to_le_bytes());
     }
-    buf.put_f32_le(s.temp_c.map_or(f32::NAN, |t| t as f32));
-    buf.put_u32_le(s.flags);
+    let t = s.temp_c.map_or(f32::NAN, |t| t as f32);
+    f[p + 32..p + 36].copy_from_slice(&t.to_le_bytes());
+    f[p + 36..p + 40].copy_from_slice(&s.flags.to_le_bytes());
     if with_bias {
-        for v in s.bias {
-            buf.put_f32_le(v);
-        }
-        for v in s.bias_sd {
-            buf.put_f32_le(v);
+        for i in 0..6 {
+            f[p + 40 + 4 * i..p + 44 + 4 * i].copy_from_slice(&s.bias[i].to_le_bytes());
+            f[p + 64 + 4 * i..p + 68 + 4 * i].copy_from_slice(&s.bias_sd[i].to_le_bytes());
         }
     }
-    put_trailer(buf, start);
+    let end = HEADER_LEN + len;
+    let c = CRC32C.checksum(&f[..end]);
+    f[end..end + 4].copy_from_slice(&c.to_le_bytes());
+    buf.extend_from_slice(&f[..end + 4]);
 }
 
 /// Append the recorded-log file header (magic, version, reserved) and the descriptor frame.

@@ -1,0 +1,57 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use imuprep::frame::Descriptor;
+use imuprep::rng::Rng;
+use imuprep::sample::Sample;
+use std::path::PathBuf;
+
+/// `../shared/data/real/<rel>` beside the repo, or `None` (and a message) when absent, so a
+/// fresh clone elsewhere still passes.
+pub fn real_data(rel: &str) -> Option<PathBuf> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real").join(rel);
+    if p.exists() {
+        Some(p)
+    } else {
+        eprintln!("SKIP: real recording {} not found (../shared/data/real is absent here)", p.display());
+        None
+    }
+}
+
+/// A seeded stream of plausible samples at 200 Hz.
+pub fn samples(n: usize, seed: u64) -> Vec<Sample> {
+    let mut r = Rng::new(seed);
+    (0..n)
+        .map(|i| {
+            let mut s = Sample {
+                seq: i as u32,
+                t_ns: i as u64 * 5_000_000,
+                temp_c: if i % 7 == 0 { None } else { Some(25.0 + r.normal()) },
+                ..Sample::default()
+            };
+            s.set_channels(&[
+                0.01 * r.normal(),
+                0.01 * r.normal(),
+                0.3 + 0.01 * r.normal(),
+                0.05 * r.normal(),
+                0.05 * r.normal(),
+                -9.80665 + 0.05 * r.normal(),
+            ]);
+            s
+        })
+        .collect()
+}
+
+pub fn descriptor() -> Descriptor {
+    Descriptor {
+        sample_rate_hz: 200.0,
+        gyro_range_rad_s: 8.7,
+        accel_range_m_s2: 156.9,
+        axes: imuprep::frame::AxisConvention::Frd,
+        device_id: 7,
+    }
+}
+
+pub fn bin() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_imuprep"))
+}
