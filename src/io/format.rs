@@ -35,40 +35,51 @@ fn json_num(out: &mut String, v: f32) {
     }
 }
 
+fn json_array(out: &mut String, key: &str, vals: impl Iterator<Item = f32>) {
+    let _ = write!(out, ",\"{key}\":[");
+    for (i, v) in vals.enumerate() {
+        if i > 0 {
+            out.push(',');
+        }
+        json_num(out, v);
+    }
+    out.push(']');
+}
+
 /// Append one JSON line: time, channels, temperature, flags, and the bias estimate with its σ.
 pub fn write_json_row(s: &Sample, out: &mut String) {
-    let _ = write!(out, "{{\"seq\":{},\"t_ns\":{},\"gyro\":[", s.seq, s.t_ns);
+    let _ = write!(out, "{{\"seq\":{},\"t_ns\":{}", s.seq, s.t_ns);
     let ch = s.channels();
-    for (i, v) in ch[..3].iter().enumerate() {
-        if i > 0 {
-            out.push(',');
-        }
-        json_num(out, *v as f32);
-    }
-    out.push_str("],\"accel\":[");
-    for (i, v) in ch[3..].iter().enumerate() {
-        if i > 0 {
-            out.push(',');
-        }
-        json_num(out, *v as f32);
-    }
-    out.push_str("],\"temp\":");
+    json_array(out, "gyro", ch[..3].iter().map(|v| *v as f32));
+    json_array(out, "accel", ch[3..].iter().map(|v| *v as f32));
+    out.push_str(",\"temp\":");
     json_num(out, s.temp_c.map_or(f32::NAN, |t| t as f32));
-    let _ = write!(out, ",\"flags\":{},\"bias\":[", s.flags);
-    for (i, v) in s.bias.iter().enumerate() {
-        if i > 0 {
-            out.push(',');
-        }
-        json_num(out, *v);
+    let _ = write!(out, ",\"flags\":{}", s.flags);
+    json_array(out, "bias", s.bias.iter().copied());
+    json_array(out, "bias_sd", s.bias_sd.iter().copied());
+    out.push_str("}\n");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_line_is_valid_json_with_null_for_absent_values() {
+        let mut s = Sample {
+            seq: 3,
+            t_ns: 10,
+            ..Sample::default()
+        };
+        s.gyro[0] = f64::NAN;
+        let mut o = String::new();
+        write_json_row(&s, &mut o);
+        let v: serde_json::Value = serde_json::from_str(o.trim()).unwrap();
+        assert_eq!(v["seq"], 3);
+        assert!(v["gyro"][0].is_null());
+        assert!(v["temp"].is_null());
+        assert_eq!(v["bias_sd"].as_array().unwrap().len(), 6);
     }
-    out.push_str("],\"bias_sd\":[");
-    for (i, v) in s.bias_sd.iter().enumerate() {
-        if i > 0 {
-            out.push(',');
-        }
-        json_num(out, *v);
-    }
-    out.push_str("]}\n");
 }
 
 /// Encodes batches of samples in one format, with the stream preamble each format needs.
