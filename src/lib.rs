@@ -18,6 +18,7 @@ pub mod io;
 pub mod rng;
 pub mod runtime;
 pub mod sample;
+pub mod sim;
 pub mod stage;
 
 pub use sample::{Sample, flags};
