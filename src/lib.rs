@@ -12,9 +12,11 @@
 //! Async lives only at the edges ([`io`], [`runtime`]); the numerical stages ([`stage`]) are
 //! synchronous and pure, and the offline tools share their models.
 
+pub mod analysis;
 pub mod config;
 pub mod frame;
 pub mod io;
+pub mod model;
 pub mod rng;
 pub mod runtime;
 pub mod sample;

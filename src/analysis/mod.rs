@@ -1,0 +1,6 @@
+//! Offline analyses of recorded sensor series: noise characterisation and model comparison.
+
+pub mod allan;
+pub mod bias_compare;
+pub mod gauss_markov;
+pub mod wavelet;
