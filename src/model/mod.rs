@@ -3,6 +3,7 @@
 //! orthogonal search ([`fos`]) over candidate families ([`fos_candidates`]).
 
 pub mod ar;
+pub mod arima;
 pub mod burg;
 pub mod covariance;
 pub mod fos;

@@ -4,6 +4,7 @@
 //! no `tracing` per sample. Health is read from it at report intervals through [`Stage::counters`].
 
 pub mod build;
+pub mod gross_error;
 
 use crate::sample::Sample;
 

@@ -1,0 +1,111 @@
+//! The per-sample path of the gross-error stage does not touch the heap: a counting global
+//! allocator (this test binary only) sees zero allocations while the stage processes spikes,
+//! runs, level changes, NaN, saturation, and short and long gaps on all six channels. The one
+//! allowed allocation — identification at the end of warm-up — happens before counting starts.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use imuprep::rng::Rng;
+use imuprep::sample::{Sample, flags};
+use imuprep::stage::Stage;
+use imuprep::stage::gross_error::{GrossErrorSettings, GrossErrorStage, Replacement};
+
+struct Counting;
+
+thread_local! {
+    // Const-initialised, so touching them never allocates.
+    static ON: Cell<bool> = const { Cell::new(false) };
+    static COUNT: Cell<usize> = const { Cell::new(0) };
+}
+
+fn note() {
+    if ON.with(|c| c.get()) {
+        COUNT.with(|c| c.set(c.get() + 1));
+    }
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        note();
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
+        note();
+        unsafe { System.alloc_zeroed(l) }
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        note();
+        unsafe { System.realloc(p, l, n) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        unsafe { System.dealloc(p, l) }
+    }
+}
+
+#[global_allocator]
+static ALLOC: Counting = Counting;
+
+fn run(replacement: Replacement) {
+    let s = GrossErrorSettings {
+        warmup_samples: 600,
+        replacement,
+        ..Default::default()
+    };
+    let mut st = GrossErrorStage::new(s, None).unwrap();
+    let mut rng = Rng::new(99);
+    let mut seq = 0u32;
+    let make = |rng: &mut Rng, seq: u32, scale: f64| {
+        let mut smp = Sample {
+            seq,
+            t_ns: seq as u64 * 5_000_000,
+            ..Sample::default()
+        };
+        let v: [f64; 6] = std::array::from_fn(|c| {
+            let base = if c == 5 { 9.81 } else { 0.0 };
+            base + scale * 0.01 * rng.normal()
+        });
+        smp.set_channels(&v);
+        smp
+    };
+    // Warm-up (identification allocates here, once per channel).
+    for _ in 0..700 {
+        st.process(make(&mut rng, seq, 1.0));
+        seq += 1;
+    }
+    ON.with(|c| c.set(true));
+    let mut replaced = 0u64;
+    for i in 0..20_000u32 {
+        let mut smp = make(&mut rng, seq, 1.0);
+        match i % 997 {
+            10 => smp.gyro.z += 1.0,             // spike
+            20..=45 => smp.accel.x += 2.0,       // long run → level change
+            60 => smp.gyro.x = f64::NAN,         // non-finite
+            70 => smp.flags |= flags::sat_ch(4), // saturated
+            _ => {}
+        }
+        if i % 4001 == 100 {
+            seq += 2; // short gap: bridged
+            smp.seq = seq;
+            smp.flags |= flags::GAP;
+        }
+        if i % 7001 == 200 {
+            seq += 500; // long gap: reset
+            smp.seq = seq;
+            smp.flags |= flags::GAP;
+        }
+        let out = st.process(smp);
+        replaced += out.has(flags::REPLACED) as u64;
+        seq += 1;
+    }
+    ON.with(|c| c.set(false));
+    let n = COUNT.with(|c| c.replace(0));
+    assert!(replaced > 0, "the run must exercise replacement");
+    assert_eq!(n, 0, "{n} heap allocations on the per-sample path");
+}
+
+#[test]
+fn per_sample_processing_does_not_allocate() {
+    run(Replacement::Prediction);
+    run(Replacement::MedianOfPredictions);
+}
