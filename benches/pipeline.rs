@@ -24,7 +24,14 @@ fn input() -> Vec<u8> {
             temp_c: Some(25.0),
             ..Sample::default()
         };
-        s.set_channels(&[r.normal(), r.normal(), r.normal(), r.normal(), r.normal(), 9.8 + r.normal()]);
+        s.set_channels(&[
+            r.normal(),
+            r.normal(),
+            r.normal(),
+            r.normal(),
+            r.normal(),
+            9.8 + r.normal(),
+        ]);
         encode_sample(&s, &mut b);
     }
     b.to_vec()

@@ -87,6 +87,35 @@ enum Cmd {
         #[arg(long)]
         seed: Option<u64>,
     },
+    /// Compare methods on the same data. `--detectors --scenario S.toml`: gross-error detectors
+    /// against the simulator's truth. `LOG --channel C`: the bias models of the FOS paper.
+    Compare {
+        /// Recorded log (bias-model comparison).
+        log: Option<PathBuf>,
+        /// Compare gross-error detectors (needs --scenario: truth comes from the simulator).
+        #[arg(long)]
+        detectors: bool,
+        /// Scenario TOML to simulate (with --detectors).
+        #[arg(long)]
+        scenario: Option<PathBuf>,
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Config whose [gross_error.settings] the online stage uses (default: embedded).
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Channels for the bias comparison (gx gy gz ax ay az); repeatable; default all.
+        #[arg(long = "channel")]
+        channels: Vec<String>,
+        /// Skip this many seconds at the start (start-up transients).
+        #[arg(long, default_value_t = 0.0)]
+        skip_s: f64,
+        /// Use the temperature channel as an exogenous FOS input.
+        #[arg(long)]
+        temp_exo: bool,
+        /// Write the report as JSON here (and CSV beside it for the bias comparison).
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Write a log's samples as canonical CSV plus seq and flags.
     Export {
         log: PathBuf,
@@ -217,6 +246,29 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             );
             Ok(ExitCode::SUCCESS)
         }
+        Cmd::Compare {
+            log,
+            detectors,
+            scenario,
+            seed,
+            config,
+            channels,
+            skip_s,
+            temp_exo,
+            json,
+        } => {
+            if detectors {
+                let scenario = scenario.context(
+                    "--detectors needs --scenario S.toml (the truth comes from the simulator)",
+                )?;
+                compare_detectors(&scenario, seed, &config, json)
+            } else {
+                let log = log.context(
+                    "compare needs a LOG (bias models) or --detectors --scenario S.toml",
+                )?;
+                compare_bias(&log, &channels, skip_s, temp_exo, json)
+            }
+        }
         Cmd::Export { log, output } => {
             let (_, samples, stats) = csvio::read_log(&log)?;
             csvio::write_csv(&output, &samples)?;
@@ -249,13 +301,123 @@ fn daemon(cfg: Config, summary_json: Option<PathBuf>) -> Result<ExitCode> {
         .worker_threads(2)
         .enable_all()
         .build()?;
-    let pipeline = cfg.stages.build();
+    let pipeline = cfg.stages.build().map_err(|e| anyhow::anyhow!(e))?;
     tracing::info!(stages = ?pipeline.stage_names(), "pipeline ready");
     let health = rt.block_on(imuprep::runtime::run(&cfg, pipeline))?;
     eprint!("{}", health.text());
     if let Some(p) = summary_json {
         std::fs::write(&p, serde_json::to_string_pretty(&health)?)
             .with_context(|| format!("writing {}", p.display()))?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn read_scenario(p: &std::path::Path) -> Result<imuprep::sim::Scenario> {
+    let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+    imuprep::sim::Scenario::from_toml_str(&text)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))
+}
+
+fn compare_detectors(
+    scenario: &std::path::Path,
+    seed: Option<u64>,
+    config: &Option<PathBuf>,
+    json: Option<PathBuf>,
+) -> Result<ExitCode> {
+    use imuprep::analysis::detector_compare as dc;
+    let scn = read_scenario(scenario)?;
+    let seed = imuprep::sim::log::effective_seed(&scn, seed);
+    let cfg = load_config(config)?;
+    let settings = cfg
+        .stages
+        .gross_error
+        .map(|g| g.settings)
+        .unwrap_or_default();
+    let (samples, truth) = dc::simulate_decoded(&scn, seed)?;
+    let rows =
+        dc::compare_detectors(&samples, &truth, &settings).map_err(|e| anyhow::anyhow!(e))?;
+    let report = dc::DetectorReport {
+        scenario: scenario.display().to_string(),
+        seed,
+        samples: samples.len(),
+        gross_samples: truth
+            .iter()
+            .map(|t| t.gross_mask.iter().filter(|m| **m).count() as u64)
+            .sum(),
+        rows,
+    };
+    print!("{}", report.text());
+    if let Some(p) = json {
+        std::fs::write(&p, serde_json::to_string_pretty(&report)?)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn compare_bias(
+    log: &std::path::Path,
+    channels: &[String],
+    skip_s: f64,
+    temp_exo: bool,
+    json: Option<PathBuf>,
+) -> Result<ExitCode> {
+    use imuprep::analysis::bias_compare::{CompareSettings, SensorKind, compare_channel};
+    use imuprep::sample::{CHANNEL_NAMES, channel_index};
+    let (desc, samples, _) = csvio::read_log(log)?;
+    let rate = desc.map(|d| d.sample_rate_hz).unwrap_or(0.0);
+    anyhow::ensure!(
+        rate > 0.0,
+        "{}: the log does not declare its sample rate",
+        log.display()
+    );
+    let skip = (skip_s * rate).round() as usize;
+    anyhow::ensure!(skip < samples.len(), "--skip-s removes the whole log");
+    let samples = &samples[skip..];
+    let chans: Vec<usize> = if channels.is_empty() {
+        (0..6).collect()
+    } else {
+        channels
+            .iter()
+            .map(|c| {
+                channel_index(c)
+                    .with_context(|| format!("unknown channel {c:?} (gx gy gz ax ay az)"))
+            })
+            .collect::<Result<_>>()?
+    };
+    let temp: Vec<f64> = samples.iter().filter_map(|s| s.temp_c).collect();
+    let have_temp = temp_exo && temp.len() == samples.len();
+    anyhow::ensure!(
+        !temp_exo || have_temp,
+        "--temp-exo: the log has no complete temperature channel"
+    );
+    let settings = CompareSettings::paper(rate);
+    let mut reports = Vec::new();
+    for c in chans {
+        let y: Vec<f64> = samples.iter().map(|s| s.channel(c)).collect();
+        let exo: Vec<&[f64]> = if have_temp {
+            vec![&temp[..]]
+        } else {
+            Vec::new()
+        };
+        let kind = if c < 3 {
+            SensorKind::Gyro
+        } else {
+            SensorKind::Accel
+        };
+        let rep = compare_channel(&y, &exo, CHANNEL_NAMES[c], kind, &settings)?;
+        println!("{}", rep.to_text_table());
+        reports.push(rep);
+    }
+    if let Some(p) = json {
+        let mut csv = String::new();
+        for r in &reports {
+            csv.push_str(&r.to_csv());
+        }
+        std::fs::write(p.with_extension("csv"), csv)?;
+        let all: Vec<serde_json::Value> = reports
+            .iter()
+            .map(|r| serde_json::from_str(&r.to_json()).unwrap_or(serde_json::Value::Null))
+            .collect();
+        std::fs::write(&p, serde_json::to_string_pretty(&all)?)?;
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -51,7 +51,11 @@ fn unreadable_config_is_a_clear_error() {
 fn binary_exits_non_zero_and_starts_nothing_on_a_bad_config() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("bad.toml");
-    std::fs::write(&p, "[source]\nkind = \"serial\"\nport = \"\"\nbaud = 0\n[bogus]\n").unwrap();
+    std::fs::write(
+        &p,
+        "[source]\nkind = \"serial\"\nport = \"\"\nbaud = 0\n[bogus]\n",
+    )
+    .unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_imuprep"))
         .args(["run", "--config"])
         .arg(&p)
@@ -59,6 +63,9 @@ fn binary_exits_non_zero_and_starts_nothing_on_a_bad_config() {
         .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("source.port") && err.contains("source.baud") && err.contains("bogus"), "{err}");
+    assert!(
+        err.contains("source.port") && err.contains("source.baud") && err.contains("bogus"),
+        "{err}"
+    );
     assert!(!err.contains("pipeline ready"), "nothing may start: {err}");
 }

@@ -68,13 +68,23 @@ async fn slow_tcp_client_falls_behind_and_never_stalls_the_other() {
     }
     let seqs = match tokio::time::timeout(std::time::Duration::from_secs(30), read_task).await {
         Ok(r) => r.unwrap(),
-        Err(_) => panic!("reader did not get every frame: {:?}", h.stats.clients.lock().unwrap()),
+        Err(_) => panic!(
+            "reader did not get every frame: {:?}",
+            h.stats.clients.lock().unwrap()
+        ),
     };
-    assert_eq!(seqs, (0..total as u32).collect::<Vec<_>>(), "reader got every frame, in order");
+    assert_eq!(
+        seqs,
+        (0..total as u32).collect::<Vec<_>>(),
+        "reader got every frame, in order"
+    );
     let clients = h.stats.clients.lock().unwrap().clone();
     let stalled = &clients[0];
     let good = &clients[1];
     assert_eq!(good.samples_dropped, 0, "{clients:?}");
-    assert!(stalled.samples_dropped > 0, "lag counter must rise: {clients:?}");
+    assert!(
+        stalled.samples_dropped > 0,
+        "lag counter must rise: {clients:?}"
+    );
     assert_eq!(stalled.samples_sent + stalled.samples_dropped, total as u64);
 }

@@ -11,19 +11,28 @@ fn regenerate(name: &str) -> (Vec<u8>, Vec<u8>) {
     let out = dir.path().join("x.log");
     let seed = imuprep::sim::log::effective_seed(&scn, None);
     imuprep::sim::log::write_sim_log(&scn, seed, &out, None).unwrap();
-    (std::fs::read(out).unwrap(), std::fs::read(root.join(format!("{name}.log"))).unwrap())
+    (
+        std::fs::read(out).unwrap(),
+        std::fs::read(root.join(format!("{name}.log"))).unwrap(),
+    )
 }
 
 #[test]
 fn committed_static_bench_log_equals_its_scenario() {
     let (fresh, committed) = regenerate("static_bench");
-    assert!(fresh == committed, "replay/static_bench.log is stale: regenerate it (see its TOML)");
+    assert!(
+        fresh == committed,
+        "replay/static_bench.log is stale: regenerate it (see its TOML)"
+    );
 }
 
 #[test]
 fn committed_drive_log_equals_its_scenario() {
     let (fresh, committed) = regenerate("drive");
-    assert!(fresh == committed, "replay/drive.log is stale: regenerate it (see its TOML)");
+    assert!(
+        fresh == committed,
+        "replay/drive.log is stale: regenerate it (see its TOML)"
+    );
 }
 
 #[test]

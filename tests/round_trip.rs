@@ -15,7 +15,12 @@ fn import_replay_export_round_trips_canonical_csv() {
         text += &format!(
             "{},{},{},{},{},{},{},{},ignored\n",
             imuprep::io::format::t_seconds(s.t_ns),
-            c[0], c[1], c[2], c[3], c[4], c[5],
+            c[0],
+            c[1],
+            c[2],
+            c[3],
+            c[4],
+            c[5],
             s.temp_c.map(|t| t.to_string()).unwrap_or_default()
         );
     }
@@ -23,7 +28,13 @@ fn import_replay_export_round_trips_canonical_csv() {
     let log = dir.path().join("in.log");
     let clean = dir.path().join("clean.log");
     let out = dir.path().join("out.csv");
-    let st = Command::new(common::bin()).args(["import"]).arg(&input).arg("-o").arg(&log).status().unwrap();
+    let st = Command::new(common::bin())
+        .args(["import"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&log)
+        .status()
+        .unwrap();
     assert!(st.success());
     let st = Command::new(common::bin())
         .arg("replay")
@@ -33,7 +44,13 @@ fn import_replay_export_round_trips_canonical_csv() {
         .status()
         .unwrap();
     assert!(st.success());
-    let st = Command::new(common::bin()).arg("export").arg(&clean).arg("-o").arg(&out).status().unwrap();
+    let st = Command::new(common::bin())
+        .arg("export")
+        .arg(&clean)
+        .arg("-o")
+        .arg(&out)
+        .status()
+        .unwrap();
     assert!(st.success());
 
     let got = std::fs::read_to_string(&out).unwrap();
@@ -42,7 +59,11 @@ fn import_replay_export_round_trips_canonical_csv() {
     let mut n = 0;
     for (line, want) in lines.zip(&samples) {
         let cells: Vec<&str> = line.split(',').collect();
-        assert_eq!(cells[0], imuprep::io::format::t_seconds(want.t_ns), "time exact to the ns");
+        assert_eq!(
+            cells[0],
+            imuprep::io::format::t_seconds(want.t_ns),
+            "time exact to the ns"
+        );
         for (c, w) in want.channels().iter().enumerate() {
             let g: f32 = cells[1 + c].parse().unwrap();
             assert_eq!(g, *w as f32, "row {n} channel {c}: f32 bit-exact");
@@ -62,11 +83,24 @@ fn import_replay_export_round_trips_canonical_csv() {
 fn import_reports_bad_cell_with_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("bad.csv");
-    std::fs::write(&input, "t,gx,gy,gz,ax,ay,az,temp\n0,1,2,3,4,5,6,\n0.01,1,2,abc,4,5,6,\n").unwrap();
-    let out = Command::new(common::bin()).arg("import").arg(&input).arg("-o").arg(dir.path().join("x.log")).output().unwrap();
+    std::fs::write(
+        &input,
+        "t,gx,gy,gz,ax,ay,az,temp\n0,1,2,3,4,5,6,\n0.01,1,2,abc,4,5,6,\n",
+    )
+    .unwrap();
+    let out = Command::new(common::bin())
+        .arg("import")
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("x.log"))
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("bad.csv:3:4") && err.contains("\"abc\""), "{err}");
+    assert!(
+        err.contains("bad.csv:3:4") && err.contains("\"abc\""),
+        "{err}"
+    );
 }
 
 #[test]
@@ -74,21 +108,52 @@ fn import_reports_missing_column_and_lists_the_header() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("bad.csv");
     std::fs::write(&input, "t,gx,gy,gz,ax,ay\n0,1,2,3,4,5\n").unwrap();
-    let out = Command::new(common::bin()).arg("import").arg(&input).arg("-o").arg(dir.path().join("x.log")).output().unwrap();
+    let out = Command::new(common::bin())
+        .arg("import")
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("x.log"))
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("missing column for az") && err.contains("t,gx,gy,gz,ax,ay"), "{err}");
+    assert!(
+        err.contains("missing column for az") && err.contains("t,gx,gy,gz,ax,ay"),
+        "{err}"
+    );
 }
 
 #[test]
 fn nan_values_are_flagged_and_passed_on() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("nan.csv");
-    std::fs::write(&input, "t,gx,gy,gz,ax,ay,az\n0,0,0,0,0,0,9.8\n0.01,NaN,0,0,0,inf,9.8\n0.02,0,0,0,0,0,9.8\n").unwrap();
+    std::fs::write(
+        &input,
+        "t,gx,gy,gz,ax,ay,az\n0,0,0,0,0,0,9.8\n0.01,NaN,0,0,0,inf,9.8\n0.02,0,0,0,0,0,9.8\n",
+    )
+    .unwrap();
     let log = dir.path().join("nan.log");
     let out = dir.path().join("nan_out.csv");
-    assert!(Command::new(common::bin()).arg("import").arg(&input).arg("-o").arg(&log).status().unwrap().success());
-    assert!(Command::new(common::bin()).arg("replay").arg(&log).arg("--out").arg(format!("csv:{}", out.display())).status().unwrap().success());
+    assert!(
+        Command::new(common::bin())
+            .arg("import")
+            .arg(&input)
+            .arg("-o")
+            .arg(&log)
+            .status()
+            .unwrap()
+            .success()
+    );
+    assert!(
+        Command::new(common::bin())
+            .arg("replay")
+            .arg(&log)
+            .arg("--out")
+            .arg(format!("csv:{}", out.display()))
+            .status()
+            .unwrap()
+            .success()
+    );
     let text = std::fs::read_to_string(&out).unwrap();
     let rows: Vec<&str> = text.lines().skip(1).collect();
     assert_eq!(rows.len(), 3, "no sample lost");
@@ -101,7 +166,11 @@ fn replay_refuses_a_file_that_is_not_a_log() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("x.log");
     std::fs::write(&p, b"this is not an imuprep log").unwrap();
-    let out = Command::new(common::bin()).arg("replay").arg(&p).output().unwrap();
+    let out = Command::new(common::bin())
+        .arg("replay")
+        .arg(&p)
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("wrong magic"));
 }
@@ -119,17 +188,32 @@ fn every_real_recording_imports_with_one_command() {
     ];
     let dir = tempfile::tempdir().unwrap();
     for f in files {
-        let Some(p) = common::real_data(f) else { return };
+        let Some(p) = common::real_data(f) else {
+            return;
+        };
         if f.starts_with("adis") {
             continue; // 1 M rows: exercised by the fit/compare tests; keep this test quick
         }
         let log = dir.path().join("r.log");
-        let out = Command::new(common::bin()).arg("import").arg(&p).arg("-o").arg(&log).output().unwrap();
-        assert!(out.status.success(), "{f}: {}", String::from_utf8_lossy(&out.stderr));
+        let out = Command::new(common::bin())
+            .arg("import")
+            .arg(&p)
+            .arg("-o")
+            .arg(&log)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{f}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let (_, s, _) = imuprep::io::csv::read_log(&log).unwrap();
         assert!(s.len() > 6000, "{f}");
         // Every recording is of a sensor on Earth: the mean specific force is about 1 g.
         let m = s.iter().map(|x| x.accel.norm()).sum::<f64>() / s.len() as f64;
-        assert!((m - 9.81).abs() < 1.5, "{f}: mean |f| = {m} m/s² (units wrong?)");
+        assert!(
+            (m - 9.81).abs() < 1.5,
+            "{f}: mean |f| = {m} m/s² (units wrong?)"
+        );
     }
 }

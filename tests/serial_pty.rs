@@ -31,9 +31,17 @@ fn pty_at(link: &std::path::Path) -> SerialStream {
     master
 }
 
-async fn collect(rx: &mut mpsc::Receiver<SourceEvent>, want: usize, out: &mut Vec<imuprep::Sample>, outages: &mut u64) {
+async fn collect(
+    rx: &mut mpsc::Receiver<SourceEvent>,
+    want: usize,
+    out: &mut Vec<imuprep::Sample>,
+    outages: &mut u64,
+) {
     while out.len() < want {
-        match tokio::time::timeout(Duration::from_secs(10), rx.recv()).await.expect("source went quiet") {
+        match tokio::time::timeout(Duration::from_secs(10), rx.recv())
+            .await
+            .expect("source went quiet")
+        {
             Some(SourceEvent::Samples(b, _)) => out.extend(b),
             Some(SourceEvent::Outage { outages: n, .. }) => *outages = n,
             Some(_) => {}
@@ -60,7 +68,10 @@ async fn frames_over_a_pty_arrive_and_a_vanished_port_is_survived() {
     let mut got = Vec::new();
     let mut outages = 0;
     loop {
-        match tokio::time::timeout(Duration::from_secs(10), rx.recv()).await.unwrap() {
+        match tokio::time::timeout(Duration::from_secs(10), rx.recv())
+            .await
+            .unwrap()
+        {
             Some(SourceEvent::Connected { .. }) => break,
             Some(_) => {}
             None => panic!("source ended"),
@@ -68,7 +79,10 @@ async fn frames_over_a_pty_arrive_and_a_vanished_port_is_survived() {
     }
     master.write_all(&frames(0..100)).await.unwrap();
     collect(&mut rx, 100, &mut got, &mut outages).await;
-    assert_eq!(got.iter().map(|s| s.seq).collect::<Vec<_>>(), (0..100).collect::<Vec<_>>());
+    assert_eq!(
+        got.iter().map(|s| s.seq).collect::<Vec<_>>(),
+        (0..100).collect::<Vec<_>>()
+    );
 
     // The port vanishes: close the master and remove the device link.
     drop(master);
@@ -77,7 +91,10 @@ async fn frames_over_a_pty_arrive_and_a_vanished_port_is_survived() {
     // It comes back (a new pty at the same path); frames 150.. are sent, 100..150 were lost.
     let mut master = pty_at(&link);
     loop {
-        match tokio::time::timeout(Duration::from_secs(10), rx.recv()).await.unwrap() {
+        match tokio::time::timeout(Duration::from_secs(10), rx.recv())
+            .await
+            .unwrap()
+        {
             Some(SourceEvent::Connected { .. }) => break,
             Some(SourceEvent::Outage { outages: n, .. }) => outages = n,
             Some(_) => {}
@@ -89,7 +106,10 @@ async fn frames_over_a_pty_arrive_and_a_vanished_port_is_survived() {
     assert!(outages >= 1, "the outage is counted");
     let resumed = &got[100];
     assert_eq!(resumed.seq, 150);
-    assert!(resumed.has(imuprep::flags::GAP), "the frames lost in the outage show as a gap");
+    assert!(
+        resumed.has(imuprep::flags::GAP),
+        "the frames lost in the outage show as a gap"
+    );
     task.abort();
 }
 
@@ -103,7 +123,10 @@ async fn a_serial_port_that_does_not_exist_is_retried_not_fatal() {
         Duration::from_millis(20),
         tx,
     ));
-    match tokio::time::timeout(Duration::from_secs(5), rx.recv()).await.unwrap() {
+    match tokio::time::timeout(Duration::from_secs(5), rx.recv())
+        .await
+        .unwrap()
+    {
         Some(SourceEvent::Outage { outages, reason }) => {
             assert_eq!(outages, 1);
             assert!(!reason.is_empty());

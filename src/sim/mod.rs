@@ -22,8 +22,8 @@
 //! numbers whatever the other effects do, so switching one effect off leaves the others' noise
 //! unchanged.
 
-pub mod log;
 pub mod gross;
+pub mod log;
 pub mod motion;
 pub mod processes;
 pub mod scenario;

@@ -1,9 +1,27 @@
 //! Stage settings from the config, and the pipeline they build.
+//!
+//! Each stage section has `enabled`, an optional `model` file (written by `imuprep fit`; without
+//! one the stage identifies its own model from a warm-up window) and a `settings` table. Model
+//! files are read and checked during validation, so a bad model stops the run before it starts.
 
-use crate::config::Errors;
-use crate::stage::Pipeline;
+use crate::config::{Errors, clean_serde, resolve, section};
+use crate::model::arima::ArimaModelFile;
+use crate::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
+use crate::stage::{Pipeline, Stage};
 use serde::Deserialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// `[gross_error]` as written.
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct GrossErrorSection {
+    #[serde(default)]
+    enabled: bool,
+    /// ARIMA model file from `imuprep fit` (relative to the config file).
+    model: Option<PathBuf>,
+    #[serde(default)]
+    settings: GrossErrorSettings,
+}
 
 /// Placeholder settings of a stage that is not in this build yet (kept so configs validate).
 #[derive(Debug, Clone, Deserialize, PartialEq, Default)]
@@ -13,28 +31,83 @@ pub struct Disabled {
     pub enabled: bool,
 }
 
+/// Validated gross-error stage settings.
+#[derive(Debug, Clone)]
+pub struct GrossErrorConfig {
+    pub settings: GrossErrorSettings,
+    pub model: Option<ArimaModelFile>,
+}
+
 /// Settings of every numerical stage, validated.
 #[derive(Debug, Clone, Default)]
 pub struct StagesConfig {
-    pub gross_error: Disabled,
+    pub gross_error: Option<GrossErrorConfig>,
     pub bias: Disabled,
+}
+
+/// Read a TOML model file, recording any error at `path`.
+pub fn load_model<T>(
+    base: &Path,
+    file: &Path,
+    path: &str,
+    parse: impl Fn(&str) -> Result<T, String>,
+    errs: &mut Errors,
+) -> Option<T> {
+    let p = resolve(base, file);
+    match std::fs::read_to_string(&p) {
+        Ok(text) => match parse(&text) {
+            Ok(m) => Some(m),
+            Err(e) => {
+                errs.push(path, format!("{}: {}", p.display(), clean_serde(&e)));
+                None
+            }
+        },
+        Err(e) => {
+            errs.push(path, format!("cannot read {}: {e}", p.display()));
+            None
+        }
+    }
 }
 
 impl StagesConfig {
     /// Read the stage sections of a config table; `None` if any of them had an error.
-    pub fn from_table(
-        table: &toml::Table,
-        _base: &Path,
-        errs: &mut Errors,
-    ) -> Option<StagesConfig> {
+    pub fn from_table(table: &toml::Table, base: &Path, errs: &mut Errors) -> Option<StagesConfig> {
         let n = errs.len();
-        let gross_error = crate::config::section(table, "gross_error", errs).unwrap_or_default();
-        let bias = crate::config::section(table, "bias", errs).unwrap_or_default();
+        let ge: GrossErrorSection = section(table, "gross_error", errs).unwrap_or_default();
+        let gross_error = if ge.enabled {
+            if let Err(v) = ge.settings.validate() {
+                for m in v {
+                    errs.push("gross_error.settings", m);
+                }
+            }
+            let model = ge.model.as_ref().and_then(|m| {
+                load_model(
+                    base,
+                    m,
+                    "gross_error.model",
+                    |t| ArimaModelFile::from_toml_str(t).map_err(|e| e.to_string()),
+                    errs,
+                )
+            });
+            Some(GrossErrorConfig {
+                settings: ge.settings,
+                model,
+            })
+        } else {
+            None
+        };
+        let bias = section(table, "bias", errs).unwrap_or_default();
         (errs.len() == n).then_some(StagesConfig { gross_error, bias })
     }
 
-    /// The pipeline these settings describe.
-    pub fn build(&self) -> Pipeline {
-        Pipeline::pass_through()
+    /// The pipeline these settings describe: gross errors first, then bias.
+    pub fn build(&self) -> Result<Pipeline, String> {
+        let mut stages: Vec<Box<dyn Stage>> = Vec::new();
+        if let Some(g) = &self.gross_error {
+            let st = GrossErrorStage::new(g.settings.clone(), g.model.as_ref())
+                .map_err(|e| format!("gross_error: {e}"))?;
+            stages.push(Box::new(st));
+        }
+        Ok(Pipeline::new(stages))
     }
 }

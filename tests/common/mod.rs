@@ -9,11 +9,16 @@ use std::path::PathBuf;
 /// `../shared/data/real/<rel>` beside the repo, or `None` (and a message) when absent, so a
 /// fresh clone elsewhere still passes.
 pub fn real_data(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real").join(rel);
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/real")
+        .join(rel);
     if p.exists() {
         Some(p)
     } else {
-        eprintln!("SKIP: real recording {} not found (../shared/data/real is absent here)", p.display());
+        eprintln!(
+            "SKIP: real recording {} not found (../shared/data/real is absent here)",
+            p.display()
+        );
         None
     }
 }
@@ -26,7 +31,11 @@ pub fn samples(n: usize, seed: u64) -> Vec<Sample> {
             let mut s = Sample {
                 seq: i as u32,
                 t_ns: i as u64 * 5_000_000,
-                temp_c: if i % 7 == 0 { None } else { Some(25.0 + r.normal()) },
+                temp_c: if i % 7 == 0 {
+                    None
+                } else {
+                    Some(25.0 + r.normal())
+                },
                 ..Sample::default()
             };
             s.set_channels(&[
