@@ -87,6 +87,19 @@ enum Cmd {
         #[arg(long)]
         seed: Option<u64>,
     },
+    /// Fit models from a recording: ARIMA per channel (gross-error stage) → DIR/arima.toml.
+    Fit {
+        log: PathBuf,
+        /// Directory for the model files (created if needed).
+        #[arg(long, default_value = "models")]
+        out_dir: PathBuf,
+        /// Seconds of data used for identification (the paper's training span).
+        #[arg(long, default_value_t = 180.0)]
+        train_s: f64,
+        /// Skip this many seconds at the start (start-up transients).
+        #[arg(long, default_value_t = 0.0)]
+        skip_s: f64,
+    },
     /// Compare methods on the same data. `--detectors --scenario S.toml`: gross-error detectors
     /// against the simulator's truth. `LOG --channel C`: the bias models of the FOS paper.
     Compare {
@@ -246,6 +259,12 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             );
             Ok(ExitCode::SUCCESS)
         }
+        Cmd::Fit {
+            log,
+            out_dir,
+            train_s,
+            skip_s,
+        } => fit(&log, &out_dir, train_s, skip_s),
         Cmd::Compare {
             log,
             detectors,
@@ -419,5 +438,69 @@ fn compare_bias(
             .collect();
         std::fs::write(&p, serde_json::to_string_pretty(&all)?)?;
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Samples of a log after `skip_s`, with the log's sample rate.
+fn load_span(log: &std::path::Path, skip_s: f64) -> Result<(f64, Vec<imuprep::Sample>)> {
+    let (desc, samples, _) = csvio::read_log(log)?;
+    let rate = desc.map(|d| d.sample_rate_hz).unwrap_or(0.0);
+    anyhow::ensure!(
+        rate > 0.0,
+        "{}: the log does not declare its sample rate",
+        log.display()
+    );
+    let skip = (skip_s * rate).round() as usize;
+    anyhow::ensure!(skip < samples.len(), "--skip-s removes the whole log");
+    Ok((rate, samples[skip..].to_vec()))
+}
+
+fn fit(
+    log: &std::path::Path,
+    out_dir: &std::path::Path,
+    train_s: f64,
+    skip_s: f64,
+) -> Result<ExitCode> {
+    use imuprep::model::arima::{ArimaModelFile, IdentifySettings, identify};
+    use imuprep::sample::CHANNEL_NAMES;
+    let (rate, samples) = load_span(log, skip_s)?;
+    let n = ((train_s * rate).round() as usize).min(samples.len());
+    std::fs::create_dir_all(out_dir)?;
+    let mut file = ArimaModelFile::default();
+    println!(
+        "ARIMA identification on {n} samples ({:.0} s at {rate} Hz):",
+        n as f64 / rate
+    );
+    println!(
+        "{:<4} {:>9} {:>10} {:>8} {:>12} {:>12} {:>10}",
+        "ch", "(p,d,q)", "ADF stat", "ADF p", "sigma", "Ljung-Box Q", "LB p"
+    );
+    for (c, name) in CHANNEL_NAMES.iter().enumerate() {
+        let x: Vec<f64> = samples[..n].iter().map(|s| s.channel(c)).collect();
+        let id = identify(&x, &IdentifySettings::default())
+            .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+        let m = id.to_channel_model(name);
+        println!(
+            "{:<4} {:>9} {:>10.3} {:>8.4} {:>12.4e} {:>12.2} {:>10.4}",
+            name,
+            format!("({},{},{})", m.p, m.d, m.q),
+            id.adf.stat,
+            id.adf.p_value,
+            m.sigma,
+            id.ljung_box.q,
+            id.ljung_box.p_value
+        );
+        file.channels.push(m);
+    }
+    let path = out_dir.join("arima.toml");
+    std::fs::write(
+        &path,
+        file.to_toml_string().map_err(|e| anyhow::anyhow!("{e}"))?,
+    )?;
+    println!(
+        "wrote {} (use it as [gross_error] model = \"{}\")",
+        path.display(),
+        path.display()
+    );
     Ok(ExitCode::SUCCESS)
 }

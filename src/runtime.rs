@@ -105,8 +105,15 @@ impl Health {
         if self.source_outages > 0 {
             let _ = writeln!(o, "  source     : {} outages", self.source_outages);
         }
-        for (k, v) in &self.stages {
-            let _ = writeln!(o, "  stage      : {k} = {v}");
+        // Non-zero stage counters only (the JSON summary has them all).
+        let nz: Vec<String> = self
+            .stages
+            .iter()
+            .filter(|(_, v)| *v != 0)
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect();
+        if !nz.is_empty() {
+            let _ = writeln!(o, "  stages     : {}", nz.join(" "));
         }
         for s in &self.sinks {
             let _ = writeln!(
