@@ -183,6 +183,10 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
         } => {
             let mut cfg = load_config(&config)?;
             anyhow::ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
+            // The log declares its rate: the stages use it rather than the config's nominal one.
+            if let Ok(Some(d)) = imuprep::io::csv::read_descriptor(&log) {
+                cfg.stages.set_sample_rate(d.sample_rate_hz);
+            }
             cfg.source = SourceConfig::Replay { path: log, speed };
             add_outs(&mut cfg, &out)?;
             daemon(cfg, summary_json)

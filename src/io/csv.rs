@@ -421,3 +421,29 @@ pub fn write_csv(path: &Path, samples: &[Sample]) -> Result<(), CsvError> {
     }
     w.flush().map_err(io)
 }
+
+/// The descriptor at the start of a recorded log (reads only the first frames).
+pub fn read_descriptor(path: &Path) -> Result<Option<Descriptor>, CsvError> {
+    let mut f = std::fs::File::open(path).map_err(|err| CsvError::Io {
+        path: path.into(),
+        err,
+    })?;
+    let mut head = vec![0u8; 4096];
+    let n = f.read(&mut head).map_err(|err| CsvError::Io {
+        path: path.into(),
+        err,
+    })?;
+    head.truncate(n);
+    crate::frame::check_log_header(&head).map_err(|err| CsvError::Log {
+        path: path.into(),
+        err,
+    })?;
+    let mut buf = BytesMut::from(&head[crate::frame::LOG_HEADER_LEN..]);
+    let mut dec = FrameDecoder::new();
+    while let Ok(Some(m)) = dec.decode(&mut buf) {
+        if let Message::Descriptor(d) = m {
+            return Ok(Some(d));
+        }
+    }
+    Ok(None)
+}

@@ -4,6 +4,8 @@
 
 pub mod ar;
 pub mod arima;
+pub mod bias_model;
+pub mod bias_state_space;
 pub mod burg;
 pub mod covariance;
 pub mod fos;

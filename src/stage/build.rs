@@ -6,6 +6,9 @@
 
 use crate::config::{Errors, clean_serde, resolve, section};
 use crate::model::arima::ArimaModelFile;
+use crate::model::bias_model::BiasModelFile;
+use crate::stage::bias::BiasStage;
+use crate::stage::bias_settings::BiasSettings;
 use crate::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
 use crate::stage::{Pipeline, Stage};
 use serde::Deserialize;
@@ -23,12 +26,23 @@ struct GrossErrorSection {
     settings: GrossErrorSettings,
 }
 
-/// Placeholder settings of a stage that is not in this build yet (kept so configs validate).
-#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+/// `[bias]` as written.
+#[derive(Debug, Clone, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
-pub struct Disabled {
+struct BiasSection {
     #[serde(default)]
-    pub enabled: bool,
+    enabled: bool,
+    /// Bias model file from `imuprep fit` / `imuprep diagnose` (relative to the config file).
+    model: Option<PathBuf>,
+    #[serde(default)]
+    settings: BiasSettings,
+}
+
+/// Validated bias stage settings.
+#[derive(Debug, Clone)]
+pub struct BiasConfig {
+    pub settings: BiasSettings,
+    pub model: Option<BiasModelFile>,
 }
 
 /// Validated gross-error stage settings.
@@ -42,7 +56,7 @@ pub struct GrossErrorConfig {
 #[derive(Debug, Clone, Default)]
 pub struct StagesConfig {
     pub gross_error: Option<GrossErrorConfig>,
-    pub bias: Disabled,
+    pub bias: Option<BiasConfig>,
 }
 
 /// Read a TOML model file, recording any error at `path`.
@@ -70,6 +84,15 @@ pub fn load_model<T>(
 }
 
 impl StagesConfig {
+    /// Adopt the sensor's declared rate (from a log's descriptor) where the stages need one.
+    pub fn set_sample_rate(&mut self, rate_hz: f64) {
+        if let Some(b) = self.bias.as_mut()
+            && rate_hz > 0.0
+        {
+            b.settings.sample_rate_hz = rate_hz;
+        }
+    }
+
     /// Read the stage sections of a config table; `None` if any of them had an error.
     pub fn from_table(table: &toml::Table, base: &Path, errs: &mut Errors) -> Option<StagesConfig> {
         let n = errs.len();
@@ -96,7 +119,34 @@ impl StagesConfig {
         } else {
             None
         };
-        let bias = section(table, "bias", errs).unwrap_or_default();
+        let bs: BiasSection = section(table, "bias", errs).unwrap_or_default();
+        let bias = if bs.enabled {
+            if let Err(e) = bs.settings.validate() {
+                for m in e.0 {
+                    errs.push("bias.settings", m);
+                }
+            }
+            let file = bs
+                .model
+                .clone()
+                .or(bs.settings.model_path.as_ref().map(PathBuf::from));
+            let model = match file {
+                Some(f) => load_model(
+                    base,
+                    &f,
+                    "bias.model",
+                    |t| BiasModelFile::from_toml_str(t).map_err(|e| e.to_string()),
+                    errs,
+                ),
+                None => bs.settings.model.clone(),
+            };
+            Some(BiasConfig {
+                settings: bs.settings,
+                model,
+            })
+        } else {
+            None
+        };
         (errs.len() == n).then_some(StagesConfig { gross_error, bias })
     }
 
@@ -106,6 +156,11 @@ impl StagesConfig {
         if let Some(g) = &self.gross_error {
             let st = GrossErrorStage::new(g.settings.clone(), g.model.as_ref())
                 .map_err(|e| format!("gross_error: {e}"))?;
+            stages.push(Box::new(st));
+        }
+        if let Some(b) = &self.bias {
+            let st =
+                BiasStage::new(&b.settings, b.model.as_ref()).map_err(|e| format!("bias: {e}"))?;
             stages.push(Box::new(st));
         }
         Ok(Pipeline::new(stages))

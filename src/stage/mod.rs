@@ -3,8 +3,15 @@
 //! A stage is plain Rust: no I/O, no clock reads (time arrives in the sample), no allocation and
 //! no `tracing` per sample. Health is read from it at report intervals through [`Stage::counters`].
 
+pub mod bias;
+pub mod bias_kf;
+pub mod bias_settings;
 pub mod build;
+pub mod cusum;
 pub mod gross_error;
+pub mod line_canceller;
+pub mod stillness;
+pub mod temperature;
 
 use crate::sample::Sample;
 

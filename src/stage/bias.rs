@@ -1,0 +1,693 @@
+//! The online bias stage: deterministic calibration, learned effects, and the stochastic gyro
+//! bias observed while still and propagated by its fitted model through motion.
+//!
+//! Per sample, in order (unit = rad/s for gyro channels, m/s² for accelerometer channels):
+//!
+//! 1. **Calibration** (all six channels): `corrected = M^-1 (raw - bias)`, `M = diag(scale) N`
+//!    per triad ([`crate::stage::bias_settings`]).
+//! 2. **Deterministic effects** of the model file (issue 6), subtracted from the channel:
+//!    temperature `c1 (T_l - T0) + c2 (T_l - T0)^2` with the lagged temperature `T_l`
+//!    ([`crate::stage::temperature`]); gyro g-sensitivity `k · f` with `f` the calibrated specific
+//!    force of the same sample.
+//! 3. **Vibration lines**: each line is removed by an adaptive notch whose weights track its
+//!    amplitude and phase continuously ([`crate::stage::line_canceller`]; unit DC gain, so bias and
+//!    manoeuvres pass).
+//! 4. **Stillness** ([`crate::stage::stillness`]) on the result, with the current gyro bias
+//!    estimate as the reference rate.
+//! 5. **Stochastic gyro bias** per gyro channel: a Kalman filter on the fitted model in
+//!    state-space form ([`crate::stage::bias_kf`], model from
+//!    [`crate::model::bias_state_space::state_space_from_model`]). Measurement `z = y - mean`
+//!    (the expected true rate at rest is 0; the Earth rate, ≤ 7.3e-5 rad/s, is below consumer
+//!    MEMS noise and is absorbed into the estimate) is used **only while still**, and with a delay
+//!    of `update_delay_samples`: a sample becomes a measurement only when the detector still
+//!    reports rest that many samples later, so the onset of a manoeuvre never reaches the
+//!    estimate. The published estimate is the filter's prediction over that delay. While moving
+//!    the filter only predicts: the subtracted bias is the model's propagation, never the motion.
+//!    A CUSUM on the normalised innovations ([`crate::stage::cusum`]), present when the model has
+//!    a `step` effect, inflates the random-constant state on an alarm so the filter re-anchors.
+//!    A `rate_random_walk` effect sets that state's process noise.
+//! 6. **Accelerometer channels**: calibration and deterministic effects only. Decision: at rest
+//!    an accelerometer measures bias plus the gravity projection `g·(attitude)`, and the attitude
+//!    is unknown here; a car stopping on a 1° slope moves a horizontal axis by 0.17 m/s², 10–100×
+//!    a consumer accelerometer's bias instability. Estimating accel bias at stops would turn every
+//!    change of parking attitude into "bias" and hand the GPS/INS filter beside us a wrong bias
+//!    that also destroys its tilt observability; that filter, which knows the attitude, is the
+//!    right place for accel bias. The published `bias_sd` of an accel channel with a model is the
+//!    stationary 1-σ of its bias process: the uncertainty of the bias nobody subtracted.
+//!
+//! Published per channel: `bias[c] = corrected - output` (everything subtracted after the
+//! calibration: effects, line estimate, stochastic estimate), `bias_sd[c]` = 1-σ of the stochastic
+//! estimate from the filter covariance. Flags: `STILL`, `BIAS_REMOVED` (a gyro filter subtracted
+//! its estimate), `WARMING_UP` (a gyro channel is still being identified: only calibration and
+//! effects applied to it), `EFFECT_COMPENSATED` (a temperature, g-sensitivity or vibration term
+//! was subtracted, or a step re-anchored the estimate), `NON_FINITE`.
+//!
+//! **Warm-up.** A gyro channel without a model collects the first contiguous still stretch of
+//! `warmup.still_samples` (into a buffer allocated at construction), fits AR(`warmup.ar_order`) by
+//! Burg on it (the one allocation, at that moment) with the white-noise variance unknown (the
+//! largest the fitted spectrum admits), adds the configured default rate random walk (a short
+//! stretch cannot reveal the slow wander), and starts its filter.
+//!
+//! **Time.** Steps between samples come from the sequence counter (robust to bursty host
+//! timestamps), falling back to `t_ns` and the nominal rate when the counter does not advance.
+//! After a gap longer than 100 samples the delay line is flushed without updates and the detector
+//! restarts.
+
+use nalgebra::Vector3;
+
+use crate::model::bias_model::{ArOf, BiasModelFile, ChannelBiasModel, Effect};
+use crate::model::bias_state_space::{BiasStateSpace, StateSpaceError, state_space_from_model};
+use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
+use crate::stage::Stage;
+use crate::stage::bias_kf::{BiasKf, ConstantState, Lead};
+use crate::stage::bias_settings::{
+    BiasSettings, Calibration, MAX_UPDATE_DELAY, SettingsErrors, WarmupSettings,
+};
+use crate::stage::cusum::Cusum;
+use crate::stage::line_canceller::LineCanceller;
+use crate::stage::stillness::StillnessDetector;
+use crate::stage::temperature::TemperatureComp;
+
+/// Most vibration lines cancelled per channel.
+pub const MAX_LINES: usize = 4;
+/// Gaps longer than this (samples) flush the delay line and restart the stillness detector.
+const BIG_GAP_STEPS: u32 = 100;
+
+/// Why the stage cannot be built.
+#[derive(Debug, thiserror::Error)]
+pub enum BiasStageError {
+    /// The settings are invalid (all problems listed).
+    #[error(transparent)]
+    Settings(#[from] SettingsErrors),
+    /// `model_path` is set but no model was passed to [`BiasStage::new`].
+    #[error("model_path `{0}` is not resolved: load it and pass the model to BiasStage::new")]
+    ModelPathUnresolved(String),
+    /// The model passed in is invalid (all problems listed).
+    #[error("invalid bias model:\n  {}", .0.join("\n  "))]
+    Model(Vec<String>),
+    /// A channel's model cannot be put into state-space form.
+    #[error("channel {channel}: {source}")]
+    StateSpace {
+        channel: String,
+        #[source]
+        source: StateSpaceError,
+    },
+}
+
+/// Per-channel diagnostics of the last processed sample (for tests, tools and health).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ChannelDiagnostics {
+    /// True if the channel's filter took a measurement on the last sample.
+    pub updated: bool,
+    /// Innovation of that measurement (unit), `z - H x` of the delayed sample.
+    pub innovation: f64,
+    /// Its predicted variance S (unit²).
+    pub innovation_var: f64,
+    /// The channel has a running bias filter.
+    pub estimating: bool,
+    /// The channel is collecting its warm-up stretch.
+    pub warming_up: bool,
+    /// Step alarms so far.
+    pub step_alarms: u64,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct DelayEntry {
+    steps: u32,
+    z: [f64; 3],
+    usable: [bool; 3],
+}
+
+#[derive(Debug, Clone)]
+struct ChannelKf {
+    kf: BiasKf,
+    ss: BiasStateSpace,
+    lead_nominal: Lead,
+    cusum: Option<Cusum>,
+    step_size: f64,
+}
+
+#[derive(Debug, Clone)]
+struct ChannelState {
+    temp: Option<TemperatureComp>,
+    gsens: Option<[f64; 3]>,
+    lines: [Option<LineCanceller>; MAX_LINES],
+    est: Option<ChannelKf>,
+    warm: Option<Vec<f64>>,
+    /// Accel channels: stationary 1-σ of the modelled bias (unit), else 0.
+    stationary_sd: f64,
+    /// Published stochastic estimate (unit, mean included) of the last sample.
+    bias: f64,
+    bias_sd: f64,
+    diag: ChannelDiagnostics,
+}
+
+#[derive(Debug, Clone, Copy, Default)]
+struct Counters {
+    samples: u64,
+    still: u64,
+    updates: u64,
+    step_alarms: u64,
+    warmup_fits: u64,
+    warmup_fit_failures: u64,
+    non_finite: u64,
+    long_gaps: u64,
+    white_noise_clamped: u64,
+    ignored_effects: u64,
+}
+
+/// The bias stage (6 channels). See the module docs for what it does.
+#[derive(Debug, Clone)]
+pub struct BiasStage {
+    fs: f64,
+    gyro_cal: Calibration,
+    accel_cal: Calibration,
+    detector: StillnessDetector,
+    delay: usize,
+    ring: [DelayEntry; MAX_UPDATE_DELAY + 1],
+    ring_head: usize,
+    ring_len: usize,
+    lead_steps: u32,
+    ch: [ChannelState; N_CHANNELS],
+    prev: Option<(u32, u64)>,
+    warmup: WarmupSettings,
+    constant_prior_var: f64,
+    gyro_mean_max_rad_s: f64,
+    step_arl_samples: f64,
+    step_inflation: f64,
+    counters: Counters,
+}
+
+impl BiasStage {
+    /// Build the stage. `model` (already loaded from `settings.model_path` by the caller, or any
+    /// other source) takes precedence over an inline `settings.model`.
+    pub fn new(
+        settings: &BiasSettings,
+        model: Option<&BiasModelFile>,
+    ) -> Result<Self, BiasStageError> {
+        settings.validate()?;
+        let model = match (model, &settings.model, &settings.model_path) {
+            (Some(m), _, _) => {
+                let mut errs = m.validate().err().unwrap_or_default();
+                for (i, ch) in m.channels.iter().enumerate() {
+                    if (ch.sample_rate_hz / settings.sample_rate_hz - 1.0).abs() > 0.01 {
+                        errs.push(format!(
+                            "channels[{i}].sample_rate_hz: {} Hz differs from the stage's {} Hz by more than 1 %",
+                            ch.sample_rate_hz, settings.sample_rate_hz
+                        ));
+                    }
+                }
+                if !errs.is_empty() {
+                    return Err(BiasStageError::Model(errs));
+                }
+                Some(m)
+            }
+            (None, Some(m), _) => Some(m),
+            (None, None, Some(p)) => return Err(BiasStageError::ModelPathUnresolved(p.clone())),
+            (None, None, None) => None,
+        };
+        let fs = settings.sample_rate_hz;
+        // Validation guarantees invertible calibrations.
+        let cal_err =
+            |k: &str| BiasStageError::Model(vec![format!("{k}: calibration matrix is singular")]);
+        let gyro_cal = settings.gyro.build().ok_or_else(|| cal_err("gyro"))?;
+        let accel_cal = settings.accel.build().ok_or_else(|| cal_err("accel"))?;
+        let mut counters = Counters::default();
+        let empty = ChannelState {
+            temp: None,
+            gsens: None,
+            lines: [None; MAX_LINES],
+            est: None,
+            warm: None,
+            stationary_sd: 0.0,
+            bias: 0.0,
+            bias_sd: 0.0,
+            diag: ChannelDiagnostics::default(),
+        };
+        let mut ch: [ChannelState; N_CHANNELS] = std::array::from_fn(|_| empty.clone());
+        let mut stage_proto = BiasStage {
+            fs,
+            gyro_cal,
+            accel_cal,
+            detector: StillnessDetector::new(&settings.stillness, fs),
+            delay: settings.update_delay_samples,
+            ring: [DelayEntry {
+                steps: 0,
+                z: [0.0; 3],
+                usable: [false; 3],
+            }; MAX_UPDATE_DELAY + 1],
+            ring_head: 0,
+            ring_len: 0,
+            lead_steps: 0,
+            ch: std::array::from_fn(|_| empty.clone()),
+            prev: None,
+            warmup: settings.warmup,
+            constant_prior_var: settings.turn_on_bias_sd_rad_s.powi(2),
+            gyro_mean_max_rad_s: settings.stillness.gyro_mean_max_rad_s,
+            step_arl_samples: settings.step_false_alarm_interval_s * fs,
+            step_inflation: settings.step_inflation_factor,
+            counters,
+        };
+        for (c, state) in ch.iter_mut().enumerate() {
+            let name = CHANNEL_NAMES[c];
+            let gyro = c < 3;
+            let m = model.and_then(|m| m.channel(name));
+            match m {
+                Some(m) => {
+                    let ss =
+                        state_space_from_model(m).map_err(|source| BiasStageError::StateSpace {
+                            channel: name.into(),
+                            source,
+                        })?;
+                    if ss.white_noise_clamped {
+                        counters.white_noise_clamped += 1;
+                    }
+                    let mut n_lines = 0;
+                    for e in &m.effects {
+                        match *e {
+                            Effect::Temperature {
+                                t0_c,
+                                c1_per_c,
+                                c2_per_c2,
+                                lag_s,
+                            } => {
+                                state.temp = Some(TemperatureComp::new(
+                                    t0_c, c1_per_c, c2_per_c2, lag_s, fs,
+                                ));
+                            }
+                            Effect::VibrationLine {
+                                freq_hz,
+                                amplitude,
+                                phase_rad,
+                            } => {
+                                if n_lines < MAX_LINES {
+                                    state.lines[n_lines] = Some(LineCanceller::new(
+                                        freq_hz,
+                                        fs,
+                                        settings.vibration_bandwidth_hz,
+                                        amplitude,
+                                        phase_rad,
+                                    ));
+                                    n_lines += 1;
+                                } else {
+                                    counters.ignored_effects += 1;
+                                }
+                            }
+                            Effect::GSensitivity { coeffs_per_m_s2 } => {
+                                state.gsens = Some(coeffs_per_m_s2)
+                            }
+                            Effect::Step { .. } | Effect::RateRandomWalk { .. } if !gyro => {
+                                counters.ignored_effects += 1;
+                            }
+                            Effect::Step { .. } | Effect::RateRandomWalk { .. } => {}
+                        }
+                    }
+                    if gyro {
+                        state.est = Some(stage_proto.channel_kf(ss, &m.effects));
+                    } else {
+                        state.stationary_sd = ss.gamma[0].max(0.0).sqrt();
+                    }
+                }
+                None if gyro => {
+                    state.warm = Some(Vec::with_capacity(settings.warmup.still_samples))
+                }
+                None => {}
+            }
+        }
+        stage_proto.ch = ch;
+        stage_proto.counters = counters;
+        Ok(stage_proto)
+    }
+
+    /// The filter of a gyro channel for state-space model `ss` with the model's effects.
+    fn channel_kf(&self, ss: BiasStateSpace, effects: &[Effect]) -> ChannelKf {
+        let rrw_q_per_s: f64 = effects
+            .iter()
+            .map(|e| {
+                if let Effect::RateRandomWalk { q_per_s } = e {
+                    *q_per_s
+                } else {
+                    0.0
+                }
+            })
+            .sum();
+        let step_size = effects
+            .iter()
+            .filter_map(|e| {
+                if let Effect::Step { size, .. } = e {
+                    Some(size.abs())
+                } else {
+                    None
+                }
+            })
+            .fold(f64::INFINITY, f64::min);
+        let has_step = step_size.is_finite();
+        let constant = (self.constant_prior_var > 0.0 || rrw_q_per_s > 0.0 || has_step).then_some(
+            ConstantState {
+                prior_var: self.constant_prior_var,
+                q_per_step: rrw_q_per_s / self.fs,
+            },
+        );
+        let kf = BiasKf::new(&ss, constant);
+        // The CUSUM is tuned for the step in units of the steady innovation sd.
+        let cusum = has_step.then(|| {
+            Cusum::new(
+                step_size / ss.optimal_innovation_var().sqrt(),
+                self.step_arl_samples,
+            )
+        });
+        ChannelKf {
+            lead_nominal: kf.lead(self.delay as u32),
+            kf,
+            ss,
+            cusum,
+            step_size: if has_step { step_size } else { 0.0 },
+        }
+    }
+
+    /// Diagnostics of channel `c` (0..6) for the last sample.
+    pub fn channel_diagnostics(&self, c: usize) -> ChannelDiagnostics {
+        self.ch.get(c).map(|s| s.diag).unwrap_or_default()
+    }
+
+    /// The bias state-space model channel `c` runs (fitted at warm-up or from the config).
+    pub fn state_space(&self, c: usize) -> Option<&BiasStateSpace> {
+        self.ch.get(c).and_then(|s| s.est.as_ref()).map(|e| &e.ss)
+    }
+
+    /// Tracked (amplitude, phase) of vibration line `i` of channel `c`.
+    pub fn line_amplitude_phase(&self, c: usize, i: usize) -> Option<(f64, f64)> {
+        self.ch
+            .get(c)?
+            .lines
+            .get(i)?
+            .as_ref()
+            .map(|l| l.amplitude_phase())
+    }
+
+    /// True while the stillness detector reports rest.
+    pub fn is_still(&self) -> bool {
+        self.detector.is_still()
+    }
+
+    fn steps_since_previous(&mut self, s: &Sample) -> u32 {
+        let steps = match self.prev {
+            None => 1,
+            Some((seq, t_ns)) => {
+                let d = s.seq.wrapping_sub(seq);
+                if (1..(1 << 31)).contains(&d) {
+                    d
+                } else if d == 0 && s.t_ns > t_ns {
+                    // Source without a sequence counter: steps from the clock.
+                    let k = ((s.t_ns - t_ns) as f64 * 1e-9 * self.fs).round();
+                    k.clamp(1.0, u32::MAX as f64) as u32
+                } else if d == 0 {
+                    0 // duplicate
+                } else {
+                    1 // counter went backwards (restart): treat as the next sample
+                }
+            }
+        };
+        self.prev = Some((s.seq, s.t_ns));
+        steps
+    }
+
+    /// Consume the oldest delay-line entry into the gyro filters (`still` = detector state now).
+    fn consume(&mut self, e: DelayEntry, still: bool, alarm_fired: &mut bool) {
+        for c in 0..3 {
+            let st = &mut self.ch[c];
+            if let Some(est) = st.est.as_mut() {
+                est.kf.predict_steps(e.steps);
+                if still
+                    && e.usable[c]
+                    && let Some((nu, s)) = est.kf.update(e.z[c] - est.kf.mean())
+                {
+                    st.diag.updated = true;
+                    st.diag.innovation = nu;
+                    st.diag.innovation_var = s;
+                    self.counters.updates += 1;
+                    if let Some(cu) = est.cusum.as_mut()
+                        && cu.update(nu / s.sqrt()) != 0
+                    {
+                        let v = (self.step_inflation * est.step_size).powi(2);
+                        est.kf.inflate_constant(v);
+                        st.diag.step_alarms += 1;
+                        self.counters.step_alarms += 1;
+                        *alarm_fired = true;
+                    }
+                }
+            } else if let Some(buf) = st.warm.as_mut() {
+                if !still {
+                    buf.clear();
+                } else if e.usable[c] {
+                    buf.push(e.z[c]);
+                    if buf.len() >= self.warmup.still_samples {
+                        self.finish_warmup(c);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Fit the warm-up model of gyro channel `c` from its buffer and start its filter.
+    fn finish_warmup(&mut self, c: usize) {
+        let Some(buf) = self.ch[c].warm.as_mut() else {
+            return;
+        };
+        let fit = crate::model::burg(buf, self.warmup.ar_order);
+        let built = fit.ok().and_then(|fit| {
+            let m = ChannelBiasModel {
+                channel: CHANNEL_NAMES[c].into(),
+                method: "warmup_burg".into(),
+                sample_rate_hz: self.fs,
+                mean: fit.mean,
+                ar: fit.coeffs,
+                innovation_var: fit.noise_var,
+                white_noise_var: 0.0, // unknown: the largest the fitted spectrum admits
+                ar_of: ArOf::Signal,
+                effects: Vec::new(),
+            };
+            state_space_from_model(&m).ok()
+        });
+        match built {
+            Some(ss) => {
+                let q = self.warmup.rate_random_walk_q_per_s;
+                let effects = if q > 0.0 {
+                    vec![Effect::RateRandomWalk { q_per_s: q }]
+                } else {
+                    vec![]
+                };
+                let est = self.channel_kf(ss, &effects);
+                self.ch[c].est = Some(est);
+                self.ch[c].warm = None;
+                self.counters.warmup_fits += 1;
+            }
+            None => {
+                self.counters.warmup_fit_failures += 1;
+                if let Some(b) = self.ch[c].warm.as_mut() {
+                    b.clear();
+                }
+            }
+        }
+    }
+
+    fn push_entry(&mut self, e: DelayEntry) {
+        let cap = MAX_UPDATE_DELAY + 1;
+        let idx = (self.ring_head + self.ring_len) % cap;
+        self.ring[idx] = e;
+        self.ring_len += 1;
+        self.lead_steps = self.lead_steps.saturating_add(e.steps);
+    }
+
+    fn pop_entry(&mut self) -> DelayEntry {
+        let e = self.ring[self.ring_head];
+        self.ring_head = (self.ring_head + 1) % (MAX_UPDATE_DELAY + 1);
+        self.ring_len -= 1;
+        self.lead_steps = self.lead_steps.saturating_sub(e.steps);
+        e
+    }
+}
+
+/// Calibrate one triad; non-finite raw components contribute nothing to the mixing (they are
+/// replaced by the calibration bias) and stay non-finite in the output.
+#[inline]
+fn calibrate(cal: &Calibration, raw: &Vector3<f64>) -> Vector3<f64> {
+    if raw.iter().all(|v| v.is_finite()) {
+        return cal.apply(raw);
+    }
+    let mut r = *raw;
+    for a in 0..3 {
+        if !r[a].is_finite() {
+            r[a] = cal.bias[a];
+        }
+    }
+    let mut out = cal.apply(&r);
+    for a in 0..3 {
+        if !raw[a].is_finite() {
+            out[a] = raw[a];
+        }
+    }
+    out
+}
+
+impl Stage for BiasStage {
+    fn name(&self) -> &'static str {
+        "bias"
+    }
+
+    fn process(&mut self, mut s: Sample) -> Sample {
+        self.counters.samples += 1;
+        let mut steps = self.steps_since_previous(&s);
+        let t_s = s.t_s();
+        let mut alarm_fired = false;
+
+        // 1. Calibration.
+        let g = calibrate(&self.gyro_cal, &s.gyro);
+        let a = calibrate(&self.accel_cal, &s.accel);
+        let cal = [g[0], g[1], g[2], a[0], a[1], a[2]];
+        let finite: [bool; N_CHANNELS] = std::array::from_fn(|c| cal[c].is_finite());
+        if finite.iter().any(|f| !f) {
+            s.flags |= flags::NON_FINITE;
+            self.counters.non_finite += 1;
+        }
+        let accel_ok = finite[3] && finite[4] && finite[5];
+
+        // Long gap: flush the delay line without updates, restart the detector.
+        if steps > BIG_GAP_STEPS {
+            self.counters.long_gaps += 1;
+            while self.ring_len > 0 {
+                let e = self.pop_entry();
+                self.consume(e, false, &mut alarm_fired);
+            }
+            for st in self.ch.iter_mut().take(3) {
+                if let Some(est) = st.est.as_mut() {
+                    est.kf.predict_steps(steps - 1);
+                }
+            }
+            self.detector.reset();
+            // Line cancellers and temperature lags still see the whole gap.
+        }
+
+        // 2–3. Deterministic effects and vibration lines.
+        let mut eff = [0.0; N_CHANNELS];
+        let mut effect_applied = false;
+        for c in 0..N_CHANNELS {
+            let st = &mut self.ch[c];
+            if let Some(tc) = st.temp.as_mut()
+                && let Some(term) = tc.update(s.temp_c, steps)
+            {
+                eff[c] += term;
+                effect_applied = true;
+            }
+            if let Some(k) = st.gsens
+                && accel_ok
+            {
+                eff[c] += k[0] * a[0] + k[1] * a[1] + k[2] * a[2];
+                effect_applied = true;
+            }
+            for lc in st.lines.iter_mut().flatten() {
+                let line = lc.process(cal[c] - eff[c], t_s, steps);
+                if finite[c] {
+                    eff[c] += line;
+                    effect_applied = true;
+                }
+            }
+        }
+        let y: [f64; N_CHANNELS] = std::array::from_fn(|c| cal[c] - eff[c]);
+
+        // 4. Stillness, against the gyro bias estimate of each axis whose 1-σ is below a quarter
+        // of the mean-test threshold (an uncertain estimate must not veto rest).
+        let gyro_ref: [Option<f64>; 3] = std::array::from_fn(|c| {
+            let st = &self.ch[c];
+            (st.est.is_some() && st.bias_sd < 0.25 * self.gyro_mean_max_rad_s).then_some(st.bias)
+        });
+        let still = self
+            .detector
+            .update(&[y[0], y[1], y[2]], &[y[3], y[4], y[5]], &gyro_ref);
+        if still {
+            s.flags |= flags::STILL;
+            self.counters.still += 1;
+        }
+
+        // 5. Delayed measurement updates of the gyro filters.
+        for st in self.ch.iter_mut().take(3) {
+            st.diag.updated = false;
+        }
+        if steps > BIG_GAP_STEPS {
+            steps = 1; // the filters were advanced to the previous instant above
+        }
+        let bad = |c: usize| {
+            s.flags & (flags::sat_ch(c) | flags::replaced_ch(c) | flags::SENSOR_FAULT) != 0
+        };
+        let entry = DelayEntry {
+            steps,
+            z: [y[0], y[1], y[2]],
+            usable: std::array::from_fn(|c| finite[c] && steps > 0 && !bad(c)),
+        };
+        self.push_entry(entry);
+        if self.ring_len > self.delay {
+            let e = self.pop_entry();
+            self.consume(e, still, &mut alarm_fired);
+        }
+
+        // Outputs.
+        let mut any_est = false;
+        let mut any_warm = false;
+        let lead_steps = self.lead_steps;
+        let mut out = [0.0; N_CHANNELS];
+        for (c, st) in self.ch.iter_mut().enumerate() {
+            let mut sub = eff[c];
+            if let Some(est) = st.est.as_ref() {
+                let (b, var) = if lead_steps == est.lead_nominal.steps {
+                    est.kf.predict_ahead(&est.lead_nominal)
+                } else {
+                    est.kf.predict_ahead(&est.kf.lead(lead_steps))
+                };
+                st.bias = b;
+                st.bias_sd = var.sqrt();
+                sub += b;
+                any_est = true;
+            } else {
+                st.bias = 0.0;
+                st.bias_sd = st.stationary_sd;
+                any_warm |= st.warm.is_some();
+            }
+            st.diag.estimating = st.est.is_some();
+            st.diag.warming_up = st.warm.is_some();
+            out[c] = if finite[c] {
+                cal[c] - sub
+            } else {
+                s.channel(c)
+            };
+            s.bias[c] = sub as f32;
+            s.bias_sd[c] = st.bias_sd as f32;
+        }
+        s.set_channels(&out);
+        if any_est {
+            s.flags |= flags::BIAS_REMOVED;
+        }
+        if any_warm {
+            s.flags |= flags::WARMING_UP;
+        }
+        if effect_applied || alarm_fired {
+            s.flags |= flags::EFFECT_COMPENSATED;
+        }
+        s
+    }
+
+    fn counters(&self) -> Vec<(String, u64)> {
+        let c = &self.counters;
+        vec![
+            ("samples".into(), c.samples),
+            ("still_samples".into(), c.still),
+            ("bias_updates".into(), c.updates),
+            ("step_alarms".into(), c.step_alarms),
+            ("warmup_fits".into(), c.warmup_fits),
+            ("warmup_fit_failures".into(), c.warmup_fit_failures),
+            ("non_finite_samples".into(), c.non_finite),
+            ("long_gaps".into(), c.long_gaps),
+            ("white_noise_clamped_channels".into(), c.white_noise_clamped),
+            ("ignored_effects".into(), c.ignored_effects),
+        ]
+    }
+}

@@ -1,0 +1,397 @@
+//! Settings of the bias stage (`[bias]` in the daemon config): deterministic calibration,
+//! stillness detection, the stochastic model (inline or a path) and the online estimator's knobs.
+//!
+//! Calibration model, per sensor (gyro and accel separately), with `M = diag(scale) · N`:
+//!
+//! ```text
+//!   raw = M · true + bias      =>      corrected = M^-1 (raw - bias)
+//! ```
+//!
+//! `scale` are the scale factors (1 = nominal), `N` the misalignment / non-orthogonality matrix
+//! (row-major, identity = ideal axes), `bias` the constant offset in sensor units after
+//! conversion (rad/s, m/s²). This is the usual laboratory calibration form (e.g. Titterton &
+//! Weston, *Strapdown Inertial Navigation Technology*, 2nd ed., §8.5).
+
+use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::model::bias_model::BiasModelFile;
+use crate::stage::stillness::StillnessSettings;
+
+/// Largest bias-update delay, samples (fixed-size delay line).
+pub const MAX_UPDATE_DELAY: usize = 64;
+
+/// Deterministic calibration of one triad.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CalibrationSettings {
+    /// Constant offset per axis, rad/s (gyro) or m/s² (accel). Default 0.
+    pub bias: [f64; 3],
+    /// Scale factor per axis (dimensionless, raw = scale · true). Default 1.
+    pub scale: [f64; 3],
+    /// Misalignment matrix N, row-major (dimensionless). Default identity.
+    pub misalignment: [[f64; 3]; 3],
+}
+
+impl Default for CalibrationSettings {
+    fn default() -> Self {
+        CalibrationSettings {
+            bias: [0.0; 3],
+            scale: [1.0; 3],
+            misalignment: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        }
+    }
+}
+
+/// A validated calibration: `corrected = minv (raw - bias)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Calibration {
+    /// `M^-1`.
+    pub minv: Matrix3<f64>,
+    /// Constant offset (unit).
+    pub bias: Vector3<f64>,
+}
+
+impl CalibrationSettings {
+    fn m(&self) -> Matrix3<f64> {
+        let n = Matrix3::from_fn(|i, j| self.misalignment[i][j]);
+        Matrix3::from_diagonal(&Vector3::from(self.scale)) * n
+    }
+
+    /// Append every problem to `errors`, keys prefixed by `key`.
+    pub fn validate_into(&self, key: &str, errors: &mut Vec<String>) {
+        if self.bias.iter().any(|v| !v.is_finite()) {
+            errors.push(format!("{key}.bias: must be finite"));
+        }
+        for (a, s) in self.scale.iter().enumerate() {
+            if !(s.is_finite() && *s > 0.5 && *s < 2.0) {
+                errors.push(format!("{key}.scale[{a}]: must be in (0.5, 2) (got {s})"));
+            }
+        }
+        if self.misalignment.iter().flatten().any(|v| !v.is_finite()) {
+            errors.push(format!("{key}.misalignment: must be finite"));
+            return;
+        }
+        // Real misalignments are a few mrad to a few %: reject matrices far from orthonormal
+        // axes (condition number > 10), which are typing errors, not calibrations.
+        let sv = Matrix3::from_fn(|i, j| self.misalignment[i][j]).singular_values();
+        let (mx, mn) = (sv.max(), sv.min());
+        if !(mn > 0.0 && mx / mn < 10.0) {
+            errors.push(format!(
+                "{key}.misalignment: must be well conditioned (singular values {mn:.3e}..{mx:.3e})"
+            ));
+        }
+    }
+
+    /// The calibration to apply; `None` if M is not invertible (validation rejects that).
+    pub fn build(&self) -> Option<Calibration> {
+        self.m().try_inverse().map(|minv| Calibration {
+            minv,
+            bias: Vector3::from(self.bias),
+        })
+    }
+}
+
+impl Calibration {
+    /// `M^-1 (raw - bias)`.
+    #[inline]
+    pub fn apply(&self, raw: &Vector3<f64>) -> Vector3<f64> {
+        self.minv * (raw - self.bias)
+    }
+}
+
+/// Identifying a model online when the config has none for a gyro channel.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WarmupSettings {
+    /// Length of the contiguous still stretch the model is fitted on, samples. Default 1000
+    /// (10 s at 100 Hz: a typical stop; enough for the mean to ~1/30 of the noise sd and for a
+    /// low-order AR of the noise-dominated static signal).
+    pub still_samples: usize,
+    /// AR order of the Burg fit (1..=4). Default 2.
+    pub ar_order: usize,
+    /// Rate random walk given to a warm-up model, (rad/s)²/s: a short stretch cannot reveal the
+    /// slow wander, so without it the filter's constant state would become certain and stop
+    /// following. Default 1e-10 (K = 1e-5 rad/s/√s ≈ 120 °/h/√h, a pessimistic consumer MEMS).
+    pub rate_random_walk_q_per_s: f64,
+}
+
+impl Default for WarmupSettings {
+    fn default() -> Self {
+        WarmupSettings {
+            still_samples: 1000,
+            ar_order: 2,
+            rate_random_walk_q_per_s: 1e-10,
+        }
+    }
+}
+
+/// Settings of the bias stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BiasSettings {
+    /// Nominal sample rate of the sensor, Hz. Default 100. Models must match it within 1 %.
+    pub sample_rate_hz: f64,
+    /// Gyro calibration (bias in rad/s).
+    pub gyro: CalibrationSettings,
+    /// Accelerometer calibration (bias in m/s²).
+    pub accel: CalibrationSettings,
+    /// Stillness detector.
+    pub stillness: StillnessSettings,
+    /// Path of a bias model TOML file; resolved by the caller (relative to the config file) and
+    /// passed to the stage. Exclusive with `model`.
+    pub model_path: Option<String>,
+    /// Inline bias model (`[[bias.model.channels]]`). Exclusive with `model_path`.
+    pub model: Option<BiasModelFile>,
+    /// Online identification for gyro channels without a model.
+    pub warmup: WarmupSettings,
+    /// Prior 1-σ of the gyro turn-on bias about the model's mean, rad/s; 0 disables the
+    /// random-constant state (unless a step or rate-random-walk effect needs it).
+    /// Default 0.02 rad/s (1.1 °/s: consumer MEMS turn-on repeatability).
+    pub turn_on_bias_sd_rad_s: f64,
+    /// Delay between a sample and its use as a bias measurement, samples (0..=64): a still sample
+    /// is trusted only once the detector has seen this many samples after it, so the onset of
+    /// motion never leaks into the estimate. Default 30 (0.3 s at 100 Hz; the detector needs
+    /// < 0.2 s for a smooth 0.3 rad/s turn onset).
+    pub update_delay_samples: usize,
+    /// 3-dB bandwidth of each vibration-line canceller, Hz. Default 0.2: follows a phase drifting
+    /// by 0.01 Hz with 10 % residual amplitude; time constant 1/(π·BW) = 1.6 s.
+    pub vibration_bandwidth_hz: f64,
+    /// Mean still time between false step alarms of the CUSUM step detector, s. Default 36000.
+    pub step_false_alarm_interval_s: f64,
+    /// On a step alarm the constant state's variance grows by `(factor · |size|)²` (the model's
+    /// Step size). Default 3.
+    pub step_inflation_factor: f64,
+}
+
+impl Default for BiasSettings {
+    fn default() -> Self {
+        BiasSettings {
+            sample_rate_hz: 100.0,
+            gyro: CalibrationSettings::default(),
+            accel: CalibrationSettings::default(),
+            stillness: StillnessSettings::default(),
+            model_path: None,
+            model: None,
+            warmup: WarmupSettings::default(),
+            turn_on_bias_sd_rad_s: 0.02,
+            update_delay_samples: 30,
+            vibration_bandwidth_hz: 0.2,
+            step_false_alarm_interval_s: 36_000.0,
+            step_inflation_factor: 3.0,
+        }
+    }
+}
+
+/// Every problem found in the settings, one `key: message` per entry.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("invalid bias settings:\n  {}", .0.join("\n  "))]
+pub struct SettingsErrors(pub Vec<String>);
+
+impl BiasSettings {
+    /// Check every field; returns all problems with their key paths (relative to the `[bias]`
+    /// table, e.g. `stillness.window_samples`, `model.channels[0].ar`).
+    pub fn validate(&self) -> Result<(), SettingsErrors> {
+        let mut e = Vec::new();
+        let fs = self.sample_rate_hz;
+        if !(fs.is_finite() && fs > 0.0 && fs <= 100_000.0) {
+            e.push(format!(
+                "sample_rate_hz: must be in (0, 100000] Hz (got {fs})"
+            ));
+        }
+        self.gyro.validate_into("gyro", &mut e);
+        self.accel.validate_into("accel", &mut e);
+        self.stillness.validate_into("stillness", &mut e);
+        if self.model_path.is_some() && self.model.is_some() {
+            e.push("model_path: give either model_path or an inline model, not both".into());
+        }
+        if let Some(p) = &self.model_path
+            && p.trim().is_empty()
+        {
+            e.push("model_path: must not be empty".into());
+        }
+        if let Some(m) = &self.model {
+            if let Err(errs) = m.validate() {
+                e.extend(errs.into_iter().map(|x| format!("model.{x}")));
+            }
+            for (i, ch) in m.channels.iter().enumerate() {
+                if fs.is_finite() && fs > 0.0 && (ch.sample_rate_hz / fs - 1.0).abs() > 0.01 {
+                    e.push(format!(
+                        "model.channels[{i}].sample_rate_hz: {} Hz differs from sample_rate_hz {fs} Hz by more than 1 %",
+                        ch.sample_rate_hz
+                    ));
+                }
+            }
+        }
+        if self.warmup.still_samples < 100 || self.warmup.still_samples > 1_000_000 {
+            e.push(format!(
+                "warmup.still_samples: must be in 100..=1000000 (got {})",
+                self.warmup.still_samples
+            ));
+        }
+        if !(1..=crate::model::bias_state_space::MAX_AR_ORDER).contains(&self.warmup.ar_order) {
+            e.push(format!(
+                "warmup.ar_order: must be in 1..=4 (got {})",
+                self.warmup.ar_order
+            ));
+        }
+        let q = self.warmup.rate_random_walk_q_per_s;
+        if !(q.is_finite() && q >= 0.0) {
+            e.push(format!(
+                "warmup.rate_random_walk_q_per_s: must be >= 0 (got {q})"
+            ));
+        }
+        if !(self.turn_on_bias_sd_rad_s.is_finite() && self.turn_on_bias_sd_rad_s >= 0.0) {
+            e.push(format!(
+                "turn_on_bias_sd_rad_s: must be >= 0 (got {})",
+                self.turn_on_bias_sd_rad_s
+            ));
+        }
+        if self.update_delay_samples > MAX_UPDATE_DELAY {
+            e.push(format!(
+                "update_delay_samples: must be <= {MAX_UPDATE_DELAY} (got {})",
+                self.update_delay_samples
+            ));
+        } else if self.update_delay_samples > self.stillness.window_samples {
+            // A delayed sample must lie inside the window that declared it still.
+            e.push(format!(
+                "update_delay_samples: must not exceed stillness.window_samples ({}) (got {})",
+                self.stillness.window_samples, self.update_delay_samples
+            ));
+        }
+        if !(self.vibration_bandwidth_hz.is_finite()
+            && self.vibration_bandwidth_hz > 0.0
+            && fs.is_finite()
+            && self.vibration_bandwidth_hz < 0.05 * fs)
+        {
+            e.push(format!(
+                "vibration_bandwidth_hz: must be in (0, sample_rate_hz/20) (got {})",
+                self.vibration_bandwidth_hz
+            ));
+        }
+        if !(self.step_false_alarm_interval_s.is_finite()
+            && self.step_false_alarm_interval_s >= 1.0)
+        {
+            e.push(format!(
+                "step_false_alarm_interval_s: must be >= 1 s (got {})",
+                self.step_false_alarm_interval_s
+            ));
+        }
+        if !(self.step_inflation_factor.is_finite() && self.step_inflation_factor > 0.0) {
+            e.push(format!(
+                "step_inflation_factor: must be > 0 (got {})",
+                self.step_inflation_factor
+            ));
+        }
+        if e.is_empty() {
+            Ok(())
+        } else {
+            Err(SettingsErrors(e))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_parse_from_an_empty_table() {
+        BiasSettings::default().validate().unwrap();
+        let s: BiasSettings = toml::from_str("").unwrap();
+        assert_eq!(s, BiasSettings::default());
+    }
+
+    #[test]
+    fn validation_reports_several_errors_at_once_with_key_paths() {
+        let text = r#"
+            sample_rate_hz = 100.0
+            update_delay_samples = 80
+            model_path = "m.toml"
+            [gyro]
+            scale = [1.0, 0.1, 1.0]
+            [stillness]
+            window_samples = 1
+            [warmup]
+            ar_order = 9
+            [[model.channels]]
+            channel = "gq"
+            method = "burg"
+            sample_rate_hz = 100.0
+            mean = 0.0
+            ar = [0.5]
+            innovation_var = 1e-6
+            white_noise_var = 0.0
+        "#;
+        let s: BiasSettings = toml::from_str(text).unwrap();
+        let errs = s.validate().unwrap_err().0;
+        let all = errs.join("\n");
+        for key in [
+            "update_delay_samples:",
+            "model_path: give either",
+            "gyro.scale[1]:",
+            "stillness.window_samples:",
+            "warmup.ar_order:",
+            "model.channels[0].channel:",
+        ] {
+            assert!(all.contains(key), "missing `{key}` in\n{all}");
+        }
+    }
+
+    #[test]
+    fn a_full_config_table_parses_and_validates() {
+        // Every key of the [bias] table, as the lead's config/default.toml would carry it.
+        let text = r#"
+            sample_rate_hz = 100.0
+            turn_on_bias_sd_rad_s = 0.02
+            update_delay_samples = 30
+            vibration_bandwidth_hz = 0.2
+            step_false_alarm_interval_s = 36000.0
+            step_inflation_factor = 3.0
+            model_path = "models/imu.toml"
+            [gyro]
+            bias = [0.001, -0.002, 0.0]
+            scale = [1.0, 1.0, 1.0]
+            misalignment = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+            [accel]
+            bias = [0.0, 0.0, 0.0]
+            [stillness]
+            window_samples = 50
+            enter_after_s = 0.5
+            gyro_sd_max_rad_s = 0.01
+            gyro_mean_max_rad_s = 0.01
+            gyro_instant_max_rad_s = 0.02
+            accel_sd_max_m_s2 = 0.15
+            accel_norm_dev_max_m_s2 = 0.5
+            accel_instant_max_m_s2 = 0.5
+            gravity_m_s2 = 9.80665
+            [warmup]
+            still_samples = 1000
+            ar_order = 2
+            rate_random_walk_q_per_s = 1e-10
+        "#;
+        let s: BiasSettings = toml::from_str(text).unwrap();
+        s.validate().unwrap();
+        assert_eq!(s.gyro.bias, [0.001, -0.002, 0.0]);
+    }
+
+    #[test]
+    fn unknown_keys_are_rejected() {
+        assert!(toml::from_str::<BiasSettings>("sample_rate = 100.0").is_err());
+        assert!(toml::from_str::<BiasSettings>("[stillness]\nwindow = 3").is_err());
+    }
+
+    #[test]
+    fn calibration_inverts_scale_misalignment_and_bias() {
+        // raw = diag(s) N true + b  =>  apply(raw) = true exactly (1e-12).
+        let c = CalibrationSettings {
+            bias: [0.01, -0.02, 0.03],
+            scale: [1.01, 0.99, 1.02],
+            misalignment: [[1.0, 0.002, -0.001], [0.0, 1.0, 0.003], [0.001, 0.0, 1.0]],
+        };
+        let cal = c.build().unwrap();
+        let truth = Vector3::new(0.3, -0.1, 0.2);
+        let raw = c.m() * truth + Vector3::from(c.bias);
+        assert!((cal.apply(&raw) - truth).amax() < 1e-12);
+    }
+}
