@@ -100,6 +100,18 @@ enum Cmd {
         #[arg(long, default_value_t = 0.0)]
         skip_s: f64,
     },
+    /// Score the configured pipeline against a calibration-only baseline on a simulated scenario
+    /// (truth known): RMS of 1-s mean error, 60-s heading drift, manoeuvre integrals (gyros).
+    Evaluate {
+        #[arg(long)]
+        scenario: PathBuf,
+        #[arg(long)]
+        seed: Option<u64>,
+        #[arg(long)]
+        config: Option<PathBuf>,
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Compare methods on the same data. `--detectors --scenario S.toml`: gross-error detectors
     /// against the simulator's truth. `LOG --channel C`: the bias models of the FOS paper.
     Compare {
@@ -269,6 +281,12 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             train_s,
             skip_s,
         } => fit(&log, &out_dir, train_s, skip_s),
+        Cmd::Evaluate {
+            scenario,
+            seed,
+            config,
+            json,
+        } => evaluate(&scenario, seed, &config, json),
         Cmd::Compare {
             log,
             detectors,
@@ -506,5 +524,73 @@ fn fit(
         path.display(),
         path.display()
     );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn evaluate(
+    scenario: &std::path::Path,
+    seed: Option<u64>,
+    config: &Option<PathBuf>,
+    json: Option<PathBuf>,
+) -> Result<ExitCode> {
+    use imuprep::analysis::pipeline_eval as pe;
+    let scn = read_scenario(scenario)?;
+    let seed = imuprep::sim::log::effective_seed(&scn, seed);
+    let mut cfg = load_config(config)?;
+    let rate = scn.sample_rate_hz();
+    cfg.stages.set_sample_rate(rate);
+    let pipeline = cfg.stages.build().map_err(|e| anyhow::anyhow!(e))?;
+    let (samples, truth) = pe::simulate(&scn, seed)?;
+    let cal = cfg
+        .stages
+        .bias
+        .as_ref()
+        .map(|b| b.settings.clone())
+        .unwrap_or_default();
+    let gyro_cal = cal
+        .gyro
+        .build()
+        .context("gyro calibration matrix is singular")?;
+    let accel_cal = cal
+        .accel
+        .build()
+        .context("accel calibration matrix is singular")?;
+    let res = pe::evaluate(&samples, &truth, rate, pipeline, move |mut s| {
+        s.gyro = gyro_cal.apply(&s.gyro);
+        s.accel = accel_cal.apply(&s.accel);
+        s
+    });
+    println!(
+        "pipeline vs calibration-only baseline on {} (seed {seed}), gyro channels:",
+        scenario.display()
+    );
+    println!(
+        "{:<3} {:>14} {:>14} {:>8} {:>14} {:>14} {:>9} {:>12}",
+        "ch",
+        "1s-mean RMS",
+        "baseline",
+        "ratio",
+        "60s drift rad",
+        "baseline",
+        "reduced",
+        "worst manoeuvre change"
+    );
+    for r in &res {
+        println!(
+            "{:<3} {:>14.3e} {:>14.3e} {:>8.2} {:>14.3e} {:>14.3e} {:>8.1}% {:>9.2}% of {}",
+            r.channel,
+            r.pipeline.rms_1s_mean_error,
+            r.baseline.rms_1s_mean_error,
+            r.improvement_1s,
+            r.pipeline.rms_60s_drift_rad,
+            r.baseline.rms_60s_drift_rad,
+            100.0 * r.drift_reduction,
+            100.0 * r.worst_attenuation,
+            r.manoeuvres
+        );
+    }
+    if let Some(p) = json {
+        std::fs::write(&p, serde_json::to_string_pretty(&res)?)?;
+    }
     Ok(ExitCode::SUCCESS)
 }

@@ -36,7 +36,8 @@ fn import_replay_export_round_trips_canonical_csv() {
         .status()
         .unwrap();
     assert!(st.success());
-    let passthrough = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("config/passthrough.toml");
+    let passthrough =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("config/passthrough.toml");
     let st = Command::new(common::bin())
         .arg("replay")
         .arg(&log)

@@ -7,5 +7,6 @@ pub mod detectors;
 pub mod gate_sweep;
 pub mod gauss_markov;
 pub mod hypothesis;
+pub mod pipeline_eval;
 pub mod special;
 pub mod wavelet;

@@ -1,0 +1,115 @@
+//! `imuprep evaluate`: the configured pipeline against a calibration-only baseline, on a
+//! simulated scenario whose truth is known (issue 5's drive targets).
+//!
+//! Definitions (gyro channels; truth = true angular rate + road vibration, i.e. what a perfect
+//! sensor would read):
+//! - *1-s mean error*: the error (output − truth) averaged over consecutive 1-s blocks; its RMS.
+//! - *60-s heading drift*: the error integrated over consecutive 60-s windows (rad); RMS of the
+//!   window-end values — a plain single-axis strapdown of the error.
+//! - *manoeuvre change*: for every stretch where |true rate| > 0.05 rad/s for ≥ 1 s,
+//!   |1 − ∫output/∫truth| over that stretch (bias left in the output counts too); the worst.
+//! The baseline applies only the configured calibration (constant bias, scale, misalignment).
+
+use crate::sample::{CHANNEL_NAMES, Sample};
+use crate::sim::truth::{Effect, TruthRow};
+use crate::stage::Pipeline;
+use serde::Serialize;
+
+/// Scores of one output series on one gyro channel.
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct Scores {
+    pub rms_1s_mean_error: f64,
+    pub rms_60s_drift_rad: f64,
+}
+
+/// One gyro channel: pipeline vs baseline.
+#[derive(Debug, Clone, Serialize)]
+pub struct ChannelEval {
+    pub channel: String,
+    pub pipeline: Scores,
+    pub baseline: Scores,
+    /// baseline / pipeline for the 1-s mean error (target ≥ 5).
+    pub improvement_1s: f64,
+    /// 1 − pipeline/baseline for the 60-s drift (target ≥ 0.8).
+    pub drift_reduction: f64,
+    /// Worst |relative change| of a manoeuvre's integral (target ≤ 0.01), and the count.
+    pub worst_attenuation: f64,
+    pub manoeuvres: usize,
+}
+
+fn blocks(err: &[f64], n: usize, f: impl Fn(&[f64]) -> f64) -> f64 {
+    let v: Vec<f64> = err.chunks_exact(n.max(1)).map(f).collect();
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
+}
+
+fn scores(err: &[f64], rate: f64) -> Scores {
+    let n1 = rate.round() as usize;
+    let dt = 1.0 / rate;
+    Scores {
+        rms_1s_mean_error: blocks(err, n1, |b| b.iter().sum::<f64>() / b.len() as f64),
+        rms_60s_drift_rad: blocks(err, 60 * n1, |b| b.iter().sum::<f64>() * dt),
+    }
+}
+
+/// Evaluate `pipeline` against the calibration-only `baseline` on the simulated scenario.
+pub fn evaluate(
+    samples: &[Sample],
+    truth: &[TruthRow],
+    rate_hz: f64,
+    mut pipeline: Pipeline,
+    mut baseline: impl FnMut(Sample) -> Sample,
+) -> Vec<ChannelEval> {
+    let out: Vec<Sample> = samples.iter().map(|s| pipeline.process(*s)).collect();
+    let base: Vec<Sample> = samples.iter().map(|s| baseline(*s)).collect();
+    let mut res = Vec::new();
+    for c in 0..3 {
+        let tr: Vec<f64> = truth
+            .iter()
+            .map(|t| t.true_signal[c] + t.component(Effect::RoadVibration, c))
+            .collect();
+        let e_p: Vec<f64> = out.iter().zip(&tr).map(|(s, t)| s.channel(c) - t).collect();
+        let e_b: Vec<f64> = base
+            .iter()
+            .zip(&tr)
+            .map(|(s, t)| s.channel(c) - t)
+            .collect();
+        // Manoeuvres: stretches of |true rate| > 0.05 rad/s lasting ≥ 1 s.
+        let mut worst: f64 = 0.0;
+        let mut count = 0;
+        let mut i = 0;
+        while i < tr.len() {
+            if truth[i].true_signal[c].abs() > 0.05 {
+                let j0 = i;
+                while i < tr.len() && truth[i].true_signal[c].abs() > 0.05 {
+                    i += 1;
+                }
+                if (i - j0) as f64 >= rate_hz {
+                    count += 1;
+                    // Signed relative change of the manoeuvre's integral (its heading change):
+                    // any bias the output still carries counts against the stage as well.
+                    let true_int: f64 = tr[j0..i].iter().sum();
+                    let out_int: f64 = out[j0..i].iter().map(|s| s.channel(c)).sum();
+                    let att = (1.0 - out_int / true_int).abs();
+                    worst = worst.max(att);
+                }
+            } else {
+                i += 1;
+            }
+        }
+        let p = scores(&e_p, rate_hz);
+        let b = scores(&e_b, rate_hz);
+        res.push(ChannelEval {
+            channel: CHANNEL_NAMES[c].into(),
+            improvement_1s: b.rms_1s_mean_error / p.rms_1s_mean_error,
+            drift_reduction: 1.0 - p.rms_60s_drift_rad / b.rms_60s_drift_rad,
+            pipeline: p,
+            baseline: b,
+            worst_attenuation: worst,
+            manoeuvres: count,
+        });
+    }
+    res
+}
+
+/// Convenience: simulate a scenario and decode it as replay would.
+pub use crate::analysis::detector_compare::simulate_decoded as simulate;
