@@ -231,3 +231,9 @@ mod tests {
         assert!(overlapping_adev(&y, 0.0).tau_s.is_empty());
     }
 }
+
+/// `(tau_s, adev)` pairs at every octave τ: the shape the residual diagnosis consumes.
+pub fn oadev_octaves(y: &[f64], rate_hz: f64) -> Vec<(f64, f64)> {
+    let r = overlapping_adev(y, rate_hz);
+    r.tau_s.into_iter().zip(r.adev).collect()
+}
