@@ -112,6 +112,25 @@ enum Cmd {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Close the loop: fit the model, analyse the held-out residual (whiteness, spectrum lines,
+    /// temperature, other axes, g-sensitivity, steps, Allan slopes, quantisation), add the best
+    /// significant effect, refit, repeat; report before/after, plots, and a bias model with the
+    /// learned effects (DIR/bias.toml) that the daemon's [bias] model can load.
+    Diagnose {
+        log: PathBuf,
+        /// Channels (gx gy gz ax ay az); repeatable; default all.
+        #[arg(long = "channel")]
+        channels: Vec<String>,
+        /// Analyse only from this time (s from the start of the log)...
+        #[arg(long, default_value_t = 0.0)]
+        from_s: f64,
+        /// ...to this time (s; default: the end). Use it to pick a still stretch of a moving log.
+        #[arg(long)]
+        to_s: Option<f64>,
+        /// Output directory: report.txt, report.json, bias.toml, plots/*.svg.
+        #[arg(long, default_value = "diagnose-out")]
+        out_dir: PathBuf,
+    },
     /// Compare methods on the same data. `--detectors --scenario S.toml`: gross-error detectors
     /// against the simulator's truth. `LOG --channel C`: the bias models of the FOS paper.
     Compare {
@@ -287,6 +306,13 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             config,
             json,
         } => evaluate(&scenario, seed, &config, json),
+        Cmd::Diagnose {
+            log,
+            channels,
+            from_s,
+            to_s,
+            out_dir,
+        } => diagnose(&log, &channels, from_s, to_s, &out_dir),
         Cmd::Compare {
             log,
             detectors,
@@ -592,5 +618,128 @@ fn evaluate(
     if let Some(p) = json {
         std::fs::write(&p, serde_json::to_string_pretty(&res)?)?;
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn diagnose(
+    log: &std::path::Path,
+    channels: &[String],
+    from_s: f64,
+    to_s: Option<f64>,
+    out_dir: &std::path::Path,
+) -> Result<ExitCode> {
+    use imuprep::analysis::diagnose::{ChannelInput, DiagnoseSettings, diagnose_channel};
+    use imuprep::analysis::diagnose_report::{DiagnoseReport, channel_plots, effect_text};
+    use imuprep::analysis::exogenous::Exogenous;
+    use imuprep::model::bias_model::{BiasModelFile, ChannelBiasModel};
+    use imuprep::sample::{CHANNEL_NAMES, channel_index};
+    let (rate, samples) = load_span(log, from_s)?;
+    let end = match to_s {
+        Some(t) => (((t - from_s) * rate).round() as usize).min(samples.len()),
+        None => samples.len(),
+    };
+    anyhow::ensure!(end > 0, "the chosen stretch is empty");
+    let samples = &samples[..end];
+    let chans: Vec<usize> = if channels.is_empty() {
+        (0..6).collect()
+    } else {
+        channels
+            .iter()
+            .map(|c| channel_index(c).with_context(|| format!("unknown channel {c:?}")))
+            .collect::<Result<_>>()?
+    };
+    let series: Vec<Vec<f64>> = (0..6)
+        .map(|c| samples.iter().map(|s| s.channel(c)).collect())
+        .collect();
+    let temp: Option<Vec<f64>> = samples.iter().map(|s| s.temp_c).collect();
+    std::fs::create_dir_all(out_dir.join("plots"))?;
+    let settings = DiagnoseSettings::default();
+    let mut report = DiagnoseReport {
+        source: format!(
+            "{} [{from_s} s .. +{:.1} s at {rate} Hz]",
+            log.display(),
+            end as f64 / rate
+        ),
+        channels: vec![],
+    };
+    let mut model = BiasModelFile::default();
+    for c in chans {
+        let name = CHANNEL_NAMES[c];
+        let others: Vec<(String, &[f64])> = (0..6)
+            .filter(|j| *j != c)
+            .map(|j| (CHANNEL_NAMES[j].to_string(), series[j].as_slice()))
+            .collect();
+        let exo = Exogenous {
+            temperature_c: temp.as_deref(),
+            specific_force_m_s2: (c < 3).then(|| {
+                [
+                    series[3].as_slice(),
+                    series[4].as_slice(),
+                    series[5].as_slice(),
+                ]
+            }),
+            other_axes: &others,
+        };
+        let input = ChannelInput {
+            name,
+            values: &series[c],
+            rate_hz: rate,
+            exogenous: exo,
+        };
+        match diagnose_channel(&input, &settings) {
+            Ok(d) => {
+                let added: Vec<String> = d
+                    .iterations
+                    .iter()
+                    .map(|it| effect_text(&it.effect))
+                    .collect();
+                println!(
+                    "{name}: first model AR({}) test MSE {:.4e}; added: {}; final test MSE {:.4e} ({:.1} % lower)",
+                    d.baseline.ar_order,
+                    d.baseline.mse_one_step,
+                    if added.is_empty() {
+                        "nothing".to_string()
+                    } else {
+                        added.join("; ")
+                    },
+                    d.final_metrics.mse_one_step,
+                    100.0 * (1.0 - d.final_metrics.mse_one_step / d.baseline.mse_one_step)
+                );
+                for (stem, svg) in channel_plots(&d) {
+                    std::fs::write(out_dir.join("plots").join(format!("{stem}.svg")), svg)?;
+                }
+                model.channels.push(ChannelBiasModel {
+                    channel: name.to_string(),
+                    method: "burg".into(),
+                    sample_rate_hz: rate,
+                    mean: d.intercept,
+                    ar: d.ar.clone(),
+                    innovation_var: d.innovation_var,
+                    white_noise_var: 0.0,
+                    effects: d.effects.clone(),
+                    ..Default::default()
+                });
+                report.channels.push(d);
+            }
+            Err(e) => println!("{name}: cannot diagnose: {e}"),
+        }
+    }
+    std::fs::write(out_dir.join("report.txt"), report.to_text())?;
+    std::fs::write(
+        out_dir.join("report.json"),
+        report
+            .to_json()
+            .map_err(|e| anyhow::anyhow!(e.to_string()))?,
+    )?;
+    std::fs::write(
+        out_dir.join("bias.toml"),
+        model
+            .to_toml_string()
+            .map_err(|e| anyhow::anyhow!(e.to_string()))?,
+    )?;
+    println!(
+        "wrote {0}/report.txt, {0}/report.json, {0}/bias.toml and {0}/plots/",
+        out_dir.display()
+    );
     Ok(ExitCode::SUCCESS)
 }
