@@ -174,6 +174,12 @@ fn geometric_mean(it: impl Iterator<Item = f64>) -> Option<f64> {
     (c > 0).then(|| (s / c as f64).exp())
 }
 
+/// `(tau_s, adev)` pairs at every octave τ: the shape the residual diagnosis consumes.
+pub fn oadev_octaves(y: &[f64], rate_hz: f64) -> Vec<(f64, f64)> {
+    let r = overlapping_adev(y, rate_hz);
+    r.tau_s.into_iter().zip(r.adev).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -230,10 +236,4 @@ mod tests {
         assert!(overlapping_adev(&[1.0, 2.0], 1.0).tau_s.is_empty());
         assert!(overlapping_adev(&y, 0.0).tau_s.is_empty());
     }
-}
-
-/// `(tau_s, adev)` pairs at every octave τ: the shape the residual diagnosis consumes.
-pub fn oadev_octaves(y: &[f64], rate_hz: f64) -> Vec<(f64, f64)> {
-    let r = overlapping_adev(y, rate_hz);
-    r.tau_s.into_iter().zip(r.adev).collect()
 }

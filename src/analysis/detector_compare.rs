@@ -120,7 +120,7 @@ pub fn compare_detectors(
         };
         let mut per = Vec::new();
         let mut ratio_sum = 0.0;
-        for c in 0..N_CHANNELS {
+        for (c, ch_name) in CHANNEL_NAMES.iter().enumerate() {
             let x: Vec<f64> = samples.iter().map(|s| s.channel(c)).collect();
             let mask_true: Vec<bool> = truth.iter().map(|t| t.gross_mask[c]).collect();
             let clean: Vec<f64> = x
@@ -151,7 +151,7 @@ pub fn compare_detectors(
             } else {
                 1.0
             };
-            per.push((CHANNEL_NAMES[c].to_string(), sc));
+            per.push((ch_name.to_string(), sc));
         }
         let (tp, fp, fne, clean_n) = per.iter().fold((0, 0, 0, 0), |a, (_, s)| {
             (

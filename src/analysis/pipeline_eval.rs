@@ -8,6 +8,7 @@
 //!   window-end values — a plain single-axis strapdown of the error.
 //! - *manoeuvre change*: for every stretch where |true rate| > 0.05 rad/s for ≥ 1 s,
 //!   |1 − ∫output/∫truth| over that stretch (bias left in the output counts too); the worst.
+//!
 //! The baseline applies only the configured calibration (constant bias, scale, misalignment).
 
 use crate::sample::{CHANNEL_NAMES, Sample};
@@ -62,7 +63,7 @@ pub fn evaluate(
     let out: Vec<Sample> = samples.iter().map(|s| pipeline.process(*s)).collect();
     let base: Vec<Sample> = samples.iter().map(|s| baseline(*s)).collect();
     let mut res = Vec::new();
-    for c in 0..3 {
+    for (c, ch_name) in CHANNEL_NAMES.iter().enumerate().take(3) {
         let tr: Vec<f64> = truth
             .iter()
             .map(|t| t.true_signal[c] + t.component(Effect::RoadVibration, c))
@@ -99,7 +100,7 @@ pub fn evaluate(
         let p = scores(&e_p, rate_hz);
         let b = scores(&e_b, rate_hz);
         res.push(ChannelEval {
-            channel: CHANNEL_NAMES[c].into(),
+            channel: ch_name.to_string(),
             improvement_1s: b.rms_1s_mean_error / p.rms_1s_mean_error,
             drift_reduction: 1.0 - p.rms_60s_drift_rad / b.rms_60s_drift_rad,
             pipeline: p,

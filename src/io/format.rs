@@ -60,28 +60,6 @@ pub fn write_json_row(s: &Sample, out: &mut String) {
     out.push_str("}\n");
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn json_line_is_valid_json_with_null_for_absent_values() {
-        let mut s = Sample {
-            seq: 3,
-            t_ns: 10,
-            ..Sample::default()
-        };
-        s.gyro[0] = f64::NAN;
-        let mut o = String::new();
-        write_json_row(&s, &mut o);
-        let v: serde_json::Value = serde_json::from_str(o.trim()).unwrap();
-        assert_eq!(v["seq"], 3);
-        assert!(v["gyro"][0].is_null());
-        assert!(v["temp"].is_null());
-        assert_eq!(v["bias_sd"].as_array().unwrap().len(), 6);
-    }
-}
-
 /// Encodes batches of samples in one format, with the stream preamble each format needs.
 pub struct Encoder {
     format: Format,
@@ -130,5 +108,27 @@ impl Encoder {
                 buf.put_slice(self.text.as_bytes());
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_line_is_valid_json_with_null_for_absent_values() {
+        let mut s = Sample {
+            seq: 3,
+            t_ns: 10,
+            ..Sample::default()
+        };
+        s.gyro[0] = f64::NAN;
+        let mut o = String::new();
+        write_json_row(&s, &mut o);
+        let v: serde_json::Value = serde_json::from_str(o.trim()).unwrap();
+        assert_eq!(v["seq"], 3);
+        assert!(v["gyro"][0].is_null());
+        assert!(v["temp"].is_null());
+        assert_eq!(v["bias_sd"].as_array().unwrap().len(), 6);
     }
 }

@@ -105,8 +105,8 @@ async fn pump<R: AsyncRead + Unpin>(
         };
         match item {
             Some(Ok(Message::Sample(s))) => {
-                if let Some(p) = pacer.as_mut() {
-                    if let Some(wait) = p.wait_for(s.t_ns) {
+                if let Some(wait) = pacer.as_mut().and_then(|p| p.wait_for(s.t_ns)) {
+                    {
                         // Hand over what we hold before sleeping, so pacing is visible downstream.
                         if !batch.is_empty() {
                             let stats = framed.decoder().stats();
