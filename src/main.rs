@@ -87,7 +87,8 @@ enum Cmd {
         #[arg(long)]
         seed: Option<u64>,
     },
-    /// Fit models from a recording: ARIMA per channel (gross-error stage) → DIR/arima.toml.
+    /// Fit models from a recording: ARIMA per channel (gross-error stage) → DIR/arima.toml, and
+    /// the AR bias model (Burg) per channel (bias stage) → DIR/bias.toml.
     Fit {
         log: PathBuf,
         /// Directory for the model files (created if needed).
@@ -99,6 +100,10 @@ enum Cmd {
         /// Skip this many seconds at the start (start-up transients).
         #[arg(long, default_value_t = 0.0)]
         skip_s: f64,
+        /// AR order of the bias model. Long by default: the bias stage splits the fitted signal
+        /// spectrum into a slow bias and white noise, which a short AR cannot describe.
+        #[arg(long, default_value_t = 64)]
+        bias_order: usize,
     },
     /// Score the configured pipeline against a calibration-only baseline on a simulated scenario
     /// (truth known): RMS of 1-s mean error, 60-s heading drift, manoeuvre integrals (gyros).
@@ -299,7 +304,8 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             out_dir,
             train_s,
             skip_s,
-        } => fit(&log, &out_dir, train_s, skip_s),
+            bias_order,
+        } => fit(&log, &out_dir, train_s, skip_s, bias_order),
         Cmd::Evaluate {
             scenario,
             seed,
@@ -508,6 +514,7 @@ fn fit(
     out_dir: &std::path::Path,
     train_s: f64,
     skip_s: f64,
+    bias_order: usize,
 ) -> Result<ExitCode> {
     use imuprep::model::arima::{ArimaModelFile, IdentifySettings, identify};
     use imuprep::sample::CHANNEL_NAMES;
@@ -549,6 +556,42 @@ fn fit(
         "wrote {} (use it as [gross_error] model = \"{}\")",
         path.display(),
         path.display()
+    );
+
+    use imuprep::model::bias_model::{BiasModelFile, ChannelBiasModel};
+    let mut bias = BiasModelFile::default();
+    println!("bias model: Burg AR({bias_order}) per channel on the same span:");
+    for (c, name) in CHANNEL_NAMES.iter().enumerate() {
+        let x: Vec<f64> = samples[..n].iter().map(|s| s.channel(c)).collect();
+        let f = imuprep::model::burg(&x, bias_order).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+        println!(
+            "{name:<4} mean {:>12.4e}  one-step innovation sd {:>10.4e}",
+            f.mean,
+            f.noise_var.sqrt()
+        );
+        bias.channels.push(ChannelBiasModel {
+            channel: name.to_string(),
+            method: "burg".into(),
+            sample_rate_hz: rate,
+            mean: f.mean,
+            ar: f.coeffs,
+            innovation_var: f.noise_var,
+            white_noise_var: 0.0,
+            ..Default::default()
+        });
+    }
+    bias.validate()
+        .map_err(|e| anyhow::anyhow!("bias model: {}", e.join("; ")))?;
+    let bpath = out_dir.join("bias.toml");
+    std::fs::write(
+        &bpath,
+        bias.to_toml_string()
+            .map_err(|e| anyhow::anyhow!(e.to_string()))?,
+    )?;
+    println!(
+        "wrote {} (use it as [bias] model = \"{}\")",
+        bpath.display(),
+        bpath.display()
     );
     Ok(ExitCode::SUCCESS)
 }
