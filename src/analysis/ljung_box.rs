@@ -84,100 +84,13 @@ pub fn ljung_box(x: &[f64], lags: usize, fitted_params: usize) -> Result<LjungBo
     })
 }
 
-/// ln Γ(x) for x > 0 (Lanczos, g = 7).
-pub fn ln_gamma(x: f64) -> f64 {
-    const G: f64 = 7.0;
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    if x < 0.5 {
-        // Reflection keeps the series in its accurate range.
-        let pi = std::f64::consts::PI;
-        return (pi / (pi * x).sin()).ln() - ln_gamma(1.0 - x);
-    }
-    let x = x - 1.0;
-    let mut a = C[0];
-    let t = x + G + 0.5;
-    for (i, c) in C.iter().enumerate().skip(1) {
-        a += c / (x + i as f64);
-    }
-    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
-}
-
-/// Regularised upper incomplete gamma Q(a, x) = Γ(a, x)/Γ(a), a > 0, x ≥ 0.
-pub fn gamma_q(a: f64, x: f64) -> f64 {
-    if !super::is_pos(a) || x.is_nan() {
-        return f64::NAN;
-    }
-    if x <= 0.0 {
-        return 1.0;
-    }
-    if x.is_infinite() {
-        return 0.0;
-    }
-    let ln_pre = a * x.ln() - x - ln_gamma(a);
-    if x < a + 1.0 {
-        // Series for P(a, x): Σ x^n / (a (a+1) ... (a+n)).
-        let mut term = 1.0 / a;
-        let mut sum = term;
-        let mut ap = a;
-        for _ in 0..10_000 {
-            ap += 1.0;
-            term *= x / ap;
-            sum += term;
-            if term.abs() < sum.abs() * 1e-16 {
-                break;
-            }
-        }
-        (1.0 - sum * ln_pre.exp()).clamp(0.0, 1.0)
-    } else {
-        // Continued fraction for Q(a, x), modified Lentz.
-        let tiny = 1e-300;
-        let mut b = x + 1.0 - a;
-        let mut c = 1.0 / tiny;
-        let mut d = 1.0 / b;
-        let mut h = d;
-        for i in 1..10_000 {
-            let an = -(i as f64) * (i as f64 - a);
-            b += 2.0;
-            d = an * d + b;
-            if d.abs() < tiny {
-                d = tiny;
-            }
-            c = b + an / c;
-            if c.abs() < tiny {
-                c = tiny;
-            }
-            d = 1.0 / d;
-            let del = d * c;
-            h *= del;
-            if (del - 1.0).abs() < 1e-16 {
-                break;
-            }
-        }
-        (ln_pre.exp() * h).clamp(0.0, 1.0)
-    }
-}
-
-/// Survival function of the chi-square distribution with `k` degrees of freedom.
-pub fn chi2_sf(x: f64, k: f64) -> f64 {
-    if x <= 0.0 {
-        return 1.0;
-    }
-    gamma_q(0.5 * k, 0.5 * x)
-}
+/// The χ² tail used for the p-value: shared with the hypothesis tests.
+pub use crate::analysis::special::chi2_sf;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::analysis::special::ln_gamma;
     use crate::rng::Rng;
 
     #[test]
