@@ -434,28 +434,9 @@ fn compare_bias(
     json: Option<PathBuf>,
 ) -> Result<ExitCode> {
     use imuprep::analysis::bias_compare::{CompareSettings, SensorKind, compare_channel};
-    use imuprep::sample::{CHANNEL_NAMES, channel_index};
-    let (desc, samples, _) = csvio::read_log(log)?;
-    let rate = desc.map(|d| d.sample_rate_hz).unwrap_or(0.0);
-    anyhow::ensure!(
-        rate > 0.0,
-        "{}: the log does not declare its sample rate",
-        log.display()
-    );
-    let skip = (skip_s * rate).round() as usize;
-    anyhow::ensure!(skip < samples.len(), "--skip-s removes the whole log");
-    let samples = &samples[skip..];
-    let chans: Vec<usize> = if channels.is_empty() {
-        (0..6).collect()
-    } else {
-        channels
-            .iter()
-            .map(|c| {
-                channel_index(c)
-                    .with_context(|| format!("unknown channel {c:?} (gx gy gz ax ay az)"))
-            })
-            .collect::<Result<_>>()?
-    };
+    use imuprep::sample::CHANNEL_NAMES;
+    let (rate, samples) = load_span(log, skip_s)?;
+    let chans = parse_channels(channels)?;
     let temp: Vec<f64> = samples.iter().filter_map(|s| s.temp_c).collect();
     let have_temp = temp_exo && temp.len() == samples.len();
     anyhow::ensure!(
@@ -675,7 +656,7 @@ fn diagnose(
     use imuprep::analysis::diagnose_report::{DiagnoseReport, channel_plots, effect_text};
     use imuprep::analysis::exogenous::Exogenous;
     use imuprep::model::bias_model::{BiasModelFile, ChannelBiasModel};
-    use imuprep::sample::{CHANNEL_NAMES, channel_index};
+    use imuprep::sample::CHANNEL_NAMES;
     let (rate, samples) = load_span(log, from_s)?;
     let end = match to_s {
         Some(t) => (((t - from_s) * rate).round() as usize).min(samples.len()),
@@ -683,14 +664,7 @@ fn diagnose(
     };
     anyhow::ensure!(end > 0, "the chosen stretch is empty");
     let samples = &samples[..end];
-    let chans: Vec<usize> = if channels.is_empty() {
-        (0..6).collect()
-    } else {
-        channels
-            .iter()
-            .map(|c| channel_index(c).with_context(|| format!("unknown channel {c:?}")))
-            .collect::<Result<_>>()?
-    };
+    let chans = parse_channels(channels)?;
     let series: Vec<Vec<f64>> = (0..6)
         .map(|c| samples.iter().map(|s| s.channel(c)).collect())
         .collect();
@@ -785,4 +759,18 @@ fn diagnose(
         out_dir.display()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// Channel names (gx gy gz ax ay az) → indices; none given = all six.
+fn parse_channels(channels: &[String]) -> Result<Vec<usize>> {
+    if channels.is_empty() {
+        return Ok((0..6).collect());
+    }
+    channels
+        .iter()
+        .map(|c| {
+            imuprep::sample::channel_index(c)
+                .with_context(|| format!("unknown channel {c:?} (gx gy gz ax ay az)"))
+        })
+        .collect()
 }

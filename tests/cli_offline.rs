@@ -1,0 +1,104 @@
+//! The offline commands end to end on the bundled static bench: `fit` writes models that the
+//! daemon loads, `compare --detectors` scores the online gate, `diagnose` writes its report and
+//! a bias model the daemon loads.
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+fn run(args: &[&str]) -> String {
+    let out = Command::new(common::bin())
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(args)
+        .output()
+        .unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success(), "imuprep {args:?} failed:\n{text}");
+    text
+}
+
+#[test]
+fn fit_writes_models_that_the_daemon_loads_and_applies() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    run(&[
+        "fit",
+        "replay/static_bench.log",
+        "--out-dir",
+        d,
+        "--train-s",
+        "60",
+        "--bias-order",
+        "8",
+    ]);
+    assert!(Path::new(d).join("arima.toml").exists() && Path::new(d).join("bias.toml").exists());
+    let cfg = dir.path().join("c.toml");
+    std::fs::write(
+        &cfg,
+        format!(
+            "[source]\nkind = \"stdin\"\n[gross_error]\nenabled = true\nmodel = \"{d}/arima.toml\"\n[bias]\nenabled = true\nmodel = \"{d}/bias.toml\"\n"
+        ),
+    )
+    .unwrap();
+    let summary = dir.path().join("s.json");
+    run(&[
+        "replay",
+        "replay/static_bench.log",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--summary-json",
+        summary.to_str().unwrap(),
+    ]);
+    let h: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(summary).unwrap()).unwrap();
+    // Fitted models: nothing warms up, and the bias stage removes a bias from every sample.
+    assert_eq!(h["flagged_warming_up"], 0, "{h}");
+    assert_eq!(h["flagged_bias_removed"], h["samples_out"], "{h}");
+    // The static bench carries gross errors: some are replaced.
+    assert!(h["flagged_replaced"].as_u64().unwrap() > 0, "{h}");
+}
+
+#[test]
+fn compare_detectors_scores_every_detector_on_the_truth() {
+    let out = run(&[
+        "compare",
+        "--detectors",
+        "--scenario",
+        "replay/static_bench.toml",
+    ]);
+    for d in [
+        "online ARIMA gate",
+        "global 3-sigma",
+        "Grubbs",
+        "Chauvenet",
+        "Dixon",
+        "Hampel",
+    ] {
+        assert!(out.contains(d), "{d} missing:\n{out}");
+    }
+}
+
+#[test]
+fn diagnose_writes_report_plots_and_a_loadable_bias_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    run(&[
+        "diagnose",
+        "replay/static_bench.log",
+        "--channel",
+        "gz",
+        "--out-dir",
+        d,
+    ]);
+    for f in ["report.txt", "report.json", "bias.toml"] {
+        assert!(dir.path().join(f).exists(), "{f}");
+    }
+    assert!(std::fs::read_dir(dir.path().join("plots")).unwrap().count() > 0);
+    let m = std::fs::read_to_string(dir.path().join("bias.toml")).unwrap();
+    imuprep::model::bias_model::BiasModelFile::from_toml_str(&m)
+        .expect("diagnose writes a valid bias model");
+}
