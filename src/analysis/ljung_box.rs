@@ -34,26 +34,21 @@ pub struct LjungBox {
     pub acf_outside: usize,
 }
 
-/// Sample autocorrelation r_1..r_max_lag (biased estimator, mean removed).
+/// Sample autocorrelation r_1..r_max_lag (biased estimator, mean removed): the hypothesis-test
+/// module's ACF without r_0, with this module's error type.
 pub fn acf(x: &[f64], max_lag: usize) -> Result<Vec<f64>, AnalysisError> {
     check_finite(x, max_lag + 2)?;
-    let n = x.len();
-    let mean = x.iter().sum::<f64>() / n as f64;
-    let d: Vec<f64> = x.iter().map(|v| v - mean).collect();
-    let c0: f64 = d.iter().map(|v| v * v).sum();
-    if c0 <= 0.0 {
-        return Err(AnalysisError::BadSetting("acf of a constant series"));
+    match crate::analysis::hypothesis::acf(x, max_lag) {
+        Ok(mut r) => {
+            r.remove(0);
+            Ok(r)
+        }
+        Err(crate::analysis::hypothesis::HypothesisError::Constant) => {
+            Err(AnalysisError::BadSetting("acf of a constant series"))
+        }
+        // Length and finiteness were checked above; nothing else can fail.
+        Err(_) => Err(AnalysisError::BadSetting("acf: unusable series")),
     }
-    Ok((1..=max_lag)
-        .map(|k| {
-            d[k..]
-                .iter()
-                .zip(&d[..n - k])
-                .map(|(a, b)| a * b)
-                .sum::<f64>()
-                / c0
-        })
-        .collect())
 }
 
 /// Ljung–Box test of `x` over `lags` lags, with `fitted_params` ARMA parameters subtracted from
