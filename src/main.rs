@@ -639,6 +639,23 @@ fn evaluate(
             r.manoeuvres
         );
     }
+    for r in res.iter().filter(|r| !r.manoeuvre_list.is_empty()) {
+        println!(
+            "{} manoeuvres: start s, duration s, true angle rad, change, mean error rad/s (in the 1 s before)",
+            r.channel
+        );
+        for m in &r.manoeuvre_list {
+            println!(
+                "  {:>7.1} {:>6.1} {:>9.4} {:>+8.2}% {:>+11.3e} ({:>+10.3e})",
+                m.start_s,
+                m.duration_s,
+                m.true_angle_rad,
+                100.0 * m.change,
+                m.mean_error,
+                m.mean_error_before
+            );
+        }
+    }
     if let Some(p) = json {
         std::fs::write(&p, serde_json::to_string_pretty(&res)?)?;
     }

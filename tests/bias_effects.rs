@@ -130,7 +130,10 @@ fn vibration_line_with_drifting_phase_is_cancelled_and_stillness_survives_it() {
 /// Step of +0.005 rad/s (0.29 °/s) on gz at t = 100 s, during the drive of cycle 3; the next stop
 /// starts at 120 s.
 fn step_run(effects: Vec<Effect>) -> Run {
-    let mut stage = drive_stage([vec![], vec![], effects]);
+    step_run_with(drive_stage([vec![], vec![], effects]))
+}
+
+fn step_run_with(mut stage: BiasStage) -> Run {
     let mut base = standard_bias(1000);
     drive(
         &mut stage,
@@ -193,6 +196,34 @@ fn detected_step_re_anchors_the_bias_within_two_seconds_of_the_stop() {
             .iter()
             .all(|f| f & flags::EFFECT_COMPENSATED == 0),
         "false step alarm"
+    );
+}
+
+#[test]
+fn default_step_detector_re_anchors_an_undeclared_step() {
+    // The same model without a step effect, but the stage's default settings: the CUSUM tuned for
+    // the default 0.5 mrad/s step catches the undeclared 5 mrad/s one at the next stop.
+    let settings = BiasSettings {
+        model: Some(drive_model([vec![], vec![], vec![]])),
+        ..Default::default()
+    };
+    let run = step_run_with(BiasStage::new(&settings, None).unwrap());
+    let k = (122.0 * FS) as usize;
+    let e = (run.est[k][2] - run.bias[k][2]).abs();
+    let (a, b) = ((128.0 * FS) as usize, (150.0 * FS) as usize);
+    let m = (a..b)
+        .map(|k| (run.est[k][2] - run.bias[k][2]).abs())
+        .sum::<f64>()
+        / (b - a) as f64;
+    eprintln!("undeclared step, default detector: |error| at 122 s {e:.2e}, next drive {m:.2e}");
+    // Same bounds as the declared step above (10 % of the step).
+    assert!(e < 0.1 * 0.005, "{e}");
+    assert!(m < 0.1 * 0.005, "{m}");
+    assert!(
+        run.flags[..10_000]
+            .iter()
+            .all(|f| f & flags::EFFECT_COMPENSATED == 0),
+        "false step alarm before the step"
     );
 }
 

@@ -36,6 +36,25 @@ pub struct ChannelEval {
     /// Worst |relative change| of a manoeuvre's integral (target ≤ 0.01), and the count.
     pub worst_attenuation: f64,
     pub manoeuvres: usize,
+    /// Every manoeuvre, in time order.
+    pub manoeuvre_list: Vec<Manoeuvre>,
+}
+
+/// One manoeuvre (|true rate| > 0.05 rad/s for ≥ 1 s) on one gyro channel.
+#[derive(Debug, Clone, Serialize)]
+pub struct Manoeuvre {
+    /// Start time from the first sample (s) and duration (s).
+    pub start_s: f64,
+    pub duration_s: f64,
+    /// ∫truth over the manoeuvre (rad).
+    pub true_angle_rad: f64,
+    /// Signed 1 − ∫output/∫truth.
+    pub change: f64,
+    /// Mean output error (output − truth) over the manoeuvre (rad/s) — a bias left in the output.
+    pub mean_error: f64,
+    /// Mean output error over the 1 s before the manoeuvre (rad/s): if it matches `mean_error`, the
+    /// change is a bias carried in from before the turn, not motion removed by the stage.
+    pub mean_error_before: f64,
 }
 
 fn blocks(err: &[f64], n: usize, f: impl Fn(&[f64]) -> f64) -> f64 {
@@ -77,6 +96,8 @@ pub fn evaluate(
         // Manoeuvres: stretches of |true rate| > 0.05 rad/s lasting ≥ 1 s.
         let mut worst: f64 = 0.0;
         let mut count = 0;
+        let mut list = Vec::new();
+        let n1 = rate_hz.round() as usize;
         let mut i = 0;
         while i < tr.len() {
             if truth[i].true_signal[c].abs() > 0.05 {
@@ -90,8 +111,17 @@ pub fn evaluate(
                     // any bias the output still carries counts against the stage as well.
                     let true_int: f64 = tr[j0..i].iter().sum();
                     let out_int: f64 = out[j0..i].iter().map(|s| s.channel(c)).sum();
-                    let att = (1.0 - out_int / true_int).abs();
-                    worst = worst.max(att);
+                    let change = 1.0 - out_int / true_int;
+                    worst = worst.max(change.abs());
+                    let mean = |e: &[f64]| e.iter().sum::<f64>() / e.len().max(1) as f64;
+                    list.push(Manoeuvre {
+                        start_s: j0 as f64 / rate_hz,
+                        duration_s: (i - j0) as f64 / rate_hz,
+                        true_angle_rad: true_int / rate_hz,
+                        change,
+                        mean_error: mean(&e_p[j0..i]),
+                        mean_error_before: mean(&e_p[j0.saturating_sub(n1)..j0]),
+                    });
                 }
             } else {
                 i += 1;
@@ -107,6 +137,7 @@ pub fn evaluate(
             baseline: b,
             worst_attenuation: worst,
             manoeuvres: count,
+            manoeuvre_list: list,
         });
     }
     res

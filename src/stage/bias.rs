@@ -175,6 +175,8 @@ pub struct BiasStage {
     gyro_mean_max_rad_s: f64,
     step_arl_samples: f64,
     step_inflation: f64,
+    default_step: f64,
+    default_rrw_q_per_s: f64,
     counters: Counters,
 }
 
@@ -246,6 +248,8 @@ impl BiasStage {
             gyro_mean_max_rad_s: settings.stillness.gyro_mean_max_rad_s,
             step_arl_samples: settings.step_false_alarm_interval_s * fs,
             step_inflation: settings.step_inflation_factor,
+            default_step: settings.default_step_rad_s,
+            default_rrw_q_per_s: settings.default_rate_random_walk_q_per_s,
             counters,
         };
         for (c, state) in ch.iter_mut().enumerate() {
@@ -319,19 +323,27 @@ impl BiasStage {
         Ok(stage_proto)
     }
 
-    /// The filter of a gyro channel for state-space model `ss` with the model's effects.
+    /// The filter of a gyro channel for state-space model `ss` with the model's effects; a model
+    /// without a rate random walk or a step gets the settings' defaults for them.
     fn channel_kf(&self, ss: BiasStateSpace, effects: &[Effect]) -> ChannelKf {
-        let rrw_q_per_s: f64 = effects
+        let declared_rrw = effects
             .iter()
-            .map(|e| {
-                if let Effect::RateRandomWalk { q_per_s } = e {
-                    *q_per_s
-                } else {
-                    0.0
-                }
-            })
-            .sum();
-        let step_size = effects
+            .any(|e| matches!(e, Effect::RateRandomWalk { .. }));
+        let rrw_q_per_s: f64 = if declared_rrw {
+            effects
+                .iter()
+                .map(|e| {
+                    if let Effect::RateRandomWalk { q_per_s } = e {
+                        *q_per_s
+                    } else {
+                        0.0
+                    }
+                })
+                .sum()
+        } else {
+            self.default_rrw_q_per_s
+        };
+        let declared_step = effects
             .iter()
             .filter_map(|e| {
                 if let Effect::Step { size, .. } = e {
@@ -341,6 +353,13 @@ impl BiasStage {
                 }
             })
             .fold(f64::INFINITY, f64::min);
+        let step_size = if declared_step.is_finite() {
+            declared_step
+        } else if self.default_step > 0.0 {
+            self.default_step
+        } else {
+            f64::INFINITY
+        };
         let has_step = step_size.is_finite();
         let constant = (self.constant_prior_var > 0.0 || rrw_q_per_s > 0.0 || has_step).then_some(
             ConstantState {
@@ -471,12 +490,9 @@ impl BiasStage {
         });
         match built {
             Some(ss) => {
+                // The warm-up's own rate random walk, declared so it overrides the default.
                 let q = self.warmup.rate_random_walk_q_per_s;
-                let effects = if q > 0.0 {
-                    vec![Effect::RateRandomWalk { q_per_s: q }]
-                } else {
-                    vec![]
-                };
+                let effects = vec![Effect::RateRandomWalk { q_per_s: q }];
                 let est = self.channel_kf(ss, &effects);
                 self.ch[c].est = Some(est);
                 self.ch[c].warm = None;

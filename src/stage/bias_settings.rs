@@ -162,6 +162,17 @@ pub struct BiasSettings {
     /// On a step alarm the constant state's variance grows by `(factor · |size|)²` (the model's
     /// Step size). Default 3.
     pub step_inflation_factor: f64,
+    /// Smallest gyro bias step (a shock) the CUSUM is tuned for on a channel whose model declares
+    /// no `step` effect (warm-up models included), rad/s; 0 = no step detector on such channels.
+    /// Default 5e-4 (0.03 °/s, about half a consumer gyro's per-sample noise at 100 Hz): a shock
+    /// during a drive is otherwise absorbed by the AR state at the next stop and decays away
+    /// during the following motion.
+    pub default_step_rad_s: f64,
+    /// Rate random walk of the constant state on a channel whose model declares no
+    /// `rate_random_walk` effect, (rad/s)²/s; 0 = none. Default 1e-10 (as the warm-up's): a model
+    /// fitted on minutes of data cannot reveal the slow wander, and without it the constant state
+    /// becomes certain after the first stop and never follows the bias again.
+    pub default_rate_random_walk_q_per_s: f64,
 }
 
 impl Default for BiasSettings {
@@ -179,6 +190,8 @@ impl Default for BiasSettings {
             vibration_bandwidth_hz: 0.2,
             step_false_alarm_interval_s: 36_000.0,
             step_inflation_factor: 3.0,
+            default_step_rad_s: 5e-4,
+            default_rate_random_walk_q_per_s: 1e-10,
         }
     }
 }
@@ -277,6 +290,17 @@ impl BiasSettings {
                 self.step_false_alarm_interval_s
             ));
         }
+        for (key, v) in [
+            ("default_step_rad_s", self.default_step_rad_s),
+            (
+                "default_rate_random_walk_q_per_s",
+                self.default_rate_random_walk_q_per_s,
+            ),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                e.push(format!("{key}: must be >= 0 (got {v})"));
+            }
+        }
         if !(self.step_inflation_factor.is_finite() && self.step_inflation_factor > 0.0) {
             e.push(format!(
                 "step_inflation_factor: must be > 0 (got {})",
@@ -348,6 +372,8 @@ mod tests {
             vibration_bandwidth_hz = 0.2
             step_false_alarm_interval_s = 36000.0
             step_inflation_factor = 3.0
+            default_step_rad_s = 5e-4
+            default_rate_random_walk_q_per_s = 1e-10
             model_path = "models/imu.toml"
             [gyro]
             bias = [0.001, -0.002, 0.0]

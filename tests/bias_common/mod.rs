@@ -97,6 +97,10 @@ pub fn truth_model(
 pub fn settings_with(model: Option<BiasModelFile>) -> BiasSettings {
     BiasSettings {
         model,
+        // Only the model's declared effects: the tests compare a model with an effect against
+        // the same model without it.
+        default_step_rad_s: 0.0,
+        default_rate_random_walk_q_per_s: 0.0,
         ..Default::default()
     }
 }
