@@ -21,20 +21,15 @@ fn run(args: &[&str]) -> String {
     text
 }
 
-#[test]
-fn fit_writes_models_that_the_daemon_loads_and_applies() {
+/// `fit replay/static_bench.log --out-dir DIR FIT_ARGS...`, then `replay` of the same log with
+/// both fitted models in the config. Returns the directory (kept alive), fit's output and the
+/// replay's health summary.
+fn fit_and_replay(fit_args: &[&str]) -> (tempfile::TempDir, String, serde_json::Value) {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().to_str().unwrap();
-    run(&[
-        "fit",
-        "replay/static_bench.log",
-        "--out-dir",
-        d,
-        "--train-s",
-        "60",
-        "--bias-order",
-        "8",
-    ]);
+    let mut args = vec!["fit", "replay/static_bench.log", "--out-dir", d];
+    args.extend_from_slice(fit_args);
+    let fit_out = run(&args);
     assert!(Path::new(d).join("arima.toml").exists() && Path::new(d).join("bias.toml").exists());
     let cfg = dir.path().join("c.toml");
     std::fs::write(
@@ -55,11 +50,43 @@ fn fit_writes_models_that_the_daemon_loads_and_applies() {
     ]);
     let h: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(summary).unwrap()).unwrap();
+    (dir, fit_out, h)
+}
+
+/// What a replay with fitted models must show.
+fn assert_fitted_models_applied(h: &serde_json::Value) {
     // Fitted models: nothing warms up, and the bias stage removes a bias from every sample.
     assert_eq!(h["flagged_warming_up"], 0, "{h}");
     assert_eq!(h["flagged_bias_removed"], h["samples_out"], "{h}");
     // The static bench carries gross errors: some are replaced.
     assert!(h["flagged_replaced"].as_u64().unwrap() > 0, "{h}");
+}
+
+#[test]
+fn fit_writes_models_that_the_daemon_loads_and_applies() {
+    let (_dir, _, h) = fit_and_replay(&["--train-s", "60", "--bias-order", "8"]);
+    assert_fitted_models_applied(&h);
+}
+
+#[test]
+fn fit_with_fos_writes_a_bias_model_that_the_daemon_loads_and_applies() {
+    // Default span (180 s) and L (10): long enough for FOS to select lags on several channels
+    // of the bench, so the FOS -> AR conversion is exercised, not only the white case.
+    let (dir, out, h) = fit_and_replay(&["--bias-method", "fos"]);
+    assert!(out.contains("FOS CP=1 L=10"), "{out}");
+    let m = imuprep::model::bias_model::BiasModelFile::load(&dir.path().join("bias.toml"))
+        .expect("fit --bias-method fos writes a valid bias model");
+    assert_eq!(m.channels.len(), imuprep::sample::CHANNEL_NAMES.len());
+    for name in imuprep::sample::CHANNEL_NAMES {
+        let c = m.channel(name).unwrap_or_else(|| panic!("{name} missing"));
+        assert_eq!(c.method, "fos", "{name}");
+        assert!(c.ar.len() <= 10, "{name}: {:?}", c.ar);
+    }
+    assert!(
+        m.channels.iter().any(|c| !c.ar.is_empty()),
+        "no channel has a lag term: {m:?}"
+    );
+    assert_fitted_models_applied(&h);
 }
 
 #[test]

@@ -32,7 +32,12 @@
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+use crate::model::fos_candidates::TermSpec;
+use crate::model::fos_model::FosModel;
 use crate::sample::channel_index;
+
+/// `|1 - sum ar|` below which [`ChannelBiasModel::from_linear_fos`] reports a unit root.
+const UNIT_ROOT_TOL: f64 = 1e-9;
 
 /// Longest AR polynomial accepted in a file. The online stage reduces any order to
 /// [`crate::model::bias_state_space::MAX_AR_ORDER`] by autocovariance matching; this bound only
@@ -222,6 +227,102 @@ impl BiasModelFile {
 }
 
 impl ChannelBiasModel {
+    /// The AR model of channel `channel` equal to a linear FOS model (CP degree 1: a constant
+    /// and output lags), with `method = "fos"` and `ar_of = "signal"`.
+    ///
+    /// The FOS model works on `u = (y - center) / scale`:
+    /// `u(n) = a_0 + sum_l a_l u(n-l)` (`a_0` = coefficient of the constant, 0 if the search did
+    /// not select it; `a_l` = coefficient of `y(n-l)`, 0 for unselected lags). In `y` units that
+    /// is `y(n) = k + sum_l a_l y(n-l)`, `k = center (1 - S) + scale a_0`, `S = sum_l a_l`: the lag
+    /// coefficients are unchanged, and the level the model reverts to is
+    /// `mean = k / (1 - S) = center + scale a_0 / (1 - S)` (computed in the second form, which
+    /// does not cancel). Then `mean + sum_l a_l (y(n-l) - mean)` is the FOS one-step prediction
+    /// exactly, for every history. `ar` has the length of the largest selected lag (empty if no
+    /// lag was selected: white).
+    ///
+    /// `innovation_var` is the one-step residual variance of the model on its fit data in `y`
+    /// units (unit²), e.g. the mean square of [`FosModel::residuals`]; it is stored as given.
+    ///
+    /// Only linear, autonomous models convert: the online bias stage is a linear Kalman filter
+    /// over an AR state space, so a model with a cross-product term (CP degree 2) or an
+    /// exogenous term cannot run online and is rejected with an error naming the term. A model
+    /// whose lag coefficients sum to (nearly) 1 has a unit root and no level to revert to; it is
+    /// rejected too. The result is not validated (stationarity etc.): call
+    /// [`BiasModelFile::validate`] on the file.
+    pub fn from_linear_fos(
+        channel: &str,
+        sample_rate_hz: f64,
+        model: &FosModel,
+        innovation_var: f64,
+    ) -> Result<Self, String> {
+        if model.terms.len() != model.coefficients.len() {
+            return Err(format!(
+                "FOS model of {channel}: {} terms but {} coefficients",
+                model.terms.len(),
+                model.coefficients.len()
+            ));
+        }
+        if !(model.center.is_finite() && model.scale.is_finite() && model.scale != 0.0) {
+            return Err(format!(
+                "FOS model of {channel}: bad standardisation (center {}, scale {})",
+                model.center, model.scale
+            ));
+        }
+        let mut a0 = 0.0;
+        let mut ar = vec![0.0; model.max_lag()];
+        for (t, &c) in model.terms.iter().zip(&model.coefficients) {
+            if !c.is_finite() {
+                return Err(format!(
+                    "FOS model of {channel}: coefficient of {} is not finite ({c})",
+                    t.name()
+                ));
+            }
+            match *t {
+                TermSpec::Constant => a0 += c,
+                TermSpec::Lag { lag } if lag >= 1 => ar[lag - 1] += c,
+                TermSpec::Lag { .. } => {
+                    return Err(format!(
+                        "FOS model of {channel}: term {} is not a past output",
+                        t.name()
+                    ));
+                }
+                TermSpec::CrossProduct { .. } => {
+                    return Err(format!(
+                        "FOS model of {channel} has the non-linear term {}: the online bias stage \
+                         is a linear Kalman filter and runs only linear (CP degree 1) models",
+                        t.name()
+                    ));
+                }
+                TermSpec::ExoLag { .. } => {
+                    return Err(format!(
+                        "FOS model of {channel} has the exogenous term {}: the online bias stage \
+                         runs only autonomous AR models (constant and output lags)",
+                        t.name()
+                    ));
+                }
+            }
+        }
+        let one_minus_sum = 1.0 - ar.iter().sum::<f64>();
+        if one_minus_sum.is_nan() || one_minus_sum.abs() <= UNIT_ROOT_TOL {
+            return Err(format!(
+                "FOS model of {channel}: the lag coefficients sum to {} (a unit root): the model \
+                 reverts to no level, so it has no mean and cannot be a stationary bias model",
+                1.0 - one_minus_sum
+            ));
+        }
+        Ok(ChannelBiasModel {
+            channel: channel.to_string(),
+            method: "fos".into(),
+            sample_rate_hz,
+            mean: model.center + model.scale * a0 / one_minus_sum,
+            ar,
+            innovation_var,
+            white_noise_var: 0.0,
+            ar_of: ArOf::Signal,
+            effects: Vec::new(),
+        })
+    }
+
     /// True for the gyro channels `gx gy gz`.
     pub fn is_gyro(&self) -> bool {
         matches!(channel_index(&self.channel), Some(c) if c < 3)
@@ -363,6 +464,130 @@ impl ChannelBiasModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::fos::FosSettings;
+    use crate::model::fos_model::FosModelSpec;
+    use crate::rng::Rng;
+
+    /// One-step prediction of the file's AR model: `mean + sum ar[i-1] (y[n-i] - mean)`, with
+    /// `history` newest last (at least `ar.len()` values).
+    fn ar_predict(m: &ChannelBiasModel, history: &[f64]) -> f64 {
+        let n = history.len();
+        m.mean
+            + m.ar
+                .iter()
+                .enumerate()
+                .map(|(i, a)| a * (history[n - 1 - i] - m.mean))
+                .sum::<f64>()
+    }
+
+    fn assert_same_prediction(m: &ChannelBiasModel, fos: &FosModel, history: &[f64]) {
+        let p_ar = ar_predict(m, history);
+        let p_fos = fos.predict_next(history, &[]);
+        assert!(
+            (p_ar - p_fos).abs() <= 1e-9 * p_fos.abs().max(1e-300),
+            "AR {p_ar} vs FOS {p_fos} (diff {:e})",
+            p_ar - p_fos
+        );
+    }
+
+    #[test]
+    fn linear_fos_converts_to_the_same_ar_predictor() {
+        // Seed 20240605: y(n) = 3 + x(n), x(n) = 0.6 x(n-1) + 0.25 x(n-2) + 0.1 e(n), 20 000
+        // samples; FOS CP=1, L=10 as `fit --bias-method fos` runs it.
+        let mut rng = Rng::new(20_240_605);
+        let (mut x1, mut x2) = (0.0f64, 0.0f64);
+        let y: Vec<f64> = (0..20_000)
+            .map(|_| {
+                let x = 0.6 * x1 + 0.25 * x2 + 0.1 * rng.normal();
+                x2 = x1;
+                x1 = x;
+                3.0 + x
+            })
+            .collect();
+        let l = 10;
+        let (fos, _) =
+            FosModel::fit(&y, &[], &FosModelSpec::paper(l, 1), &FosSettings::default()).unwrap();
+        let r = fos.residuals(&y, &[], l..y.len());
+        let mse = r.iter().map(|e| e * e).sum::<f64>() / r.len() as f64;
+        let m = ChannelBiasModel::from_linear_fos("gz", 100.0, &fos, mse).unwrap();
+        assert_eq!(m.method, "fos");
+        assert_eq!(m.ar_of, ArOf::Signal);
+        assert_eq!(m.innovation_var, mse);
+        let file = BiasModelFile {
+            channels: vec![m.clone()],
+        };
+        file.validate().unwrap();
+        // Exactly the FOS predictor, on the fit data and on histories far from it.
+        for n in (l..y.len()).step_by(97) {
+            assert_same_prediction(&m, &fos, &y[..n]);
+        }
+        let odd: Vec<f64> = (0..l).map(|i| -7.0 + 1.3 * i as f64).collect();
+        assert_same_prediction(&m, &fos, &odd);
+        // And it is the generating model, to sampling accuracy (sd of phi ~ 0.007).
+        assert!(m.ar.len() >= 2 && m.ar.len() <= l, "{:?}", m.ar);
+        assert!((m.ar[0] - 0.6).abs() < 0.04, "{:?}", m.ar);
+        assert!((m.ar[1] - 0.25).abs() < 0.04, "{:?}", m.ar);
+        assert!((m.mean - 3.0).abs() < 0.05, "{}", m.mean);
+        assert!((mse / 0.01 - 1.0).abs() < 0.05, "{mse}");
+    }
+
+    #[test]
+    fn linear_fos_conversion_maps_the_constant_through_the_standardisation() {
+        // u(n) = 0.3 + 0.5 u(n-1) + 0.2 u(n-3), u = (y - 10) / 2: y(n) = 10 (1 - 0.7) + 0.6
+        // + 0.5 y(n-1) + 0.2 y(n-3), level 3.6 / 0.3 = 12; lag 2 unselected → 0.
+        let fos = FosModel {
+            terms: vec![
+                TermSpec::Lag { lag: 3 },
+                TermSpec::Constant,
+                TermSpec::Lag { lag: 1 },
+            ],
+            coefficients: vec![0.2, 0.3, 0.5],
+            center: 10.0,
+            scale: 2.0,
+            exo_center: vec![],
+            exo_scale: vec![],
+        };
+        let m = ChannelBiasModel::from_linear_fos("ax", 200.0, &fos, 1e-4).unwrap();
+        assert_eq!(m.ar, vec![0.5, 0.0, 0.2]);
+        assert!((m.mean - 12.0).abs() < 1e-12, "{}", m.mean);
+        for h in [[1.0, 2.0, 3.0], [12.0, 12.0, 12.0], [-40.0, 0.5, 1e3]] {
+            assert_same_prediction(&m, &fos, &h);
+        }
+    }
+
+    #[test]
+    fn non_linear_exogenous_and_unit_root_fos_models_are_rejected() {
+        let model = |terms: Vec<TermSpec>, coefficients: Vec<f64>| FosModel {
+            terms,
+            coefficients,
+            center: 0.0,
+            scale: 1.0,
+            exo_center: vec![0.0],
+            exo_scale: vec![1.0],
+        };
+        let cp = model(
+            vec![
+                TermSpec::Lag { lag: 1 },
+                TermSpec::CrossProduct { lag1: 1, lag2: 2 },
+            ],
+            vec![0.5, 0.1],
+        );
+        let e = ChannelBiasModel::from_linear_fos("gx", 100.0, &cp, 1e-6).unwrap_err();
+        assert!(e.contains("y(n-1)*y(n-2)") && e.contains("linear"), "{e}");
+        let exo = model(vec![TermSpec::ExoLag { input: 0, lag: 0 }], vec![0.5]);
+        let e = ChannelBiasModel::from_linear_fos("gx", 100.0, &exo, 1e-6).unwrap_err();
+        assert!(e.contains("x0(n-0)") && e.contains("exogenous"), "{e}");
+        let unit_root = model(
+            vec![
+                TermSpec::Constant,
+                TermSpec::Lag { lag: 1 },
+                TermSpec::Lag { lag: 2 },
+            ],
+            vec![0.01, 1.2, -0.2],
+        );
+        let e = ChannelBiasModel::from_linear_fos("gx", 100.0, &unit_root, 1e-6).unwrap_err();
+        assert!(e.contains("unit root"), "{e}");
+    }
 
     fn example() -> BiasModelFile {
         BiasModelFile {
