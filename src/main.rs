@@ -21,6 +21,35 @@ struct Cli {
     cmd: Cmd,
 }
 
+/// How `fit` estimates the bias model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum BiasMethod {
+    Burg,
+    YuleWalker,
+    Covariance,
+    Fos,
+}
+
+impl BiasMethod {
+    /// The `method` string written to the bias model file.
+    fn file_name(self) -> &'static str {
+        match self {
+            BiasMethod::Burg => "burg",
+            BiasMethod::YuleWalker => "yule_walker",
+            BiasMethod::Covariance => "covariance",
+            BiasMethod::Fos => "fos",
+        }
+    }
+
+    /// `--bias-order` when not given.
+    fn default_order(self) -> usize {
+        match self {
+            BiasMethod::Fos => 10,
+            _ => 64,
+        }
+    }
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// The daemon: source from config (serial or replay) → pipeline → sinks, until SIGINT/SIGTERM.
@@ -86,9 +115,13 @@ enum Cmd {
         /// Seed (default: the scenario's `seed`, else 0). Same seed → same bytes.
         #[arg(long)]
         seed: Option<u64>,
+        /// Override a scenario key, repeatable: --set errors.gross.rate_per_sample=2e-3
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
     },
     /// Fit models from a recording: ARIMA per channel (gross-error stage) → DIR/arima.toml, and
-    /// the AR bias model (Burg) per channel (bias stage) → DIR/bias.toml.
+    /// the AR bias model per channel (bias stage; Burg, Yule-Walker, covariance or linear FOS)
+    /// → DIR/bias.toml.
     Fit {
         log: PathBuf,
         /// Directory for the model files (created if needed).
@@ -100,10 +133,16 @@ enum Cmd {
         /// Skip this many seconds at the start (start-up transients).
         #[arg(long, default_value_t = 0.0)]
         skip_s: f64,
-        /// AR order of the bias model. Long by default: the bias stage splits the fitted signal
-        /// spectrum into a slow bias and white noise, which a short AR cannot describe.
-        #[arg(long, default_value_t = 64)]
-        bias_order: usize,
+        /// Fitting method of the bias model. `fos`: fast orthogonal search over a constant and
+        /// lags 1..=L (CP degree 1, the linear model the online Kalman filter can run),
+        /// converted to the equivalent AR model.
+        #[arg(long, value_enum, default_value_t = BiasMethod::Burg)]
+        bias_method: BiasMethod,
+        /// AR order of the bias model (for `fos`: the largest lag L). Default 64 for the AR
+        /// methods: the bias stage splits the fitted signal spectrum into a slow bias and white
+        /// noise, which a short AR cannot describe; default 10 (the paper's L) for `fos`.
+        #[arg(long)]
+        bias_order: Option<usize>,
     },
     /// Score the configured pipeline against a calibration-only baseline on a simulated scenario
     /// (truth known): RMS of 1-s mean error, 60-s heading drift, manoeuvre integrals (gyros).
@@ -116,6 +155,9 @@ enum Cmd {
         config: Option<PathBuf>,
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Override a scenario key, repeatable: --set errors.gross.rate_per_sample=2e-3
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
     },
     /// Close the loop: fit the model, analyse the held-out residual (whiteness, spectrum lines,
     /// temperature, other axes, g-sensitivity, steps, Allan slopes, quantisation), add the best
@@ -147,6 +189,9 @@ enum Cmd {
         /// Scenario TOML to simulate (with --detectors).
         #[arg(long)]
         scenario: Option<PathBuf>,
+        /// Override a scenario key, repeatable: --set errors.gross.rate_per_sample=2e-3
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
         #[arg(long)]
         seed: Option<u64>,
         /// Config whose [gross_error.settings] the online stage uses (default: embedded).
@@ -281,11 +326,9 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             output,
             truth,
             seed,
+            sets,
         } => {
-            let text = std::fs::read_to_string(&scenario)
-                .with_context(|| format!("reading {}", scenario.display()))?;
-            let scn = imuprep::sim::Scenario::from_toml_str(&text)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", scenario.display()))?;
+            let scn = read_scenario(&scenario, &sets)?;
             let seed = imuprep::sim::log::effective_seed(&scn, seed);
             let s = imuprep::sim::log::write_sim_log(&scn, seed, &output, truth.as_deref())?;
             eprintln!(
@@ -304,14 +347,23 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             out_dir,
             train_s,
             skip_s,
+            bias_method,
             bias_order,
-        } => fit(&log, &out_dir, train_s, skip_s, bias_order),
+        } => fit(
+            &log,
+            &out_dir,
+            train_s,
+            skip_s,
+            bias_method,
+            bias_order.unwrap_or(bias_method.default_order()),
+        ),
         Cmd::Evaluate {
             scenario,
             seed,
             config,
             json,
-        } => evaluate(&scenario, seed, &config, json),
+            sets,
+        } => evaluate(&scenario, seed, &config, json, &sets),
         Cmd::Diagnose {
             log,
             channels,
@@ -329,12 +381,13 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             skip_s,
             temp_exo,
             json,
+            sets,
         } => {
             if detectors {
                 let scenario = scenario.context(
                     "--detectors needs --scenario S.toml (the truth comes from the simulator)",
                 )?;
-                compare_detectors(&scenario, seed, &config, json)
+                compare_detectors(&scenario, seed, &config, json, &sets)
             } else {
                 let log = log.context(
                     "compare needs a LOG (bias models) or --detectors --scenario S.toml",
@@ -385,9 +438,18 @@ fn daemon(cfg: Config, summary_json: Option<PathBuf>) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn read_scenario(p: &std::path::Path) -> Result<imuprep::sim::Scenario> {
+/// Read a scenario file with `--set KEY=VALUE` overrides applied.
+fn read_scenario(p: &std::path::Path, sets: &[String]) -> Result<imuprep::sim::Scenario> {
     let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
-    imuprep::sim::Scenario::from_toml_str(&text)
+    let overrides = sets
+        .iter()
+        .map(|kv| {
+            kv.split_once('=')
+                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+                .with_context(|| format!("--set {kv:?}: expected KEY=VALUE"))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    imuprep::sim::Scenario::from_toml_str_with(&text, &overrides)
         .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))
 }
 
@@ -396,24 +458,33 @@ fn compare_detectors(
     seed: Option<u64>,
     config: &Option<PathBuf>,
     json: Option<PathBuf>,
+    sets: &[String],
 ) -> Result<ExitCode> {
     use imuprep::analysis::detector_compare as dc;
-    let scn = read_scenario(scenario)?;
+    let scn = read_scenario(scenario, sets)?;
     let seed = imuprep::sim::log::effective_seed(&scn, seed);
     let cfg = load_config(config)?;
-    let settings = cfg
+    let (settings, model) = cfg
         .stages
         .gross_error
-        .map(|g| g.settings)
+        .map(|g| (g.settings, g.model))
         .unwrap_or_default();
     let (samples, truth) = dc::simulate_decoded(&scn, seed)?;
-    let rows =
-        dc::compare_detectors(&samples, &truth, &settings).map_err(|e| anyhow::anyhow!(e))?;
+    // Without a fitted model the online stage spends its first `warmup_samples` identifying
+    // one (passing samples through); every detector is scored on the samples after that.
+    let from = if model.is_some() {
+        0
+    } else {
+        settings.warmup_samples.min(samples.len())
+    };
+    let rows = dc::compare_detectors(&samples, &truth, &settings, model.as_ref(), from)
+        .map_err(|e| anyhow::anyhow!(e))?;
     let report = dc::DetectorReport {
         scenario: scenario.display().to_string(),
         seed,
         samples: samples.len(),
-        gross_samples: truth
+        scored_from: from,
+        gross_samples: truth[from..]
             .iter()
             .map(|t| t.gross_mask.iter().filter(|m| **m).count() as u64)
             .sum(),
@@ -495,10 +566,16 @@ fn fit(
     out_dir: &std::path::Path,
     train_s: f64,
     skip_s: f64,
+    bias_method: BiasMethod,
     bias_order: usize,
 ) -> Result<ExitCode> {
     use imuprep::model::arima::{ArimaModelFile, IdentifySettings, identify};
+    use imuprep::model::bias_model::{BiasModelFile, ChannelBiasModel, MAX_FILE_AR_ORDER};
     use imuprep::sample::CHANNEL_NAMES;
+    anyhow::ensure!(
+        (1..=MAX_FILE_AR_ORDER).contains(&bias_order),
+        "--bias-order must be in 1..={MAX_FILE_AR_ORDER} (got {bias_order})"
+    );
     let (rate, samples) = load_span(log, skip_s)?;
     let n = ((train_s * rate).round() as usize).min(samples.len());
     std::fs::create_dir_all(out_dir)?;
@@ -539,27 +616,77 @@ fn fit(
         path.display()
     );
 
-    use imuprep::model::bias_model::{BiasModelFile, ChannelBiasModel};
     let mut bias = BiasModelFile::default();
-    println!("bias model: Burg AR({bias_order}) per channel on the same span:");
+    match bias_method {
+        BiasMethod::Fos => println!(
+            "bias model: FOS CP=1 L={bias_order} (constant + lags, as AR) per channel on the same span:"
+        ),
+        m => println!(
+            "bias model: {} AR({bias_order}) per channel on the same span:",
+            m.file_name()
+        ),
+    }
     for (c, name) in CHANNEL_NAMES.iter().enumerate() {
         let x: Vec<f64> = samples[..n].iter().map(|s| s.channel(c)).collect();
-        let f = imuprep::model::burg(&x, bias_order).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-        println!(
-            "{name:<4} mean {:>12.4e}  one-step innovation sd {:>10.4e}",
-            f.mean,
-            f.noise_var.sqrt()
-        );
-        bias.channels.push(ChannelBiasModel {
+        let err = |e: imuprep::model::ModelError| anyhow::anyhow!("{name}: {e}");
+        let from_ar = |f: imuprep::model::ArFit| ChannelBiasModel {
             channel: name.to_string(),
-            method: "burg".into(),
+            method: bias_method.file_name().into(),
             sample_rate_hz: rate,
             mean: f.mean,
             ar: f.coeffs,
             innovation_var: f.noise_var,
             white_noise_var: 0.0,
             ..Default::default()
-        });
+        };
+        let (m, detail) = match bias_method {
+            BiasMethod::Burg => (
+                from_ar(imuprep::model::burg(&x, bias_order).map_err(err)?),
+                String::new(),
+            ),
+            BiasMethod::YuleWalker => (
+                from_ar(imuprep::model::yule_walker(&x, bias_order).map_err(err)?),
+                String::new(),
+            ),
+            BiasMethod::Covariance => (
+                from_ar(imuprep::model::covariance(&x, bias_order).map_err(err)?),
+                String::new(),
+            ),
+            BiasMethod::Fos => {
+                use imuprep::model::fos::FosSettings;
+                use imuprep::model::fos_model::{FosModel, FosModelSpec};
+                let (f, _) = FosModel::fit(
+                    &x,
+                    &[],
+                    &FosModelSpec::paper(bias_order, 1),
+                    &FosSettings::default(),
+                )
+                .map_err(err)?;
+                // One-step residuals on the fit rows (those with a full L-sample past), y units.
+                let r = f.residuals(&x, &[], bias_order..x.len());
+                anyhow::ensure!(
+                    !r.is_empty(),
+                    "{name}: no fit rows for FOS with L = {bias_order}"
+                );
+                let mse = r.iter().map(|e| e * e).sum::<f64>() / r.len() as f64;
+                let m = ChannelBiasModel::from_linear_fos(name, rate, &f, mse)
+                    .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+                let terms: Vec<String> = f.terms.iter().map(|t| t.name()).collect();
+                let terms = if terms.is_empty() {
+                    "none (white)".to_string()
+                } else {
+                    terms.join(" ")
+                };
+                (m, format!("  terms {terms}"))
+            }
+        };
+        println!(
+            "{name:<4} {:<11} mean {:>12.4e}  one-step innovation sd {:>10.4e}{detail}",
+            m.method,
+            m.mean,
+            m.innovation_var.sqrt()
+        );
+        bias.channels.push(m);
     }
     bias.validate()
         .map_err(|e| anyhow::anyhow!("bias model: {}", e.join("; ")))?;
@@ -582,9 +709,10 @@ fn evaluate(
     seed: Option<u64>,
     config: &Option<PathBuf>,
     json: Option<PathBuf>,
+    sets: &[String],
 ) -> Result<ExitCode> {
     use imuprep::analysis::pipeline_eval as pe;
-    let scn = read_scenario(scenario)?;
+    let scn = read_scenario(scenario, sets)?;
     let seed = imuprep::sim::log::effective_seed(&scn, seed);
     let mut cfg = load_config(config)?;
     let rate = scn.sample_rate_hz();

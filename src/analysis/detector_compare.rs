@@ -10,6 +10,7 @@
 
 use crate::analysis::detectors::{self, Detection, DetectorScore, score};
 use crate::frame::{FrameDecoder, Message, encode_sample};
+use crate::model::arima::ArimaModelFile;
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use crate::sim::truth::{Effect, TruthRow};
 use crate::sim::{Emission, Scenario, SimError, Simulator};
@@ -48,6 +49,9 @@ pub struct DetectorReport {
     pub scenario: String,
     pub seed: u64,
     pub samples: usize,
+    /// First scored sample (the online stage's warm-up is excluded for every detector).
+    pub scored_from: usize,
+    /// Gross-error channel samples in the scored part.
     pub gross_samples: u64,
     pub rows: Vec<DetectorRow>,
 }
@@ -92,14 +96,22 @@ fn rmse(a: &[f64], b: &[f64]) -> f64 {
     (a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>() / n).sqrt()
 }
 
-/// Run every detector on every channel and score it.
+/// Run every detector on every channel (the online stage with `model`, or identifying its own at
+/// warm-up) and score each on samples `from..` (every detector sees the whole series).
 pub fn compare_detectors(
     samples: &[Sample],
     truth: &[TruthRow],
     settings: &GrossErrorSettings,
+    model: Option<&ArimaModelFile>,
+    from: usize,
 ) -> Result<Vec<DetectorRow>, String> {
     let n = samples.len();
-    let mut stage = GrossErrorStage::new(settings.clone(), None).map_err(|e| e.to_string())?;
+    if from >= n {
+        return Err(format!(
+            "nothing to score: {n} samples, scoring from {from}"
+        ));
+    }
+    let mut stage = GrossErrorStage::new(settings.clone(), model).map_err(|e| e.to_string())?;
     let online: Vec<Sample> = samples.iter().map(|s| stage.process(*s)).collect();
     type Offline = fn(&[f64]) -> Result<Detection, detectors::DetectorError>;
     let offline: [(&str, Offline); 5] = [
@@ -144,10 +156,16 @@ pub fn compare_detectors(
                 let det = offline[d - 1].1(&x).map_err(|e| e.to_string())?;
                 (det.mask, det.corrected)
             };
-            let sc = score(&mask, &mask_true, &corrected, &clean).map_err(|e| e.to_string())?;
-            let base = rmse(&clean, &true_sig);
+            let sc = score(
+                &mask[from..],
+                &mask_true[from..],
+                &corrected[from..],
+                &clean[from..],
+            )
+            .map_err(|e| e.to_string())?;
+            let base = rmse(&clean[from..], &true_sig[from..]);
             ratio_sum += if base > 0.0 {
-                rmse(&corrected, &true_sig) / base
+                rmse(&corrected[from..], &true_sig[from..]) / base
             } else {
                 1.0
             };
@@ -190,7 +208,6 @@ pub fn compare_detectors(
             per_channel: per,
         });
     }
-    let _ = n;
     Ok(rows)
 }
 
@@ -200,8 +217,8 @@ impl DetectorReport {
         let mut o = String::new();
         let _ = writeln!(
             o,
-            "gross-error detectors on scenario {} (seed {}): {} samples × 6 channels, {} gross-error channel samples",
-            self.scenario, self.seed, self.samples, self.gross_samples
+            "gross-error detectors on scenario {} (seed {}): {} samples × 6 channels, scored from sample {} (after the online stage's warm-up): {} gross-error channel samples",
+            self.scenario, self.seed, self.samples, self.scored_from, self.gross_samples
         );
         let _ = writeln!(
             o,

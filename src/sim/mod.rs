@@ -114,6 +114,45 @@ impl Scenario {
         Ok(scn)
     }
 
+    /// Parse a scenario with overrides applied first: each `(key.path, value)` sets one key,
+    /// `value` in TOML syntax (`2e-3`, `"drive"`, `[6.0, 30.0]`); intermediate tables are created
+    /// as needed. Used by `--set` on the command line (e.g. a denser gross-error rate for a
+    /// detector comparison without a second copy of the scenario).
+    pub fn from_toml_str_with(
+        text: &str,
+        overrides: &[(String, String)],
+    ) -> Result<Scenario, SimError> {
+        if overrides.is_empty() {
+            return Self::from_toml_str(text);
+        }
+        let mut root: toml::Table =
+            toml::from_str(text).map_err(|e| SimError::Parse(e.to_string()))?;
+        for (key, value) in overrides {
+            let parsed: toml::Table = toml::from_str(&format!("v = {value}"))
+                .map_err(|e| SimError::Parse(format!("--set {key}={value}: {e}")))?;
+            let v = parsed["v"].clone();
+            let parts: Vec<&str> = key.split('.').collect();
+            if parts.iter().any(|p| p.is_empty()) {
+                return Err(SimError::Parse(format!("--set {key}: empty key segment")));
+            }
+            let mut t = &mut root;
+            for p in &parts[..parts.len() - 1] {
+                let e = t
+                    .entry(p.to_string())
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+                t = e
+                    .as_table_mut()
+                    .ok_or_else(|| SimError::Parse(format!("--set {key}: `{p}` is not a table")))?;
+            }
+            t.insert(parts[parts.len() - 1].to_string(), v);
+        }
+        let scn: Scenario = root
+            .try_into()
+            .map_err(|e: toml::de::Error| SimError::Parse(e.to_string()))?;
+        scn.validate()?;
+        Ok(scn)
+    }
+
     /// Check every value; all problems are reported together, each with its key path.
     pub fn validate(&self) -> Result<(), SimError> {
         let issues = self.issues();

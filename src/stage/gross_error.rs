@@ -138,6 +138,12 @@ pub struct GrossErrorSettings {
     /// Longest run of successive samples replaced; the next gross one is a level change
     /// (samples; default 10).
     pub max_run: u32,
+    /// Release rule: an event whose first sample was within `release_k` σ of the forecast (a
+    /// borderline trigger) is released at its third sample when the second and third continue
+    /// the first smoothly (each off the pre-event trend line from the first by at most `jump_k`
+    /// σ_Δ) — the signature of a manoeuvre whose curvature the forecast missed, not of a gross
+    /// error (default 7; 0 = off).
+    pub release_k: f64,
     /// Replacement of a gross error (default: the prediction).
     pub replacement: Replacement,
     /// Window of the median-of-predictions replacement (samples; 3 or 5; default 3).
@@ -174,6 +180,7 @@ impl Default for GrossErrorSettings {
             jump_level_alpha: 0.5,
             slope_alpha: 0.3,
             max_run: 10,
+            release_k: 7.0,
             replacement: Replacement::Prediction,
             median_window: 3,
             scale_window_samples: 200.0,
@@ -216,6 +223,12 @@ impl GrossErrorSettings {
         }
         if self.max_run == 0 {
             e.push("max_run must be ≥ 1".into());
+        }
+        if !(self.release_k.is_finite() && (0.0..=50.0).contains(&self.release_k)) {
+            e.push(format!(
+                "release_k = {} must be in [0, 50] (0 = off)",
+                self.release_k
+            ));
         }
         if !(self.median_window == 3 || self.median_window == 5) {
             e.push(format!(
@@ -286,6 +299,9 @@ pub struct ChannelCounters {
     pub runs: u64,
     /// Runs longer than `max_run` accepted as level changes.
     pub level_changes: u64,
+    /// Events released at their second sample by the release rule (borderline first sample,
+    /// smooth continuation).
+    pub released: u64,
     /// Non-finite values seen.
     pub non_finite: u64,
     /// Saturated samples seen.
@@ -326,6 +342,9 @@ struct Channel {
     needs_seed: bool,
     /// A saturated run outlasted max_run: saturated samples pass until saturation ends.
     sat_accepted: bool,
+    /// First sample of the current event and its ν²/σ² (release rule).
+    first_raw: f64,
+    first_ratio2: f64,
     /// Last predictions, newest first, and how many are valid.
     preds: [f64; MAX_MEDIAN_WINDOW],
     n_preds: usize,
@@ -353,6 +372,7 @@ pub struct GrossErrorStage {
     k2: f64,
     jump_k2: f64,
     run_k2: f64,
+    release_k2: f64,
     /// Weight of the scale trackers, 1/scale_window_samples.
     scale_w: f64,
     /// 1/β(c), β(c) the Huber consistency factor.
@@ -485,6 +505,8 @@ impl GrossErrorStage {
                 r2: [1.0; PSI_N],
                 needs_seed: true,
                 sat_accepted: false,
+                first_raw: 0.0,
+                first_ratio2: f64::INFINITY,
                 preds: [0.0; MAX_MEDIAN_WINDOW],
                 n_preds: 0,
                 counters: ChannelCounters::default(),
@@ -496,6 +518,7 @@ impl GrossErrorStage {
             k2: settings.k * settings.k,
             jump_k2: settings.jump_k * settings.jump_k,
             run_k2: settings.run_k * settings.run_k,
+            release_k2: settings.release_k * settings.release_k,
             scale_w: 1.0 / sw,
             inv_beta: 1.0 / huber_beta(SCALE_CLIP),
             s: settings,
@@ -579,8 +602,15 @@ impl GrossErrorStage {
                     (level, slope) = holt_step(level, slope, v, ja, slope_alpha);
                 }
                 let x_acc = level;
-                let (_, s_e) = median_and_robust_sigma(&innov);
-                let (_, s_d) = median_and_robust_sigma(&jumps);
+                // Initial scales from the most recent part of the window (one tracker window,
+                // at least 50 samples): conditions may have changed during the warm-up (a
+                // vehicle at rest that starts driving), and the gate must start from the
+                // variability of now, not of the window's average.
+                let recent = (self.s.scale_window_samples.round() as usize)
+                    .max(50)
+                    .min(innov.len());
+                let (_, s_e) = median_and_robust_sigma(&innov[innov.len() - recent..]);
+                let (_, s_d) = median_and_robust_sigma(&jumps[jumps.len() - recent..]);
                 ch.sig2 = (s_e * s_e).max(ch.min_var);
                 ch.jump2 = (s_d * s_d).max(ch.min_var);
                 ch.x_acc = x_acc;
@@ -654,6 +684,7 @@ impl GrossErrorStage {
     fn gate(&mut self, c: usize, v: f64, saturated: bool) -> Outcome {
         let k2 = self.k2;
         let run_k2 = self.run_k2;
+        let release_k2 = self.release_k2;
         let jk2 = self.jump_k2;
         let w = self.scale_w;
         let inv_beta = self.inv_beta;
@@ -743,6 +774,27 @@ impl GrossErrorStage {
             ch.run = 0;
             return Outcome::Passed;
         }
+        if gross && finite && !saturated && ch.run >= 1 && ch.first_ratio2 < release_k2 {
+            // Release rule: the event's first sample was borderline; does this one continue it
+            // smoothly from the pre-event trend (x_1 + (run)·slope)? Two such continuations in a
+            // row — the signature of a manoeuvre the forecast lagged, which a spike run of
+            // independent amplitudes almost never shows — release the event.
+            let d = v - (ch.first_raw + ch.run as f64 * ch.slope);
+            if d * d > jk2 * ch.jump2 {
+                ch.first_ratio2 = f64::INFINITY; // not a smooth continuation: a gross event
+            } else if ch.run >= 2 {
+                // Accept this sample (the earlier replacements are already out); restart the
+                // predictor here with the mean increment since the event began as the slope.
+                ch.slope += slope_alpha * ((v - ch.first_raw) / ch.run as f64 - ch.slope);
+                ch.x_acc = v;
+                pred.restart(v, ch.slope);
+                ch.h = 1;
+                ch.run = 0;
+                ch.n_preds = 0;
+                ch.counters.released += 1;
+                return Outcome::Passed;
+            }
+        }
         if finite && ch.run >= max_run {
             // Too long to be a gross error: accept the new level. The predictor restarts at
             // this value with the slope seen before the run (the run's earlier raw samples may
@@ -767,6 +819,12 @@ impl GrossErrorStage {
         pred.update(r, r - xh);
         if ch.run == 0 {
             ch.counters.runs += 1;
+            ch.first_raw = v;
+            ch.first_ratio2 = if finite && !saturated {
+                nu * nu / (r2 * ch.sig2)
+            } else {
+                f64::INFINITY
+            };
         }
         ch.run = ch.run.saturating_add(1);
         ch.h = ch.h.saturating_add(1);
@@ -873,6 +931,7 @@ impl Stage for GrossErrorStage {
                 ("replaced", k.replaced),
                 ("runs", k.runs),
                 ("level_changes", k.level_changes),
+                ("released", k.released),
                 ("non_finite", k.non_finite),
                 ("saturated", k.saturated),
                 ("warmup", k.warmup),
