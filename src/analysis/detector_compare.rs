@@ -217,8 +217,19 @@ impl DetectorReport {
         let mut o = String::new();
         let _ = writeln!(
             o,
-            "gross-error detectors on scenario {} (seed {}): {} samples × 6 channels, scored from sample {} (after the online stage's warm-up): {} gross-error channel samples",
-            self.scenario, self.seed, self.samples, self.scored_from, self.gross_samples
+            "gross-error detectors on scenario {} (seed {}): {} samples × 6 channels{}, {} gross-error channel samples",
+            self.scenario,
+            self.seed,
+            self.samples,
+            if self.scored_from > 0 {
+                format!(
+                    ", scored from sample {} (the online stage's warm-up excluded)",
+                    self.scored_from
+                )
+            } else {
+                String::new()
+            },
+            self.gross_samples
         );
         let _ = writeln!(
             o,

@@ -489,10 +489,11 @@ pub struct GrossErrors {
     /// Channels affected (default: all six).
     #[serde(default)]
     pub channels: Option<Vec<String>>,
-    /// σ unit for gyro amplitudes when white noise is off, deg/s.
+    /// σ unit for gyro amplitudes, deg/s (default: the white-noise σ per sample; set it when
+    /// white noise is off, or to size spikes against a larger innovation σ, e.g. road vibration).
     #[serde(default)]
     pub gyro_sigma_deg_s: Option<f64>,
-    /// σ unit for accel amplitudes when white noise is off, mg.
+    /// σ unit for accel amplitudes, mg (default: the white-noise σ per sample).
     #[serde(default)]
     pub accel_sigma_mg: Option<f64>,
 }
