@@ -1,0 +1,147 @@
+//! The gross-error stage on a real static recording (ADIS16405, 100 Hz, evaluation data beside
+//! the project; skipped with a message when absent) with gross errors injected at known places:
+//! the simulator's own generator (`sim::gross::Gross6`, seeded here) adds spikes and runs of
+//! 6–30 σ, a third of them runs of 2–10 samples, σ = the channel's one-step innovation σ measured
+//! robustly on the recording itself.
+
+mod common;
+
+use imuprep::io::csv::{ImportOptions, read_csv};
+use imuprep::rng::Rng;
+use imuprep::sample::{N_CHANNELS, Sample, flags};
+use imuprep::sim::gross::Gross6;
+use imuprep::stage::Stage;
+use imuprep::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
+
+/// 30 minutes at 100 Hz.
+const N: usize = 180_000;
+
+/// Robust σ of the one-step innovation of an AR(2) least-squares fit on the first 3 minutes,
+/// via the MAD of its residuals (robust to the recording's own rare outliers).
+fn innovation_sigma(x: &[f64]) -> f64 {
+    let x = &x[..18_000];
+    let m = x.iter().sum::<f64>() / x.len() as f64;
+    let y: Vec<f64> = x.iter().map(|v| v - m).collect();
+    // Normal equations of y[n] = a1 y[n-1] + a2 y[n-2].
+    let (mut s11, mut s12, mut s22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for n in 2..y.len() {
+        s11 += y[n - 1] * y[n - 1];
+        s12 += y[n - 1] * y[n - 2];
+        s22 += y[n - 2] * y[n - 2];
+        b1 += y[n] * y[n - 1];
+        b2 += y[n] * y[n - 2];
+    }
+    let det = s11 * s22 - s12 * s12;
+    let (a1, a2) = ((b1 * s22 - b2 * s12) / det, (b2 * s11 - b1 * s12) / det);
+    let mut r: Vec<f64> = (2..y.len())
+        .map(|n| (y[n] - a1 * y[n - 1] - a2 * y[n - 2]).abs())
+        .collect();
+    r.sort_by(f64::total_cmp);
+    r[r.len() / 2] * 1.482_602_218_505_602
+}
+
+/// Independent, non-causal test for the recording's own impulses: a sample more than 5 robust σ
+/// (of the second difference) from the mean of its two neighbours while the neighbours agree
+/// (within 2 such σ). For Gaussian noise P(> 5 σ) ≈ 6e-7 per sample, so these are glitches of
+/// the sensor, i.e. gross errors the recording already carries.
+fn native_impulses(x: &[f64]) -> Vec<bool> {
+    let dev: Vec<f64> = (1..x.len() - 1)
+        .map(|i| x[i] - 0.5 * (x[i - 1] + x[i + 1]))
+        .collect();
+    let mut a: Vec<f64> = dev.iter().map(|d| d.abs()).collect();
+    a.sort_by(f64::total_cmp);
+    let s = a[a.len() / 2] * 1.482_602_218_505_602;
+    let mut m = vec![false; x.len()];
+    for i in 1..x.len() - 1 {
+        m[i] = dev[i - 1].abs() > 5.0 * s && (x[i + 1] - x[i - 1]).abs() < 2.0 * s;
+    }
+    m
+}
+
+fn flagged(out: &[Sample], c: usize) -> Vec<bool> {
+    out.iter()
+        .map(|s| s.flags & flags::replaced_ch(c) != 0)
+        .collect()
+}
+
+#[test]
+fn adis16405_with_injected_spikes_f1_and_false_alarms() {
+    let Some(path) = common::real_data("adis16405_static/adis_16405_imu1.csv.gz") else {
+        return;
+    };
+    let (_, mut clean) = read_csv(&path, &ImportOptions::default()).unwrap();
+    clean.truncate(N);
+    assert_eq!(clean.len(), N);
+    let sigma: [f64; N_CHANNELS] = std::array::from_fn(|c| {
+        let x: Vec<f64> = clean.iter().map(|s| s.channel(c)).collect();
+        innovation_sigma(&x)
+    });
+    eprintln!("innovation sigma per channel: {sigma:.3?}");
+    // Injection: 2e-3 events per sample and channel (as the simulated targets), seeded.
+    let mut gross = Gross6::new(
+        2e-3,
+        [6.0, 30.0],
+        0.33,
+        10,
+        [true; N_CHANNELS],
+        sigma,
+        Rng::new(20261122),
+    );
+    let mut injected = clean.clone();
+    // Per channel: true where a gross error was injected.
+    let mut mask: [Vec<bool>; N_CHANNELS] = std::array::from_fn(|_| Vec::with_capacity(N));
+    for s in injected.iter_mut() {
+        let (err, hit) = gross.step();
+        for (c, (e, h)) in err.iter().zip(hit).enumerate() {
+            s.set_channel(c, s.channel(c) + e);
+            mask[c].push(h);
+        }
+    }
+    let settings = GrossErrorSettings::default();
+    let from = settings.warmup_samples;
+    let run = |input: &[Sample]| {
+        let mut st = GrossErrorStage::new(settings.clone(), None).unwrap();
+        input.iter().map(|s| st.process(*s)).collect::<Vec<_>>()
+    };
+    let out_clean = run(&clean);
+    let out = run(&injected);
+    let (mut tp, mut fp, mut fneg, mut n_clean, mut raw_flags) = (0u64, 0u64, 0u64, 0u64, 0u64);
+    let (mut native_n, mut raw_explained) = (0u64, 0u64);
+    for (c, injected_c) in mask.iter().enumerate() {
+        let pred = flagged(&out, c);
+        let x: Vec<f64> = clean.iter().map(|s| s.channel(c)).collect();
+        let native = native_impulses(&x);
+        let raw = flagged(&out_clean, c);
+        for i in from..N {
+            native_n += u64::from(native[i]);
+            raw_flags += u64::from(raw[i]);
+            raw_explained += u64::from(raw[i] && native[i]);
+            // Label: injected, or an impulse the recording already had.
+            match (pred[i], injected_c[i] || native[i]) {
+                (true, true) => tp += 1,
+                (true, false) => fp += 1,
+                (false, true) => fneg += 1,
+                (false, false) => {}
+            }
+            n_clean += u64::from(!(injected_c[i] || native[i]));
+        }
+    }
+    let precision = tp as f64 / (tp + fp) as f64;
+    let recall = tp as f64 / (tp + fneg) as f64;
+    let f1 = 2.0 * precision * recall / (precision + recall);
+    let fa = fp as f64 / n_clean as f64;
+    let clean_rate = raw_flags as f64 / ((N - from) * N_CHANNELS) as f64;
+    eprintln!(
+        "ADIS16405 30 min: {native_n} native impulses (independent test), {} labelled gross channel-samples in all: precision {precision:.4} recall {recall:.4} F1 {f1:.4} false alarms {fa:.2e} ({fp}); without injection the stage flags {clean_rate:.2e} ({raw_flags}), {raw_explained} of them native impulses",
+        tp + fneg,
+    );
+    // Measured (2026-11-22): F1 0.9817, false alarms 1.17e-4 — the F1 target (0.98) is
+    // met, its false-alarm target (1e-4) is missed by 17 %: the untouched recording makes the
+    // stage flag 1.7e-4 of its channel-samples, 45 % of them impulses the independent test
+    // confirms, the rest ~4σ excursions of the heavily quantised accelerometers (σ ≈ 1 LSB).
+    // The F1 assertion is the target; the false-alarm bound is a regression guard (2× the target)
+    // and not the target, which is reported as missed.
+    assert!(f1 >= 0.98, "F1 {f1}");
+    assert!(fa <= 2e-4, "false alarms {fa}");
+    assert!(raw_explained > 0 && raw_flags > 0);
+}
