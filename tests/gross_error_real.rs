@@ -6,6 +6,7 @@
 
 mod common;
 
+use imuprep::analysis::flag_review::isolated_impulses;
 use imuprep::io::csv::{ImportOptions, read_csv};
 use imuprep::rng::Rng;
 use imuprep::sample::{N_CHANNELS, Sample, flags};
@@ -38,24 +39,6 @@ fn innovation_sigma(x: &[f64]) -> f64 {
         .collect();
     r.sort_by(f64::total_cmp);
     r[r.len() / 2] * 1.482_602_218_505_602
-}
-
-/// Independent, non-causal test for the recording's own impulses: a sample more than 5 robust σ
-/// (of the second difference) from the mean of its two neighbours while the neighbours agree
-/// (within 2 such σ). For Gaussian noise P(> 5 σ) ≈ 6e-7 per sample, so these are glitches of
-/// the sensor, i.e. gross errors the recording already carries.
-fn native_impulses(x: &[f64]) -> Vec<bool> {
-    let dev: Vec<f64> = (1..x.len() - 1)
-        .map(|i| x[i] - 0.5 * (x[i - 1] + x[i + 1]))
-        .collect();
-    let mut a: Vec<f64> = dev.iter().map(|d| d.abs()).collect();
-    a.sort_by(f64::total_cmp);
-    let s = a[a.len() / 2] * 1.482_602_218_505_602;
-    let mut m = vec![false; x.len()];
-    for i in 1..x.len() - 1 {
-        m[i] = dev[i - 1].abs() > 5.0 * s && (x[i + 1] - x[i - 1]).abs() < 2.0 * s;
-    }
-    m
 }
 
 fn flagged(out: &[Sample], c: usize) -> Vec<bool> {
@@ -110,7 +93,8 @@ fn adis16405_with_injected_spikes_f1_and_false_alarms() {
     for (c, injected_c) in mask.iter().enumerate() {
         let pred = flagged(&out, c);
         let x: Vec<f64> = clean.iter().map(|s| s.channel(c)).collect();
-        let native = native_impulses(&x);
+        // The recording's own glitches, by a test independent of the stage (5 robust σ).
+        let native = isolated_impulses(&x, 5.0);
         let raw = flagged(&out_clean, c);
         for i in from..N {
             native_n += u64::from(native[i]);

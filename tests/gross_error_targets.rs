@@ -87,7 +87,11 @@ fn truth_gross(t: &[TruthRow]) -> usize {
 fn assert_targets(rows: &[DetectorRow]) {
     let p = &rows[0].pooled;
     assert!(p.f1 >= 0.98, "F1 {}", p.f1);
-    assert!(p.false_alarm_rate <= 1e-4, "false alarms {}", p.false_alarm_rate);
+    assert!(
+        p.false_alarm_rate <= 1e-4,
+        "false alarms {}",
+        p.false_alarm_rate
+    );
     assert!(
         p.rmse_ratio_vs_spike_free <= 1.1,
         "RMSE ratio {}",

@@ -9,6 +9,7 @@ pub mod detectors;
 pub mod diagnose;
 pub mod diagnose_report;
 pub mod exogenous;
+pub mod flag_review;
 pub mod gate_sweep;
 pub mod gauss_markov;
 pub mod hypothesis;
