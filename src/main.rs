@@ -733,11 +733,14 @@ fn evaluate(
         .accel
         .build()
         .context("accel calibration matrix is singular")?;
-    let res = pe::evaluate(&samples, &truth, rate, pipeline, move |mut s| {
+    let calibrate = move |mut s: imuprep::Sample| {
         s.gyro = gyro_cal.apply(&s.gyro);
         s.accel = accel_cal.apply(&s.accel);
         s
-    });
+    };
+    let res = pe::evaluate(&samples, &truth, rate, pipeline, calibrate);
+    let second = cfg.stages.build().map_err(|e| anyhow::anyhow!(e))?;
+    let static_drift = pe::static_position_drift(&samples, &truth, rate, second, calibrate);
     println!(
         "pipeline vs calibration-only baseline on {} (seed {seed}), gyro channels:",
         scenario.display()
@@ -765,6 +768,15 @@ fn evaluate(
             100.0 * r.drift_reduction,
             100.0 * r.worst_attenuation,
             r.manoeuvres
+        );
+    }
+    if let Some(d) = &static_drift {
+        println!(
+            "static 60-s position drift (plain strapdown of the errors, {} windows): RMS {:.3e} m, baseline {:.3e} m, reduced {:.1}%",
+            d.windows,
+            d.pipeline_rms_m,
+            d.baseline_rms_m,
+            100.0 * d.reduction
         );
     }
     for r in res.iter().filter(|r| !r.manoeuvre_list.is_empty()) {

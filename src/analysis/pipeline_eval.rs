@@ -10,6 +10,23 @@
 //!   |1 − ∫output/∫truth| over that stretch (bias left in the output counts too); the worst.
 //!
 //! The baseline applies only the configured calibration (constant bias, scale, misalignment).
+//!
+//! *Static 60-s position drift* ([`static_position_drift`], static scenarios): a plain strapdown
+//! of the output's errors over consecutive 60-s windows, each started from a perfect alignment
+//! (zero attitude, velocity and position error). In the (fixed) body frame of a sensor at rest,
+//! to first order in the errors (Titterton & Weston, *Strapdown Inertial Navigation Technology*,
+//! 2nd ed., §12.2, with the Earth-rate and transport terms dropped — below consumer MEMS errors
+//! over 60 s):
+//!
+//! ```text
+//!   δθ' = δω                 δω = gyro output − true rate
+//!   δv' = δf + f × δθ        δf = accel output − true specific force, f = true specific force
+//!   δp' = δv
+//! ```
+//!
+//! so a gyro bias tilts the computed attitude and leaks gravity into the horizontal channels
+//! (`g δω t³/6`), and an accelerometer bias adds `δf t²/2`. Scored: the RMS over windows of |δp|
+//! at each window's end (m).
 
 use crate::sample::{CHANNEL_NAMES, Sample};
 use crate::sim::truth::{Effect, TruthRow};
@@ -141,6 +158,72 @@ pub fn evaluate(
         });
     }
     res
+}
+
+/// Static 60-s position drift of the pipeline and of the calibration-only baseline (module docs).
+#[derive(Debug, Clone, Serialize)]
+pub struct StaticDrift {
+    /// Number of complete 60-s windows scored.
+    pub windows: usize,
+    /// RMS of |δp| at the window ends, m.
+    pub pipeline_rms_m: f64,
+    pub baseline_rms_m: f64,
+    /// 1 − pipeline/baseline (target ≥ 0.8).
+    pub reduction: f64,
+}
+
+/// Strapdown position error at the end of each `n`-sample window (see module docs).
+fn window_position_errors(out: &[Sample], truth: &[TruthRow], n: usize, dt: f64) -> Vec<f64> {
+    use nalgebra::Vector3;
+    out.chunks_exact(n)
+        .zip(truth.chunks_exact(n))
+        .map(|(o, t)| {
+            let (mut th, mut v, mut p) = (Vector3::zeros(), Vector3::zeros(), Vector3::zeros());
+            for (s, tr) in o.iter().zip(t) {
+                let f = Vector3::new(tr.true_signal[3], tr.true_signal[4], tr.true_signal[5]);
+                let dw =
+                    s.gyro - Vector3::new(tr.true_signal[0], tr.true_signal[1], tr.true_signal[2]);
+                let df = s.accel - f;
+                // Semi-implicit Euler: attitude, then velocity, then position.
+                th += dw * dt;
+                v += (df + f.cross(&th)) * dt;
+                p += v * dt;
+            }
+            p.norm()
+        })
+        .collect()
+}
+
+/// The static 60-s position drift of `pipeline` vs the calibration-only `baseline`, or `None`
+/// when the scenario moves (|true rate| > 1e-3 rad/s anywhere) or is shorter than 60 s.
+pub fn static_position_drift(
+    samples: &[Sample],
+    truth: &[TruthRow],
+    rate_hz: f64,
+    mut pipeline: Pipeline,
+    mut baseline: impl FnMut(Sample) -> Sample,
+) -> Option<StaticDrift> {
+    let still = truth
+        .iter()
+        .all(|t| t.true_signal[..3].iter().all(|w| w.abs() < 1e-3));
+    let n = (60.0 * rate_hz).round() as usize;
+    if !still || n == 0 || samples.len() < n {
+        return None;
+    }
+    let out: Vec<Sample> = samples.iter().map(|s| pipeline.process(*s)).collect();
+    let base: Vec<Sample> = samples.iter().map(|s| baseline(*s)).collect();
+    let rms = |e: Vec<f64>| (e.iter().map(|x| x * x).sum::<f64>() / e.len().max(1) as f64).sqrt();
+    let dt = 1.0 / rate_hz;
+    let pe = window_position_errors(&out, truth, n, dt);
+    let windows = pe.len();
+    let p = rms(pe);
+    let b = rms(window_position_errors(&base, truth, n, dt));
+    Some(StaticDrift {
+        windows,
+        pipeline_rms_m: p,
+        baseline_rms_m: b,
+        reduction: 1.0 - p / b,
+    })
 }
 
 /// Convenience: simulate a scenario and decode it as replay would.
