@@ -353,8 +353,10 @@ impl BiasStage {
                 }
             })
             .fold(f64::INFINITY, f64::min);
+        // The CUSUM is tuned for the smallest step worth catching: a declared step smaller than
+        // the default (diagnose can learn steps of 1e-5 rad/s) would make it fire on noise.
         let step_size = if declared_step.is_finite() {
-            declared_step
+            declared_step.max(self.default_step)
         } else if self.default_step > 0.0 {
             self.default_step
         } else {
