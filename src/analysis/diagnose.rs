@@ -666,7 +666,7 @@ fn candidates(
         let min_sep = (s.changepoints.min_segment_s * ctx.rate_hz) as i64;
         if let Some(cp) = cps
             .iter()
-            .filter(|c| !terms.iter().any(|t| matches!(t, Term::Step { index } if (*index as i64 - c.index as i64).abs() < min_sep)))
+            .filter(|c| !terms.iter().any(|t| matches!(t, Term::Step { index } if (*index as i64 - c.index as i64).abs() <= min_sep)))
             .min_by(|a, b| a.p_value.total_cmp(&b.p_value).then(b.size.abs().total_cmp(&a.size.abs())))
         {
             out.push(Term::Step { index: cp.index });
@@ -753,6 +753,7 @@ pub fn diagnose_channel(
     let mut overlays = Vec::new();
     let nv = sp.validation.len() as f64;
     for it in 1..=s.max_iterations {
+        let (prev_terms, prev_p) = (terms.clone(), p);
         let (f, cols) = ctx.fit(&terms, sp.train.clone(), p)?;
         let sse0 = {
             let r = f.residuals_to(y, &cols, sp.validation.end);
@@ -852,6 +853,14 @@ pub fn diagnose_channel(
             p = ctx.select_order(&terms, &sp, s.max_ar_order, p)?;
         }
         polish_structure(&ctx, &mut terms, sp.train.start..sp.validation.end, p, s)?;
+        // No progress: the added term replaced an earlier one that polishing then moved back
+        // (a step re-found next to where it was), so the model is the previous iteration's.
+        // Stop instead of cycling to max_iterations.
+        if terms.len() == prev_terms.len() && terms.iter().all(|t| prev_terms.contains(t)) {
+            terms = prev_terms;
+            p = prev_p;
+            break;
+        }
         let (after, af, acols) = test_metrics(&ctx, &terms, &sp, p, s.ljung_box_lags)?;
         let pos = terms.len() - 1;
         let effect = effects_of(&terms, &af, input.rate_hz)
