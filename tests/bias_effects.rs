@@ -325,7 +325,8 @@ fn rate_random_walk_effect_lets_the_filter_follow_a_walking_bias() {
 #[test]
 fn warm_up_identifies_a_model_at_the_first_stop_then_removes_the_bias() {
     // No model in the config: every gyro channel warms up on its first 5-s still stretch (the
-    // 8-s stops of this drive leave ~7 s of STILL), flagged WARMING_UP until then.
+    // 8-s stops of this drive leave ~7 s of STILL), flagged WARMING_UP until then, with the
+    // stretch's running mean removed as a provisional bias from its first second on.
     let settings = BiasSettings {
         warmup: imuprep::stage::bias_settings::WarmupSettings {
             still_samples: 500,
@@ -335,26 +336,33 @@ fn warm_up_identifies_a_model_at_the_first_stop_then_removes_the_bias() {
     };
     let mut stage = BiasStage::new(&settings, None).unwrap();
     let run = drive(&mut stage, 600.0, 91, standard_bias(1300), |_| None);
-    let first_removed = run
+    let done = run
+        .flags
+        .iter()
+        .position(|f| f & flags::WARMING_UP == 0)
+        .unwrap();
+    let provisional = run
         .flags
         .iter()
         .position(|f| f & flags::BIAS_REMOVED != 0)
         .unwrap();
-    eprintln!("warm-up done at {:.2} s", first_removed as f64 / FS);
+    eprintln!(
+        "provisional bias from {:.2} s, warm-up done at {:.2} s",
+        provisional as f64 / FS,
+        done as f64 / FS
+    );
     // STILL after the window (0.49 s) + T_in (0.5 s); from then the delay line hands over samples
-    // from 0.3 s earlier, all inside the still window, and 5 s of them complete the stretch:
-    // ~5.98 s.
-    assert!((5.8..6.2).contains(&(first_removed as f64 / FS)));
+    // from 0.3 s earlier, all inside the still window: one second of them gives the provisional
+    // bias (~1.98 s), 5 s of them complete the stretch (~5.98 s).
+    assert!((1.8..2.2).contains(&(provisional as f64 / FS)));
+    assert!((5.8..6.2).contains(&(done as f64 / FS)));
+    assert!(run.flags[..done].iter().all(|f| f & flags::WARMING_UP != 0));
     assert!(
-        run.flags[..first_removed]
+        run.flags[provisional..]
             .iter()
-            .all(|f| f & flags::WARMING_UP != 0)
+            .all(|f| f & flags::BIAS_REMOVED != 0)
     );
-    assert!(
-        run.flags[first_removed..]
-            .iter()
-            .all(|f| f & flags::WARMING_UP == 0)
-    );
+    assert!(run.flags[done..].iter().all(|f| f & flags::WARMING_UP == 0));
     let counters = stage.counters();
     assert!(
         counters.contains(&("warmup_fits".to_string(), 3)),

@@ -46,7 +46,11 @@
 //! `warmup.still_samples` (into a buffer allocated at construction), fits AR(`warmup.ar_order`) by
 //! Burg on it (the one allocation, at that moment) with the white-noise variance unknown (the
 //! largest the fitted spectrum admits), adds the configured default rate random walk (a short
-//! stretch cannot reveal the slow wander), and starts its filter.
+//! stretch cannot reveal the slow wander), and starts its filter. Until then, once the still
+//! stretch holds one second of samples, its running mean is subtracted as a *provisional* bias
+//! (published with its standard error; flags `WARMING_UP` and `BIAS_REMOVED`), and kept through
+//! motion that interrupts the stretch: the turn-on bias of a consumer gyro (~1 °/s) is far larger
+//! than anything a wrong provisional mean could add.
 //!
 //! **Time.** Steps between samples come from the sequence counter (robust to bursty host
 //! timestamps), falling back to `t_ns` and the nominal rate when the counter does not advance.
@@ -134,6 +138,12 @@ struct ChannelState {
     lines: [Option<LineCanceller>; MAX_LINES],
     est: Option<ChannelKf>,
     warm: Option<Vec<f64>>,
+    /// Running sum and sum of squares of the warm-up buffer (O(1) provisional bias).
+    warm_sum: f64,
+    warm_sumsq: f64,
+    /// Provisional bias while warming up: the mean of the current (or last) still stretch once it
+    /// holds at least one second of samples, and the standard error of that mean.
+    provisional: Option<(f64, f64)>,
     /// Accel channels: stationary 1-σ of the modelled bias (unit), else 0.
     stationary_sd: f64,
     /// Published stochastic estimate (unit, mean included) of the last sample.
@@ -221,6 +231,9 @@ impl BiasStage {
             lines: [None; MAX_LINES],
             est: None,
             warm: None,
+            warm_sum: 0.0,
+            warm_sumsq: 0.0,
+            provisional: None,
             stationary_sd: 0.0,
             bias: 0.0,
             bias_sd: 0.0,
@@ -460,8 +473,19 @@ impl BiasStage {
             } else if let Some(buf) = st.warm.as_mut() {
                 if !still {
                     buf.clear();
+                    st.warm_sum = 0.0;
+                    st.warm_sumsq = 0.0;
                 } else if e.usable[c] {
-                    buf.push(e.z[c]);
+                    let z = e.z[c];
+                    buf.push(z);
+                    st.warm_sum += z;
+                    st.warm_sumsq += z * z;
+                    let n = buf.len() as f64;
+                    if n >= self.fs.max(10.0) {
+                        let m = st.warm_sum / n;
+                        let var = (st.warm_sumsq / n - m * m).max(0.0);
+                        st.provisional = Some((m, (var / n).sqrt()));
+                    }
                     if buf.len() >= self.warmup.still_samples {
                         self.finish_warmup(c);
                     }
@@ -665,6 +689,13 @@ impl Stage for BiasStage {
                 st.bias_sd = var.sqrt();
                 sub += b;
                 any_est = true;
+            } else if let (Some((m, se)), true) = (st.provisional, st.warm.is_some()) {
+                // Warming up with a provisional bias (module docs).
+                st.bias = m;
+                st.bias_sd = se;
+                sub += m;
+                any_est = true;
+                any_warm = true;
             } else {
                 st.bias = 0.0;
                 st.bias_sd = st.stationary_sd;
