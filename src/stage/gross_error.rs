@@ -52,6 +52,17 @@
 //! in variance per sample at the default 200-sample window) instead of jumping on one outlier. A
 //! running MAD would be as robust but needs a sort per sample; this is O(1).
 //!
+//! **Tail adaptation.** Real vibration and shocks give heavy-tailed innovations (kurtosis 4–26
+//! per channel on the rtklibexplorer drive), so a Gaussian k-σ gate calls their tails gross. Each
+//! channel tracks the share `p₃` of accepted one-step innovations beyond 3σ (EWMA, time constant
+//! `tail_window_samples`; Gaussian: 0.27 %). While `p₃` exceeds twice the Gaussian share the gate
+//! widens to `k (1 + ½ ln(p₃ / 0.54 %))` — e.g. ×1.5 at a Laplace-like 1.4 %, which puts the
+//! Laplace false-alarm rate back near the Gaussian one at k. Below twice Gaussian nothing changes
+//! (over a 5000-sample window a Gaussian stream exceeds that with P ≈ 1e-3), so the synthetic
+//! sweeps are unchanged; on the rtklibexplorer drive the flags drop 3.5× (1148 → 324 samples), and
+//! spikes smaller than the widened gate are no longer caught there — the price of not replacing
+//! real motion.
+//!
 //! **Local trend.** The predictor is centred on a local linear trend (d = 0) or a local mean of ∇x
 //! (d = 1) instead of the fitted constant (`level_alpha`, `trend_beta`; see `ArimaPredictor`), so
 //! a model identified at rest follows manoeuvre levels it has never seen.
@@ -96,6 +107,12 @@ pub const MAX_MEDIAN_WINDOW: usize = 5;
 const RAW_KEEP: usize = MAX_P + MAX_D;
 /// Horizons for which the h-step widening r_h is tabulated (longer horizons use the last).
 const PSI_N: usize = 32;
+/// P(|Z| > 3) for a standard normal Z.
+const GAUSS_TAIL3: f64 = 0.002_699_796;
+/// Tail adaptation: no widening until the tracked share beyond 3σ is this many times Gaussian.
+const TAIL_DEAD_ZONE: f64 = 2.0;
+/// Tail adaptation: gate factor 1 + TAIL_BETA ln(share / (GAUSS_TAIL3 · TAIL_DEAD_ZONE)).
+const TAIL_BETA: f64 = 0.5;
 /// 1/Φ⁻¹(¾): MAD → σ for Gaussian data.
 const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
 
@@ -150,6 +167,9 @@ pub struct GrossErrorSettings {
     pub median_window: usize,
     /// Time constant of the σ trackers (samples; default 200 = 1 s at 200 Hz).
     pub scale_window_samples: f64,
+    /// Tail adaptation: time constant (samples) of the tracked share of accepted innovations
+    /// beyond 3σ; 0 = off (default 5000). See the module docs.
+    pub tail_window_samples: f64,
     /// Local-level weight per sample for d = 0 models (Holt's α; 0 = the fitted mean;
     /// default 0.2).
     pub level_alpha: f64,
@@ -184,6 +204,7 @@ impl Default for GrossErrorSettings {
             replacement: Replacement::Prediction,
             median_window: 3,
             scale_window_samples: 200.0,
+            tail_window_samples: 5000.0,
             level_alpha: 0.2,
             trend_beta: 0.1,
             warmup_samples: 2000,
@@ -240,6 +261,14 @@ impl GrossErrorSettings {
             e.push(format!(
                 "scale_window_samples = {} must be ≥ 1",
                 self.scale_window_samples
+            ));
+        }
+        if !(self.tail_window_samples == 0.0
+            || (self.tail_window_samples.is_finite() && self.tail_window_samples >= 100.0))
+        {
+            e.push(format!(
+                "tail_window_samples = {} must be 0 (off) or ≥ 100",
+                self.tail_window_samples
             ));
         }
         if !(0.0..=1.0).contains(&self.level_alpha) {
@@ -342,6 +371,8 @@ struct Channel {
     needs_seed: bool,
     /// A saturated run outlasted max_run: saturated samples pass until saturation ends.
     sat_accepted: bool,
+    /// Tracked share of accepted one-step innovations beyond 3σ (tail adaptation).
+    tail3: f64,
     /// First sample of the current event and its ν²/σ² (release rule).
     first_raw: f64,
     first_ratio2: f64,
@@ -373,6 +404,8 @@ pub struct GrossErrorStage {
     jump_k2: f64,
     run_k2: f64,
     release_k2: f64,
+    /// 1/tail_window_samples (0 = tail adaptation off).
+    tail_w: f64,
     /// Weight of the scale trackers, 1/scale_window_samples.
     scale_w: f64,
     /// 1/β(c), β(c) the Huber consistency factor.
@@ -505,6 +538,7 @@ impl GrossErrorStage {
                 r2: [1.0; PSI_N],
                 needs_seed: true,
                 sat_accepted: false,
+                tail3: GAUSS_TAIL3,
                 first_raw: 0.0,
                 first_ratio2: f64::INFINITY,
                 preds: [0.0; MAX_MEDIAN_WINDOW],
@@ -519,6 +553,11 @@ impl GrossErrorStage {
             jump_k2: settings.jump_k * settings.jump_k,
             run_k2: settings.run_k * settings.run_k,
             release_k2: settings.release_k * settings.release_k,
+            tail_w: if settings.tail_window_samples > 0.0 {
+                1.0 / settings.tail_window_samples
+            } else {
+                0.0
+            },
             scale_w: 1.0 / sw,
             inv_beta: 1.0 / huber_beta(SCALE_CLIP),
             s: settings,
@@ -682,7 +721,16 @@ impl GrossErrorStage {
     /// Gate one active channel value. Per sample: no allocation.
     #[inline]
     fn gate(&mut self, c: usize, v: f64, saturated: bool) -> Outcome {
-        let k2 = self.k2;
+        let tail_w = self.tail_w;
+        let k2 = {
+            let r = self.ch[c].tail3 / (GAUSS_TAIL3 * TAIL_DEAD_ZONE);
+            if tail_w > 0.0 && r > 1.0 {
+                let f = 1.0 + TAIL_BETA * r.ln();
+                self.k2 * f * f
+            } else {
+                self.k2
+            }
+        };
         let run_k2 = self.run_k2;
         let release_k2 = self.release_k2;
         let jk2 = self.jump_k2;
@@ -757,6 +805,10 @@ impl GrossErrorStage {
             if h == 1 {
                 // Winsorised scale updates, one-step samples only.
                 let cap = SCALE_CLIP * SCALE_CLIP;
+                if tail_w > 0.0 {
+                    let beyond = if nu * nu > 9.0 * ch.sig2 { 1.0 } else { 0.0 };
+                    ch.tail3 += tail_w * (beyond - ch.tail3);
+                }
                 ch.sig2 += w * ((nu * nu).min(cap * ch.sig2) * inv_beta - ch.sig2);
                 ch.jump2 += w * ((jump * jump).min(cap * ch.jump2) * inv_beta - ch.jump2);
                 ch.sig2 = ch.sig2.max(ch.min_var);
