@@ -57,13 +57,16 @@ fn bench(c: &mut Criterion) {
     let block = samples(10_000);
     let mut g = c.benchmark_group("gross_error_per_channel_sample");
     g.throughput(Throughput::Elements((block.len() * N_CHANNELS) as u64));
-    for (name, d, repl) in [
-        ("arima302_prediction", 0, Replacement::Prediction),
-        ("arima312_prediction", 1, Replacement::Prediction),
-        ("arima302_median", 0, Replacement::MedianOfPredictions),
+    for (name, d, repl, tail) in [
+        ("arima302_prediction", 0, Replacement::Prediction, 5000.0),
+        // Baseline in the same run: the tail adaptation off.
+        ("arima302_prediction_no_tail", 0, Replacement::Prediction, 0.0),
+        ("arima312_prediction", 1, Replacement::Prediction, 5000.0),
+        ("arima302_median", 0, Replacement::MedianOfPredictions, 5000.0),
     ] {
         let s = GrossErrorSettings {
             replacement: repl,
+            tail_window_samples: tail,
             ..Default::default()
         };
         let mut st = GrossErrorStage::new(s, Some(&models(d))).unwrap();
