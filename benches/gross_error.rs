@@ -60,9 +60,19 @@ fn bench(c: &mut Criterion) {
     for (name, d, repl, tail) in [
         ("arima302_prediction", 0, Replacement::Prediction, 5000.0),
         // Baseline in the same run: the tail adaptation off.
-        ("arima302_prediction_no_tail", 0, Replacement::Prediction, 0.0),
+        (
+            "arima302_prediction_no_tail",
+            0,
+            Replacement::Prediction,
+            0.0,
+        ),
         ("arima312_prediction", 1, Replacement::Prediction, 5000.0),
-        ("arima302_median", 0, Replacement::MedianOfPredictions, 5000.0),
+        (
+            "arima302_median",
+            0,
+            Replacement::MedianOfPredictions,
+            5000.0,
+        ),
     ] {
         let s = GrossErrorSettings {
             replacement: repl,

@@ -4,21 +4,9 @@
 mod common;
 
 use std::path::Path;
-use std::process::Command;
 
 fn run(args: &[&str]) -> String {
-    let out = Command::new(common::bin())
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(args)
-        .output()
-        .unwrap();
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(out.status.success(), "imuprep {args:?} failed:\n{text}");
-    text
+    common::run_cli(args)
 }
 
 /// `fit replay/static_bench.log --out-dir DIR FIT_ARGS...`, then `replay` of the same log with

@@ -15,7 +15,9 @@
 //! Everything is seeded (the scenarios' seeds), so the numbers are deterministic; the thresholds
 //! are the targets, not fitted to the measured values.
 
-use imuprep::analysis::detector_compare::{DetectorRow, compare_detectors, simulate_decoded};
+use imuprep::analysis::detector_compare::{
+    DetectorReport, DetectorRow, compare_detectors, simulate_decoded,
+};
 use imuprep::model::arima::{ArimaModelFile, IdentifySettings, identify};
 use imuprep::sample::CHANNEL_NAMES;
 use imuprep::sim::Scenario;
@@ -59,19 +61,16 @@ fn run(scn: &Scenario, seed: u64, model: Option<&ArimaModelFile>) -> Vec<Detecto
         settings.warmup_samples
     };
     let rows = compare_detectors(&samples, &truth, &settings, model, from).unwrap();
-    for r in &rows {
-        let p = &r.pooled;
-        eprintln!(
-            "{:<30} precision {:.4} recall {:.4} F1 {:.4} false alarms {:.2e} ({}) RMSE ratio {:.3}",
-            r.detector,
-            p.precision,
-            p.recall,
-            p.f1,
-            p.false_alarm_rate,
-            p.false_positives,
-            p.rmse_ratio_vs_spike_free
-        );
-    }
+    let report = DetectorReport {
+        scenario: scn.name.clone(),
+        seed,
+        samples: samples.len(),
+        scored_from: from,
+        gross_samples: truth_gross(&truth[from..]) as u64,
+        rows,
+    };
+    eprint!("{}", report.text());
+    let rows = report.rows;
     let gross: usize = truth_gross(&truth[from..]);
     assert!(gross > 500, "only {gross} labelled gross samples");
     rows

@@ -42,7 +42,6 @@ mod common;
 
 use imuprep::model::bias_model::{BiasModelFile, Effect};
 use std::path::Path;
-use std::process::Command;
 
 /// Environment of the bench recording (see the module docs).
 const BENCH_SETS: [&str; 1] = ["temperature.profile.rise_c=15.0"];
@@ -91,18 +90,7 @@ const MAX_TUNING_1S_LOSS: f64 = 0.02;
 const MAX_TUNING_DRIFT_LOSS: f64 = 0.10;
 
 fn run(args: &[&str]) -> String {
-    let out = Command::new(common::bin())
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(args)
-        .output()
-        .unwrap();
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(out.status.success(), "imuprep {args:?} failed:\n{text}");
-    text
+    common::run_cli(args)
 }
 
 /// The pipeline's scores of one gyro channel on the drive.

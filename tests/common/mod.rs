@@ -64,3 +64,20 @@ pub fn descriptor() -> Descriptor {
 pub fn bin() -> PathBuf {
     PathBuf::from(env!("CARGO_BIN_EXE_imuprep"))
 }
+
+/// Run the built `imuprep` with `args` from the crate root; its stdout and stderr, joined. Panics
+/// (with that output) when it fails.
+pub fn run_cli(args: &[&str]) -> String {
+    let out = std::process::Command::new(bin())
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(args)
+        .output()
+        .unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success(), "imuprep {args:?} failed:\n{text}");
+    text
+}
