@@ -746,7 +746,7 @@ fn evaluate(
         scenario.display()
     );
     println!(
-        "{:<3} {:>14} {:>14} {:>8} {:>14} {:>14} {:>9} {:>12}",
+        "{:<3} {:>14} {:>14} {:>8} {:>14} {:>14} {:>9}  {}",
         "ch",
         "1s-mean RMS",
         "baseline",
@@ -754,11 +754,11 @@ fn evaluate(
         "60s drift rad",
         "baseline",
         "reduced",
-        "worst manoeuvre change"
+        "manoeuvres: worst attenuation, worst |change|, worst removed by the stage"
     );
     for r in &res {
         println!(
-            "{:<3} {:>14.3e} {:>14.3e} {:>8.2} {:>14.3e} {:>14.3e} {:>8.1}% {:>9.2}% of {}",
+            "{:<3} {:>14.3e} {:>14.3e} {:>8.2} {:>14.3e} {:>14.3e} {:>8.1}%  {:.2}%, {:.2}%, {:.2}% of {}",
             r.channel,
             r.pipeline.rms_1s_mean_error,
             r.baseline.rms_1s_mean_error,
@@ -767,6 +767,8 @@ fn evaluate(
             r.baseline.rms_60s_drift_rad,
             100.0 * r.drift_reduction,
             100.0 * r.worst_attenuation,
+            100.0 * r.worst_abs_change,
+            100.0 * r.worst_stage_removed,
             r.manoeuvres
         );
     }
@@ -781,16 +783,17 @@ fn evaluate(
     }
     for r in res.iter().filter(|r| !r.manoeuvre_list.is_empty()) {
         println!(
-            "{} manoeuvres: start s, duration s, true angle rad, change, mean error rad/s (in the 1 s before)",
+            "{} manoeuvres: start s, duration s, true angle rad, change (+ = attenuated), removed by the stage, mean error rad/s (in the 1 s before)",
             r.channel
         );
         for m in &r.manoeuvre_list {
             println!(
-                "  {:>7.1} {:>6.1} {:>9.4} {:>+8.2}% {:>+11.3e} ({:>+10.3e})",
+                "  {:>7.1} {:>6.1} {:>9.4} {:>+8.2}% {:>+8.3}% {:>+11.3e} ({:>+10.3e})",
                 m.start_s,
                 m.duration_s,
                 m.true_angle_rad,
                 100.0 * m.change,
+                100.0 * m.stage_removed,
                 m.mean_error,
                 m.mean_error_before
             );

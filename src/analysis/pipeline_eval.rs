@@ -6,8 +6,17 @@
 //! - *1-s mean error*: the error (output − truth) averaged over consecutive 1-s blocks; its RMS.
 //! - *60-s heading drift*: the error integrated over consecutive 60-s windows (rad); RMS of the
 //!   window-end values — a plain single-axis strapdown of the error.
-//! - *manoeuvre change*: for every stretch where |true rate| > 0.05 rad/s for ≥ 1 s,
-//!   |1 − ∫output/∫truth| over that stretch (bias left in the output counts too); the worst.
+//! - *manoeuvre change*: for every stretch where |true rate| > 0.05 rad/s for ≥ 1 s, the signed
+//!   change 1 − ∫output/∫truth over that stretch. Positive = *attenuated* (the output turned less
+//!   than the vehicle did); negative = amplified. Everything the output still carries counts: a
+//!   bias left from before the turn, and the scale-factor and g-sensitivity errors that no bias
+//!   stage removes. Reported: the worst attenuation (largest positive change, 0 if none) and the
+//!   worst |change|.
+//! - *removed by the stage*: the part of the change the pipeline itself made. The stage's
+//!   correction is c = baseline − output; if it holds the bias through the turn, c stays at its
+//!   value just before. So (∫c over the turn − n·mean c in the 1 s before) / ∫truth is the share
+//!   of the turn that the pipeline subtracted — the quantity that must stay small for true motion
+//!   to survive.
 //!
 //! The baseline applies only the configured calibration (constant bias, scale, misalignment).
 //!
@@ -50,8 +59,13 @@ pub struct ChannelEval {
     pub improvement_1s: f64,
     /// 1 − pipeline/baseline for the 60-s drift (target ≥ 0.8).
     pub drift_reduction: f64,
-    /// Worst |relative change| of a manoeuvre's integral (target ≤ 0.01), and the count.
+    /// Largest signed change (positive = attenuated; 0 if no manoeuvre was attenuated).
+    /// Target: no manoeuvre attenuated by more than 1 %.
     pub worst_attenuation: f64,
+    /// Largest |change| either way (amplification included).
+    pub worst_abs_change: f64,
+    /// Largest |share of a turn removed by the pipeline itself| (module docs).
+    pub worst_stage_removed: f64,
     pub manoeuvres: usize,
     /// Every manoeuvre, in time order.
     pub manoeuvre_list: Vec<Manoeuvre>,
@@ -65,8 +79,11 @@ pub struct Manoeuvre {
     pub duration_s: f64,
     /// ∫truth over the manoeuvre (rad).
     pub true_angle_rad: f64,
-    /// Signed 1 − ∫output/∫truth.
+    /// Signed 1 − ∫output/∫truth (positive = attenuated).
     pub change: f64,
+    /// Share of ∫truth that the pipeline subtracted during the turn beyond the correction it
+    /// applied just before it (module docs); positive = motion removed.
+    pub stage_removed: f64,
     /// Mean output error (output − truth) over the manoeuvre (rad/s) — a bias left in the output.
     pub mean_error: f64,
     /// Mean output error over the 1 s before the manoeuvre (rad/s): if it matches `mean_error`, the
@@ -112,6 +129,8 @@ pub fn evaluate(
             .collect();
         // Manoeuvres: stretches of |true rate| > 0.05 rad/s lasting ≥ 1 s.
         let mut worst: f64 = 0.0;
+        let mut worst_abs: f64 = 0.0;
+        let mut worst_removed: f64 = 0.0;
         let mut count = 0;
         let mut list = Vec::new();
         let n1 = rate_hz.round() as usize;
@@ -129,13 +148,20 @@ pub fn evaluate(
                     let true_int: f64 = tr[j0..i].iter().sum();
                     let out_int: f64 = out[j0..i].iter().map(|s| s.channel(c)).sum();
                     let change = 1.0 - out_int / true_int;
-                    worst = worst.max(change.abs());
+                    worst = worst.max(change);
+                    worst_abs = worst_abs.max(change.abs());
                     let mean = |e: &[f64]| e.iter().sum::<f64>() / e.len().max(1) as f64;
+                    // The pipeline's own correction, c = baseline − output = e_b − e_p.
+                    let corr: Vec<f64> = e_b.iter().zip(&e_p).map(|(b, p)| b - p).collect();
+                    let before = mean(&corr[j0.saturating_sub(n1)..j0]);
+                    let removed = corr[j0..i].iter().map(|c| c - before).sum::<f64>() / true_int;
+                    worst_removed = worst_removed.max(removed.abs());
                     list.push(Manoeuvre {
                         start_s: j0 as f64 / rate_hz,
                         duration_s: (i - j0) as f64 / rate_hz,
                         true_angle_rad: true_int / rate_hz,
                         change,
+                        stage_removed: removed,
                         mean_error: mean(&e_p[j0..i]),
                         mean_error_before: mean(&e_p[j0.saturating_sub(n1)..j0]),
                     });
@@ -153,6 +179,8 @@ pub fn evaluate(
             pipeline: p,
             baseline: b,
             worst_attenuation: worst,
+            worst_abs_change: worst_abs,
+            worst_stage_removed: worst_removed,
             manoeuvres: count,
             manoeuvre_list: list,
         });
