@@ -746,15 +746,8 @@ fn evaluate(
         scenario.display()
     );
     println!(
-        "{:<3} {:>14} {:>14} {:>8} {:>14} {:>14} {:>9}  {}",
-        "ch",
-        "1s-mean RMS",
-        "baseline",
-        "ratio",
-        "60s drift rad",
-        "baseline",
-        "reduced",
-        "manoeuvres: worst attenuation, worst |change|, worst removed by the stage"
+        "{:<3} {:>14} {:>14} {:>8} {:>14} {:>14} {:>9}  manoeuvres: worst attenuation, worst |change|, worst removed by the stage",
+        "ch", "1s-mean RMS", "baseline", "ratio", "60s drift rad", "baseline", "reduced",
     );
     for r in &res {
         println!(
