@@ -3,7 +3,7 @@
 //! (`analysis::flag_review`: impulse, level change, burst, excursion, other), with counts, rates and the
 //! largest events of each class.
 //!
-//! Run: cargo run --release --example flag_review -- LOG [K]
+//! Run: cargo run --release --example flag_review -- LOG [K [KEY=VALUE ...]]
 //! (LOG from `imuprep import`; K = the gate, default 4.5; the stage's other settings are the
 //! defaults, with its model identified at warm-up as the embedded config does.)
 
@@ -20,12 +20,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         std::process::exit(2);
     };
     let k: f64 = args.get(2).map(|a| a.parse()).transpose()?.unwrap_or(4.5);
+    // Further arguments: KEY=VALUE overrides of the stage's settings (as in the config's
+    // [gross_error.settings] table), e.g. tail_gain=1.0.
+    let mut table = toml::Table::new();
+    table.insert("k".into(), toml::Value::Float(k));
+    for kv in args.iter().skip(3) {
+        let (key, val) = kv.split_once('=').ok_or("override must be KEY=VALUE")?;
+        let v: toml::Value = toml::from_str::<toml::Table>(&format!("v = {val}"))?["v"].clone();
+        table.insert(key.into(), v);
+    }
     let (desc, raw, _) = read_log(std::path::Path::new(log))?;
     let rate = desc.map(|d| d.sample_rate_hz).unwrap_or(100.0);
-    let settings = GrossErrorSettings {
-        k,
-        ..Default::default()
-    };
+    let settings: GrossErrorSettings = table.try_into()?;
     let mut stage = GrossErrorStage::new(settings.clone(), None)?;
     let out: Vec<_> = raw.iter().map(|s| stage.process(*s)).collect();
     let scored = raw.len().saturating_sub(settings.warmup_samples) * CHANNEL_NAMES.len();
@@ -75,5 +81,35 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             top.join(" ")
         );
     }
+    // Coherence: events whose start lies within ±1 sample of events on at least two other
+    // channels — a shock seen by several axes at once (a sensor glitch hits one channel).
+    let coherent: Vec<_> = events
+        .iter()
+        .filter(|e| {
+            let mut other = [false; CHANNEL_NAMES.len()];
+            for f in &events {
+                if f.channel != e.channel && f.start.abs_diff(e.start) <= 1 {
+                    other[f.channel] = true;
+                }
+            }
+            other.iter().filter(|&&o| o).count() >= 2
+        })
+        .collect();
+    println!(
+        "events starting within 1 sample of events on >= 2 other channels: {} ({} channel-samples)",
+        coherent.len(),
+        coherent.iter().map(|e| e.len).sum::<usize>()
+    );
+    // Where in the recording the replaced channel-samples fall (a warm-up model meeting the first
+    // motion shows as a cluster at the start), in at most 20 bins of whole minutes.
+    let minutes = ((raw.len() as f64 / rate / 60.0).ceil() as usize).max(1);
+    let bin_min = minutes.div_ceil(20);
+    let n_bins = minutes.div_ceil(bin_min);
+    let mut per_bin = vec![0usize; n_bins];
+    for e in &events {
+        let b = (e.start as f64 / rate / 60.0) as usize / bin_min;
+        per_bin[b.min(n_bins - 1)] += e.len;
+    }
+    println!("replaced channel-samples per {bin_min} min: {per_bin:?}");
     Ok(())
 }
