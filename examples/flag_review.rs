@@ -3,7 +3,7 @@
 //! (`analysis::flag_review`: impulse, level change, burst, excursion, other), with counts, rates and the
 //! largest events of each class.
 //!
-//! Run: cargo run --release --example flag_review -- LOG [K [KEY=VALUE ...]]
+//! Run: cargo run --release --example flag_review -- LOG [K [KEY=VALUE ...]] [--list]
 //! (LOG from `imuprep import`; K = the gate, default 4.5; the stage's other settings are the
 //! defaults, with its model identified at warm-up as the embedded config does.)
 
@@ -14,9 +14,12 @@ use imuprep::stage::Stage;
 use imuprep::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
+    // `--list` (anywhere) prints every event, not only the largest of each class.
+    let all: Vec<String> = std::env::args().collect();
+    let list_all = all.iter().any(|a| a == "--list");
+    let args: Vec<&String> = all.iter().filter(|a| *a != "--list").collect();
     let Some(log) = args.get(1) else {
-        eprintln!("usage: flag_review LOG [K]");
+        eprintln!("usage: flag_review LOG [K [KEY=VALUE ...]] [--list]");
         std::process::exit(2);
     };
     let k: f64 = args.get(2).map(|a| a.parse()).transpose()?.unwrap_or(4.5);
@@ -111,5 +114,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         per_bin[b.min(n_bins - 1)] += e.len;
     }
     println!("replaced channel-samples per {bin_min} min: {per_bin:?}");
+    if list_all {
+        println!("every event: channel, start s, replaced samples, class, size in local σ");
+        for e in &events {
+            println!(
+                "  {:<2} {:>9.2} {:>3} {:<12} {:>5.1}",
+                CHANNEL_NAMES[e.channel],
+                e.start as f64 / rate,
+                e.len,
+                format!("{:?}", e.class),
+                e.size_sigma
+            );
+        }
+    }
     Ok(())
 }
