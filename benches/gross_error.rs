@@ -55,10 +55,16 @@ fn samples(n: usize) -> Vec<Sample> {
 
 fn bench(c: &mut Criterion) {
     let block = samples(10_000);
+    let tail_default = GrossErrorSettings::default().tail_window_samples;
     let mut g = c.benchmark_group("gross_error_per_channel_sample");
     g.throughput(Throughput::Elements((block.len() * N_CHANNELS) as u64));
     for (name, d, repl, tail) in [
-        ("arima302_prediction", 0, Replacement::Prediction, 5000.0),
+        (
+            "arima302_prediction",
+            0,
+            Replacement::Prediction,
+            tail_default,
+        ),
         // Baseline in the same run: the tail adaptation off.
         (
             "arima302_prediction_no_tail",
@@ -66,12 +72,17 @@ fn bench(c: &mut Criterion) {
             Replacement::Prediction,
             0.0,
         ),
-        ("arima312_prediction", 1, Replacement::Prediction, 5000.0),
+        (
+            "arima312_prediction",
+            1,
+            Replacement::Prediction,
+            tail_default,
+        ),
         (
             "arima302_median",
             0,
             Replacement::MedianOfPredictions,
-            5000.0,
+            tail_default,
         ),
     ] {
         let s = GrossErrorSettings {

@@ -858,23 +858,31 @@ fn diagnose(
         };
         match diagnose_channel(&input, &settings) {
             Ok(d) => {
-                let added: Vec<String> = d
-                    .iterations
-                    .iter()
-                    .map(|it| effect_text(&it.effect))
-                    .collect();
-                println!(
-                    "{name}: first model AR({}) test MSE {:.4e}; added: {}; final test MSE {:.4e} ({:.1} % lower)",
-                    d.baseline.ar_order,
-                    d.baseline.mse_one_step,
-                    if added.is_empty() {
+                let list = |v: Vec<String>| {
+                    if v.is_empty() {
                         "nothing".to_string()
                     } else {
-                        added.join("; ")
-                    },
+                        v.join("; ")
+                    }
+                };
+                let added = list(
+                    d.iterations
+                        .iter()
+                        .map(|it| effect_text(&it.effect))
+                        .collect(),
+                );
+                // What the model file carries: the effects refitted on the whole log for
+                // deployment; one the loop added may have been superseded by a later one (a step
+                // re-found nearby), so this list can be shorter than the loop's.
+                let written = list(d.effects.iter().map(effect_text).collect());
+                println!(
+                    "{name}: first model AR({}) test MSE {:.4e}; added: {added}; final test MSE {:.4e} ({:.1} % lower)",
+                    d.baseline.ar_order,
+                    d.baseline.mse_one_step,
                     d.final_metrics.mse_one_step,
                     100.0 * (1.0 - d.final_metrics.mse_one_step / d.baseline.mse_one_step)
                 );
+                println!("{name}: effects in the model file (refit on the whole log): {written}");
                 for (stem, svg) in channel_plots(&d) {
                     std::fs::write(out_dir.join("plots").join(format!("{stem}.svg")), svg)?;
                 }
