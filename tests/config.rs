@@ -69,3 +69,22 @@ fn binary_exits_non_zero_and_starts_nothing_on_a_bad_config() {
     );
     assert!(!err.contains("pipeline ready"), "nothing may start: {err}");
 }
+
+#[test]
+fn gross_error_tail_settings_out_of_range_are_named() {
+    // The tail adaptation's two knobs: a negative gain would narrow the gate on heavy tails, a
+    // window below 100 samples estimates a 0.27 % share from less than one expected exceedance.
+    // The section is not enabled: its settings are checked all the same.
+    let text = r#"
+[source]
+kind = "stdin"
+
+[gross_error.settings]
+tail_gain = -0.5
+tail_window_samples = 50.0
+"#;
+    let e = Config::from_toml_str(text, Path::new(".")).unwrap_err();
+    let s = e.to_string();
+    assert!(s.contains("tail_gain = -0.5"), "{s}");
+    assert!(s.contains("tail_window_samples = 50"), "{s}");
+}

@@ -97,12 +97,14 @@ impl StagesConfig {
     pub fn from_table(table: &toml::Table, base: &Path, errs: &mut Errors) -> Option<StagesConfig> {
         let n = errs.len();
         let ge: GrossErrorSection = section(table, "gross_error", errs).unwrap_or_default();
-        let gross_error = if ge.enabled {
-            if let Err(v) = ge.settings.validate() {
-                for m in v {
-                    errs.push("gross_error.settings", m);
-                }
+        // Settings written in a disabled section are still checked: a mistake must not wait
+        // until the day the stage is switched on.
+        if let Err(v) = ge.settings.validate() {
+            for m in v {
+                errs.push("gross_error.settings", m);
             }
+        }
+        let gross_error = if ge.enabled {
             let model = ge.model.as_ref().and_then(|m| {
                 load_model(
                     base,
@@ -120,12 +122,12 @@ impl StagesConfig {
             None
         };
         let bs: BiasSection = section(table, "bias", errs).unwrap_or_default();
-        let bias = if bs.enabled {
-            if let Err(e) = bs.settings.validate() {
-                for m in e.0 {
-                    errs.push("bias.settings", m);
-                }
+        if let Err(e) = bs.settings.validate() {
+            for m in e.0 {
+                errs.push("bias.settings", m);
             }
+        }
+        let bias = if bs.enabled {
             let file = bs
                 .model
                 .clone()
