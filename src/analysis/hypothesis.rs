@@ -141,6 +141,18 @@ pub struct LjungBox {
     pub p_value: f64,
 }
 
+/// The Ljung–Box statistic `Q = N (N + 2) Σ_{k=1}^{h} r_k² / (N − k)` from the autocorrelations
+/// `r_1..r_h` (`r1[k − 1] = r_k`) of a series of `n` samples.
+pub fn ljung_box_statistic(r1: &[f64], n: usize) -> f64 {
+    let nf = n as f64;
+    let s: f64 = r1
+        .iter()
+        .enumerate()
+        .map(|(i, rk)| rk * rk / (nf - (i + 1) as f64))
+        .sum();
+    nf * (nf + 2.0) * s
+}
+
 /// Ljung–Box test on `resid` over `lags` autocorrelations, for a model with `fitted_params` ARMA
 /// coefficients (p + q; the constant is not counted, as in Box–Jenkins and statsmodels' `model_df`).
 pub fn ljung_box(
@@ -154,9 +166,7 @@ pub fn ljung_box(
         )));
     }
     let r = acf(resid, lags)?;
-    let n = resid.len() as f64;
-    let s: f64 = (1..=lags).map(|k| r[k] * r[k] / (n - k as f64)).sum();
-    let q = n * (n + 2.0) * s;
+    let q = ljung_box_statistic(&r[1..], resid.len());
     let dof = lags - fitted_params;
     Ok(LjungBox {
         q,

@@ -59,15 +59,11 @@ pub fn ljung_box(x: &[f64], lags: usize, fitted_params: usize) -> Result<LjungBo
     }
     let r = acf(x, lags)?;
     let n = x.len();
-    let nf = n as f64;
-    let q = nf
-        * (nf + 2.0)
-        * r.iter()
-            .enumerate()
-            .map(|(i, rk)| rk * rk / (nf - (i + 1) as f64))
-            .sum::<f64>();
+    // One formula for Q, shared with the ARIMA diagnostics; this variant differs only in keeping
+    // at least one degree of freedom and in counting the ACF values outside their bounds.
+    let q = crate::analysis::hypothesis::ljung_box_statistic(&r, n);
     let dof = lags.saturating_sub(fitted_params).max(1);
-    let bound = 1.96 / nf.sqrt();
+    let bound = 1.96 / (n as f64).sqrt();
     Ok(LjungBox {
         n,
         lags,
