@@ -20,6 +20,14 @@
 //! Why a notch rather than a quadrature oscillator inside the bias Kalman filter: the notch keeps
 //! tracking during motion (vehicle motion has no content at an engine line), whereas the filter
 //! observes the bias only while still and would have to extrapolate the phase through every drive.
+//!
+//! **Its skirt.** Between DC and the line the notch is not flat: for a line at 0.567 Hz with the
+//! default 0.2 Hz bandwidth at 100 Hz, |H| = 0.998 at 0.1 Hz, 0.97 at 0.3 Hz, 0.79 at 0.45 Hz,
+//! 0.96 at 1 Hz, 0.994 at 2 Hz. A line inside the vehicle's motion band (below ~2 Hz) therefore
+//! takes real motion near it along with the line — fine on a bench (the ADIS16405 accelerometer
+//! line, `tests/learned_line_real.rs`), not on a vehicle, where only lines well above the motion
+//! band (engine orders, supply ripple) should be cancelled this way. The integral of a manoeuvre
+//! is kept either way (unit DC gain).
 
 use std::f64::consts::TAU;
 
