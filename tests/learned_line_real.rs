@@ -118,7 +118,7 @@ fn adis16405_accelerometer_line_is_tracked_through_its_drift() {
             peaks.push(f_pk);
             // Measured: raw 29–101 (the line stands far out of the noise in every block), output
             // 0.09–0.60 (the notch's ±0.1 Hz band takes the local noise too). A line left at a
-            // quarter of its power would still read ≥ 8 here; 2 fails anything visible.
+            // quarter of its power would still read ≥ 7 here; 2 fails anything visible.
             assert!(
                 r_raw > 20.0,
                 "ch {c} block {b}: no line in the input ({r_raw})"
