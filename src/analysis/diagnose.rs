@@ -691,7 +691,9 @@ fn candidates(
 }
 
 /// The rate-random-walk candidate, when the Allan deviation of the train innovations shows
-/// excess rising (+½) or flat (flicker) that the model cannot produce.
+/// excess rising (+½) or flat (flicker) that the model cannot produce; with the kind seen, so the
+/// report names a flicker finding as such (the model file has no flicker term: a random-walk
+/// level is its approximation over the record's time scales).
 fn rrw_candidate(
     ctx: &Ctx,
     terms: &[Term],
@@ -699,13 +701,14 @@ fn rrw_candidate(
     cols: &[Vec<f64>],
     split: &Split,
     s: &DiagnoseSettings,
-) -> Option<Term> {
+) -> Option<(Term, AllanKind)> {
     if terms.contains(&Term::RateRandomWalk) {
         return None;
     }
     let r = f.residuals_to(ctx.y, cols, split.train.end);
     let a = allan_check(&r.innovation[split.train.clone()], ctx.rate_hz, s.alpha).ok()?;
-    matches!(a.kind, AllanKind::RateRandomWalk | AllanKind::Flicker).then_some(Term::RateRandomWalk)
+    matches!(a.kind, AllanKind::RateRandomWalk | AllanKind::Flicker)
+        .then_some((Term::RateRandomWalk, a.kind))
 }
 
 /// Block means of at most `max_points` blocks (for plots of slow curves).
@@ -799,16 +802,21 @@ pub fn diagnose_channel(
         // had been credited with the walk's drift.
         let best = match best {
             Some(b) => Some(b),
-            None => rrw_candidate(&ctx, &terms, &f, &cols, &sp, s).and_then(|c| {
+            None => rrw_candidate(&ctx, &terms, &f, &cols, &sp, s).and_then(|(c, kind)| {
                 let mut t2 = terms.clone();
                 t2.push(c.clone());
                 let sse1 = ctx
                     .sse(&t2, sp.train.clone(), p, sp.validation.clone())
                     .ok()?;
                 let lr = nv * (sse0 / sse1).ln();
+                let seen = if kind == AllanKind::Flicker {
+                    "Allan excess flat: flicker (bias instability), approximated by"
+                } else {
+                    "Allan excess rising: rate random walk, modelled as"
+                };
                 let sc = CandidateScore {
                     family: c.family().into(),
-                    description: c.describe(input.rate_hz),
+                    description: format!("{seen} a {}", c.describe(input.rate_hz)),
                     n_params: 1,
                     q: (sse0 - sse1) / nv,
                     lr,

@@ -194,6 +194,10 @@ pub fn channel_text(c: &ChannelDiagnosis) -> String {
             it.score.lr,
             it.score.p_value
         );
+        if it.score.description.starts_with("Allan excess") {
+            // Which Allan slope called for the walk term (flicker has no term of its own).
+            let _ = writeln!(o, "      ({})", it.score.description);
+        }
         for r in &it.removed {
             let _ = writeln!(o, "      dropped (no longer significant with it): {r}");
         }
