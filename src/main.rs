@@ -177,6 +177,17 @@ enum Cmd {
         /// Output directory: report.txt, report.json, bias.toml, plots/*.svg.
         #[arg(long, default_value = "diagnose-out")]
         out_dir: PathBuf,
+        /// Scan a long log in windows of this length (s), each with its own train / validation /
+        /// test split, written to OUT_DIR/window_<start>s/; a summary lists what each window
+        /// added. Effects are chosen on a window's train and validation parts only, so one run
+        /// over a long log never sees an effect that starts after its first minutes.
+        #[arg(long)]
+        window_s: Option<f64>,
+        /// Start-to-start spacing of the windows (s; default 90 = half the 180-s train part, so
+        /// that every instant lies in the middle of some window's train part, where change points
+        /// are searched — a step at a train part's edge looks like a trend or a level).
+        #[arg(long, default_value_t = 90.0)]
+        hop_s: f64,
     },
     /// Compare methods on the same data. `--detectors --scenario S.toml`: gross-error detectors
     /// against the simulator's truth. `LOG --channel C`: the bias models of the FOS paper.
@@ -370,7 +381,12 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             from_s,
             to_s,
             out_dir,
-        } => diagnose(&log, &channels, from_s, to_s, &out_dir),
+            window_s,
+            hop_s,
+        } => match window_s {
+            None => diagnose(&log, &channels, from_s, to_s, &out_dir).map(|_| ExitCode::SUCCESS),
+            Some(w) => diagnose_windows(&log, &channels, from_s, to_s, w, hop_s, &out_dir),
+        },
         Cmd::Compare {
             log,
             detectors,
@@ -798,13 +814,80 @@ fn evaluate(
     Ok(ExitCode::SUCCESS)
 }
 
+/// What one `diagnose` run added, per channel: (channel, effects chosen by the loop, with times
+/// from the start of the analysed stretch).
+type Added = Vec<(String, Vec<imuprep::model::bias_model::Effect>)>;
+
+/// `diagnose --window-s W`: the loop on overlapping windows of a long log, and a summary.
+fn diagnose_windows(
+    log: &std::path::Path,
+    channels: &[String],
+    from_s: f64,
+    to_s: Option<f64>,
+    window_s: f64,
+    hop_s: f64,
+    out_dir: &std::path::Path,
+) -> Result<ExitCode> {
+    use imuprep::analysis::diagnose_report::effect_text;
+    use imuprep::model::bias_model::Effect;
+    anyhow::ensure!(
+        window_s > 0.0 && hop_s > 0.0 && hop_s <= window_s,
+        "--window-s and --hop-s must be > 0, with the hop no longer than the window"
+    );
+    let (rate, samples) = load_span(log, from_s)?;
+    let total_s = samples.len() as f64 / rate;
+    let end_s = to_s.map_or(from_s + total_s, |t| t.min(from_s + total_s));
+    // Windows start every hop; a window shorter than half its length (the log's tail) is
+    // dropped, since its split would leave too little to fit and test on.
+    let mut starts = Vec::new();
+    let mut t = from_s;
+    while t < end_s && (end_s - t >= 0.5 * window_s || starts.is_empty()) {
+        starts.push(t);
+        t += hop_s;
+    }
+    let mut summary = Vec::new();
+    for &a in &starts {
+        let b = (a + window_s).min(end_s);
+        println!("== window {a:.0}–{b:.0} s");
+        let dir = out_dir.join(format!("window_{a:.0}s"));
+        let added = diagnose(log, channels, a, Some(b), &dir)?;
+        summary.push((a, b, added));
+    }
+    // Each window is tested at the loop's own significance level, so a scan of many windows
+    // adds more false findings than one run (slow wander read as a step, say): a finding is
+    // a place to look, to be confirmed with --from-s/--to-s around it.
+    println!(
+        "\nsummary: what each window's loop added (step times from the log's start; each window is tested on its own, so expect some findings from slow wander)"
+    );
+    for (a, b, added) in &summary {
+        for (ch, effects) in added {
+            let text: Vec<String> = effects
+                .iter()
+                .map(|e| match *e {
+                    Effect::Step { t_s, size } => effect_text(&Effect::Step { t_s: t_s + a, size }),
+                    ref other => effect_text(other),
+                })
+                .collect();
+            println!(
+                "  {a:>7.0}–{b:<7.0} {ch}: {}",
+                if text.is_empty() {
+                    "nothing".to_string()
+                } else {
+                    text.join("; ")
+                }
+            );
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 fn diagnose(
     log: &std::path::Path,
     channels: &[String],
     from_s: f64,
     to_s: Option<f64>,
     out_dir: &std::path::Path,
-) -> Result<ExitCode> {
+) -> Result<Added> {
     use imuprep::analysis::diagnose::{ChannelInput, DiagnoseSettings, diagnose_channel};
     use imuprep::analysis::diagnose_report::{DiagnoseReport, channel_plots, effect_text};
     use imuprep::analysis::exogenous::Exogenous;
@@ -833,6 +916,7 @@ fn diagnose(
         channels: vec![],
     };
     let mut model = BiasModelFile::default();
+    let mut added_all: Added = Vec::new();
     for c in chans {
         let name = CHANNEL_NAMES[c];
         let others: Vec<(String, &[f64])> = (0..6)
@@ -897,6 +981,10 @@ fn diagnose(
                     effects: d.effects.clone(),
                     ..Default::default()
                 });
+                added_all.push((
+                    name.to_string(),
+                    d.iterations.iter().map(|it| it.effect.clone()).collect(),
+                ));
                 report.channels.push(d);
             }
             Err(e) => println!("{name}: cannot diagnose: {e}"),
@@ -919,7 +1007,7 @@ fn diagnose(
         "wrote {0}/report.txt, {0}/report.json, {0}/bias.toml and {0}/plots/",
         out_dir.display()
     );
-    Ok(ExitCode::SUCCESS)
+    Ok(added_all)
 }
 
 /// Channel names (gx gy gz ax ay az) → indices; none given = all six.
