@@ -850,7 +850,9 @@ fn diagnose_windows(
         let b = (a + window_s).min(end_s);
         println!("== window {a:.0}–{b:.0} s");
         let dir = out_dir.join(format!("window_{a:.0}s"));
-        let added = diagnose(log, channels, a, Some(b), &dir)?;
+        let i0 = (((a - from_s) * rate).round() as usize).min(samples.len());
+        let i1 = (((b - from_s) * rate).round() as usize).clamp(i0, samples.len());
+        let added = diagnose_samples(log, &samples[i0..i1], rate, a, channels, &dir)?;
         summary.push((a, b, added));
     }
     // Each window is tested at the loop's own significance level, so a scan of many windows
@@ -868,19 +870,22 @@ fn diagnose_windows(
                     ref other => effect_text(other),
                 })
                 .collect();
-            println!(
-                "  {a:>7.0}–{b:<7.0} {ch}: {}",
-                if text.is_empty() {
-                    "nothing".to_string()
-                } else {
-                    text.join("; ")
-                }
-            );
+            println!("  {a:>7.0}–{b:<7.0} {ch}: {}", effects_text(&text));
         }
     }
     Ok(ExitCode::SUCCESS)
 }
 
+/// Effect texts joined with "; ", or "nothing".
+fn effects_text(v: &[String]) -> String {
+    if v.is_empty() {
+        "nothing".to_string()
+    } else {
+        v.join("; ")
+    }
+}
+
+/// `diagnose` on one stretch of a log.
 fn diagnose(
     log: &std::path::Path,
     channels: &[String],
@@ -888,18 +893,30 @@ fn diagnose(
     to_s: Option<f64>,
     out_dir: &std::path::Path,
 ) -> Result<Added> {
-    use imuprep::analysis::diagnose::{ChannelInput, DiagnoseSettings, diagnose_channel};
-    use imuprep::analysis::diagnose_report::{DiagnoseReport, channel_plots, effect_text};
-    use imuprep::analysis::exogenous::Exogenous;
-    use imuprep::model::bias_model::{BiasModelFile, ChannelBiasModel};
-    use imuprep::sample::CHANNEL_NAMES;
     let (rate, samples) = load_span(log, from_s)?;
     let end = match to_s {
         Some(t) => (((t - from_s) * rate).round() as usize).min(samples.len()),
         None => samples.len(),
     };
+    diagnose_samples(log, &samples[..end], rate, from_s, channels, out_dir)
+}
+
+/// The loop on `samples` (already cut to the stretch that starts `from_s` into `log`).
+fn diagnose_samples(
+    log: &std::path::Path,
+    samples: &[imuprep::Sample],
+    rate: f64,
+    from_s: f64,
+    channels: &[String],
+    out_dir: &std::path::Path,
+) -> Result<Added> {
+    use imuprep::analysis::diagnose::{ChannelInput, DiagnoseSettings, diagnose_channel};
+    use imuprep::analysis::diagnose_report::{DiagnoseReport, channel_plots, effect_text};
+    use imuprep::analysis::exogenous::Exogenous;
+    use imuprep::model::bias_model::{BiasModelFile, ChannelBiasModel};
+    use imuprep::sample::CHANNEL_NAMES;
+    let end = samples.len();
     anyhow::ensure!(end > 0, "the chosen stretch is empty");
-    let samples = &samples[..end];
     let chans = parse_channels(channels)?;
     let series: Vec<Vec<f64>> = (0..6)
         .map(|c| samples.iter().map(|s| s.channel(c)).collect())
@@ -942,23 +959,17 @@ fn diagnose(
         };
         match diagnose_channel(&input, &settings) {
             Ok(d) => {
-                let list = |v: Vec<String>| {
-                    if v.is_empty() {
-                        "nothing".to_string()
-                    } else {
-                        v.join("; ")
-                    }
-                };
-                let added = list(
-                    d.iterations
-                        .iter()
-                        .map(|it| effect_text(&it.effect))
-                        .collect(),
-                );
+                let added: Vec<String> = d
+                    .iterations
+                    .iter()
+                    .map(|it| effect_text(&it.effect))
+                    .collect();
+                let added = effects_text(&added);
                 // What the model file carries: the effects refitted on the whole log for
                 // deployment; one the loop added may have been superseded by a later one (a step
                 // re-found nearby), so this list can be shorter than the loop's.
-                let written = list(d.effects.iter().map(effect_text).collect());
+                let written: Vec<String> = d.effects.iter().map(effect_text).collect();
+                let written = effects_text(&written);
                 println!(
                     "{name}: first model AR({}) test MSE {:.4e}; added: {added}; final test MSE {:.4e} ({:.1} % lower)",
                     d.baseline.ar_order,

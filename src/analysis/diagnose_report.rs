@@ -194,7 +194,7 @@ pub fn channel_text(c: &ChannelDiagnosis) -> String {
             it.score.lr,
             it.score.p_value
         );
-        if it.score.description.starts_with("Allan excess") {
+        if it.family == "rate_random_walk" {
             // Which Allan slope called for the walk term (flicker has no term of its own).
             let _ = writeln!(o, "      ({})", it.score.description);
         }

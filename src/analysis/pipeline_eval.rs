@@ -127,6 +127,8 @@ pub fn evaluate(
             .zip(&tr)
             .map(|(s, t)| s.channel(c) - t)
             .collect();
+        // The pipeline's own correction, c = baseline − output = e_b − e_p.
+        let corr: Vec<f64> = e_b.iter().zip(&e_p).map(|(b, p)| b - p).collect();
         // Manoeuvres: stretches of |true rate| > 0.05 rad/s lasting ≥ 1 s.
         let mut worst: f64 = 0.0;
         let mut worst_abs: f64 = 0.0;
@@ -151,8 +153,6 @@ pub fn evaluate(
                     worst = worst.max(change);
                     worst_abs = worst_abs.max(change.abs());
                     let mean = |e: &[f64]| e.iter().sum::<f64>() / e.len().max(1) as f64;
-                    // The pipeline's own correction, c = baseline − output = e_b − e_p.
-                    let corr: Vec<f64> = e_b.iter().zip(&e_p).map(|(b, p)| b - p).collect();
                     let before = mean(&corr[j0.saturating_sub(n1)..j0]);
                     let removed = corr[j0..i].iter().map(|c| c - before).sum::<f64>() / true_int;
                     worst_removed = worst_removed.max(removed.abs());

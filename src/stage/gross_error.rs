@@ -172,7 +172,7 @@ pub struct GrossErrorSettings {
     /// Tail adaptation: time constant (samples) of the tracked share of accepted innovations
     /// beyond 3σ; 0 = off (default 1000). See the module docs.
     pub tail_window_samples: f64,
-    /// Tail adaptation gain β: the gate widens by 1 + β ln(p₃ / (2 · 0.27 %)) (default 0.5).
+    /// Tail adaptation gain β: the gate widens by 1 + β ln(p₃ / (2 · 0.27 %)) (default 0.75).
     pub tail_gain: f64,
     /// Local-level weight per sample for d = 0 models (Holt's α; 0 = the fitted mean;
     /// default 0.2).
