@@ -3,7 +3,8 @@
 //!
 //! Six channels, each with the largest online model ARIMA(3,0,2) (and a d = 1 variant), fed a
 //! pre-generated block of 200 Hz samples (AR noise, 0.2 % spikes, some runs). Throughput is in
-//! channel-samples, so criterion's time per element is the cost per channel per sample.
+//! channel-samples, so criterion's time per element is the cost per channel per sample. The last
+//! pair compares the look-ahead (11 samples) with the causal stage, both through `push`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use imuprep::model::arima::{ArimaChannelModel, ArimaModelFile};
@@ -96,6 +97,30 @@ fn bench(c: &mut Criterion) {
                 let mut acc = 0u32;
                 for smp in &block {
                     acc ^= st.process(black_box(*smp)).flags;
+                }
+                black_box(acc)
+            })
+        });
+    }
+    // The look-ahead (lookahead_samples = 11 = max_run + 1) against the causal stage in the same
+    // run: both through `push` into a reused buffer, as the pipeline calls them.
+    for (name, lookahead) in [
+        ("arima302_push_causal", 0usize),
+        ("arima302_push_lookahead11", 11),
+    ] {
+        let s = GrossErrorSettings {
+            lookahead_samples: lookahead,
+            ..Default::default()
+        };
+        let mut st = GrossErrorStage::new(s, Some(&models(0))).unwrap();
+        let mut out = Vec::with_capacity(4);
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let mut acc = 0u32;
+                for smp in &block {
+                    out.clear();
+                    st.push(black_box(*smp), &mut out);
+                    acc ^= out.first().map_or(0, |o| o.flags);
                 }
                 black_box(acc)
             })

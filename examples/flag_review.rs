@@ -10,7 +10,6 @@
 use imuprep::analysis::flag_review::{EventClass, review};
 use imuprep::io::csv::read_log;
 use imuprep::sample::{CHANNEL_NAMES, flags};
-use imuprep::stage::Stage;
 use imuprep::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -36,7 +35,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rate = desc.map(|d| d.sample_rate_hz).unwrap_or(100.0);
     let settings: GrossErrorSettings = table.try_into()?;
     let mut stage = GrossErrorStage::new(settings.clone(), None)?;
-    let out: Vec<_> = raw.iter().map(|s| stage.process(*s)).collect();
+    // With `lookahead_samples=L`, the stage's look-ahead revises events that prove to be motion.
+    let out = imuprep::stage::run_through(&mut stage, &raw);
     let scored = raw.len().saturating_sub(settings.warmup_samples) * CHANNEL_NAMES.len();
     let events = review(&raw, &out);
     let replaced: usize = events.iter().map(|e| e.len).sum();
@@ -48,6 +48,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let samples_with_flag = out.iter().filter(|s| s.has(flags::REPLACED)).count();
     println!("samples with any channel replaced: {samples_with_flag}");
+    if settings.lookahead_samples > 0 {
+        let (ev, n): (u64, u64) = (0..CHANNEL_NAMES.len())
+            .map(|c| stage.channel_counters(c))
+            .fold((0, 0), |a, k| (a.0 + k.revised_events, a.1 + k.revised));
+        println!(
+            "look-ahead {} samples: {ev} events ({n} channel-samples) restored as motion",
+            settings.lookahead_samples
+        );
+    }
     println!(
         "{:<13} {:>7} {:>9} {:>10}  largest (channel, t s, length, size in local σ)",
         "class", "events", "samples", "rate"

@@ -22,6 +22,8 @@ pub struct Health {
     pub samples_out: u64,
     /// Output samples carrying each flag of interest.
     pub flagged_replaced: u64,
+    /// Restored by the gross-error stage's look-ahead (motion, not a gross error).
+    pub flagged_revised: u64,
     pub flagged_gap: u64,
     pub flagged_duplicate: u64,
     pub flagged_non_finite: u64,
@@ -40,6 +42,7 @@ impl Health {
         self.samples_out += 1;
         let f = s.flags;
         self.flagged_replaced += u64::from(f & flags::REPLACED != 0);
+        self.flagged_revised += u64::from(f & flags::REVISED != 0);
         self.flagged_gap += u64::from(f & flags::GAP != 0);
         self.flagged_duplicate += u64::from(f & flags::DUPLICATE != 0);
         self.flagged_non_finite += u64::from(f & flags::NON_FINITE != 0);
@@ -93,10 +96,11 @@ impl Health {
         );
         let _ = writeln!(
             o,
-            "  samples    : {} in, {} out; flagged: {} replaced, {} non-finite, {} saturated, {} warming up, {} bias removed",
+            "  samples    : {} in, {} out; flagged: {} replaced, {} revised, {} non-finite, {} saturated, {} warming up, {} bias removed",
             self.samples_in,
             self.samples_out,
             self.flagged_replaced,
+            self.flagged_revised,
             self.flagged_non_finite,
             self.flagged_saturated,
             self.flagged_warming_up,
@@ -202,15 +206,21 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
                 Some(SourceEvent::Samples(batch, stats)) => {
                     health.decoder = stats;
                     health.samples_in += batch.len() as u64;
-                    let mut out = batch;
-                    for s in out.iter_mut() {
-                        *s = pipeline.process(*s);
-                        health.count(s);
-                    }
-                    let out = Arc::new(out);
-                    for k in &sinks {
-                        k.offer(SinkItem::Samples(out.clone())).await;
-                    }
+                    let out = if pipeline.lookahead() == 0 {
+                        let mut out = batch;
+                        for s in out.iter_mut() {
+                            *s = pipeline.process(*s);
+                        }
+                        out
+                    } else {
+                        // A stage looks ahead: what comes out lags what went in.
+                        let mut out = Vec::with_capacity(batch.len());
+                        for s in batch {
+                            pipeline.push(s, &mut out);
+                        }
+                        out
+                    };
+                    publish(out, &mut health, &sinks).await;
                 }
                 Some(SourceEvent::Descriptor(d)) => {
                     health.descriptor = Some(d);
@@ -244,6 +254,10 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
         }
     }
     src.abort();
+    // Samples a stage still holds for its look-ahead are final now: publish them too.
+    let mut held = Vec::new();
+    pipeline.flush(&mut held);
+    publish(held, &mut health, &sinks).await;
     // Dropping each sink's sender closes its queue; the task flushes and ends.
     let mut closing: Vec<_> = sinks
         .into_iter()
@@ -257,6 +271,20 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     health.stages = pipeline.counters();
     health.sinks = closing.iter().map(|(n, s, _)| s.report(n)).collect();
     Ok(health)
+}
+
+/// Count a batch of pipeline output and offer it to every sink.
+async fn publish(out: Vec<Sample>, health: &mut Health, sinks: &[SinkHandle]) {
+    if out.is_empty() {
+        return;
+    }
+    for s in &out {
+        health.count(s);
+    }
+    let out = Arc::new(out);
+    for k in sinks {
+        k.offer(SinkItem::Samples(out.clone())).await;
+    }
 }
 
 fn fill(h: &mut Health, p: &Pipeline, sinks: &[SinkHandle], started: Instant) {

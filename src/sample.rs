@@ -51,8 +51,14 @@ pub mod flags {
     pub const REPLACED: u32 = 1 << 15;
     /// Per-channel replaced bits: bit `16 + c` for channel `c` (gx..az).
     pub const REPLACED_CH0: u32 = 1 << 16;
+    /// All six per-channel replaced bits.
+    pub const REPLACED_ANY: u32 = 0x3f << 16;
     /// A learned effect (temperature, vibration line, g-sensitivity, step) was compensated.
     pub const EFFECT_COMPENSATED: u32 = 1 << 22;
+    /// The gross-error stage's look-ahead restored the raw value of a channel it had replaced:
+    /// the event proved to be motion (a level change, a smooth excursion, a shock on several
+    /// axes). The channel's replaced bit is cleared.
+    pub const REVISED: u32 = 1 << 23;
 
     /// Per-channel replaced bit for channel `c`.
     #[inline]

@@ -71,9 +71,10 @@ fn binary_exits_non_zero_and_starts_nothing_on_a_bad_config() {
 }
 
 #[test]
-fn gross_error_tail_settings_out_of_range_are_named() {
+fn gross_error_tail_and_look_ahead_settings_out_of_range_are_named() {
     // The tail adaptation's two knobs: a negative gain would narrow the gate on heavy tails, a
     // window below 100 samples estimates a 0.27 % share from less than one expected exceedance.
+    // A look-ahead beyond 1000 samples (5 s at 200 Hz) is a typo, not a lag anyone wants.
     // The section is not enabled: its settings are checked all the same.
     let text = r#"
 [source]
@@ -82,9 +83,11 @@ kind = "stdin"
 [gross_error.settings]
 tail_gain = -0.5
 tail_window_samples = 50.0
+lookahead_samples = 5000
 "#;
     let e = Config::from_toml_str(text, Path::new(".")).unwrap_err();
     let s = e.to_string();
     assert!(s.contains("tail_gain = -0.5"), "{s}");
     assert!(s.contains("tail_window_samples = 50"), "{s}");
+    assert!(s.contains("lookahead_samples = 5000"), "{s}");
 }

@@ -14,7 +14,6 @@ use crate::model::arima::ArimaModelFile;
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use crate::sim::truth::{Effect, TruthRow};
 use crate::sim::{Emission, Scenario, SimError, Simulator};
-use crate::stage::Stage;
 use crate::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
 use bytes::BytesMut;
 use serde::Serialize;
@@ -112,7 +111,7 @@ pub fn compare_detectors(
         ));
     }
     let mut stage = GrossErrorStage::new(settings.clone(), model).map_err(|e| e.to_string())?;
-    let online: Vec<Sample> = samples.iter().map(|s| stage.process(*s)).collect();
+    let online: Vec<Sample> = crate::stage::run_through(&mut stage, samples);
     type Offline = fn(&[f64]) -> Result<Detection, detectors::DetectorError>;
     let offline: [(&str, Offline); 5] = [
         ("global 3-sigma", detectors::three_sigma),

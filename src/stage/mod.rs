@@ -19,23 +19,48 @@ use crate::sample::Sample;
 pub trait Stage: Send {
     /// Short name used in health reports (`gross_error`, `bias`, ...).
     fn name(&self) -> &'static str;
-    /// Process one sample and return it (corrected, flagged).
+    /// Process one sample and return it (corrected, flagged), with no look-ahead.
     fn process(&mut self, s: Sample) -> Sample;
+    /// Process one sample with the stage's configured look-ahead: append to `out` the samples
+    /// that are now final, oldest first. A stage with a look-ahead of `L` samples holds the
+    /// last `L` and emits each once `L` newer ones have been seen, so it may revise what it did
+    /// to a held sample; [`Stage::flush`] emits the held ones at the end of the input. Without a
+    /// look-ahead (the default) this is [`Stage::process`], one sample in, the same one out.
+    fn push(&mut self, s: Sample, out: &mut Vec<Sample>) {
+        out.push(self.process(s));
+    }
+    /// End of input: append the samples still held by [`Stage::push`], oldest first.
+    fn flush(&mut self, _out: &mut Vec<Sample>) {}
+    /// Look-ahead of [`Stage::push`], in samples (the output's lag behind the input).
+    fn lookahead(&self) -> usize {
+        0
+    }
     /// Named counters for the health report; called at report intervals, never per sample.
     fn counters(&self) -> Vec<(String, u64)> {
         Vec::new()
     }
 }
 
-/// An ordered list of stages; `process` threads a sample through all of them.
+/// An ordered list of stages; `push` threads a sample through all of them.
 #[derive(Default)]
 pub struct Pipeline {
     stages: Vec<Box<dyn Stage>>,
+    /// Sum of the stages' look-aheads: the output's lag behind the input, in samples.
+    lookahead: usize,
+    /// Scratch buffers of `push`/`flush` (reused: no allocation per sample once grown).
+    a: Vec<Sample>,
+    b: Vec<Sample>,
 }
 
 impl Pipeline {
     pub fn new(stages: Vec<Box<dyn Stage>>) -> Self {
-        Pipeline { stages }
+        let lookahead = stages.iter().map(|s| s.lookahead()).sum();
+        Pipeline {
+            stages,
+            lookahead,
+            a: Vec::with_capacity(8),
+            b: Vec::with_capacity(8),
+        }
     }
 
     /// A pipeline with no stages: samples pass through unchanged.
@@ -43,12 +68,68 @@ impl Pipeline {
         Pipeline::default()
     }
 
+    /// One sample through every stage, with no look-ahead (a stage's configured look-ahead is
+    /// not applied: use [`Pipeline::push`] and [`Pipeline::flush`] for that).
     #[inline]
     pub fn process(&mut self, mut s: Sample) -> Sample {
         for st in self.stages.iter_mut() {
             s = st.process(s);
         }
         s
+    }
+
+    /// The output's lag behind the input, in samples (0: every `push` emits its own sample).
+    pub fn lookahead(&self) -> usize {
+        self.lookahead
+    }
+
+    /// One sample in; append to `out` the samples that are final now, oldest first (exactly
+    /// one when no stage looks ahead). Together with [`Pipeline::flush`] every sample comes out
+    /// once, in order.
+    #[inline]
+    pub fn push(&mut self, s: Sample, out: &mut Vec<Sample>) {
+        if self.lookahead == 0 {
+            out.push(self.process(s));
+            return;
+        }
+        self.a.clear();
+        self.a.push(s);
+        self.through(0, out);
+    }
+
+    /// End of input: append every sample still held by a stage, oldest first.
+    pub fn flush(&mut self, out: &mut Vec<Sample>) {
+        for i in 0..self.stages.len() {
+            self.a.clear();
+            self.stages[i].flush(&mut self.a);
+            self.through(i + 1, out);
+        }
+    }
+
+    /// The samples in `self.a` through stages `from..`, then appended to `out`.
+    fn through(&mut self, from: usize, out: &mut Vec<Sample>) {
+        for st in self.stages[from..].iter_mut() {
+            if self.a.is_empty() {
+                return;
+            }
+            self.b.clear();
+            for s in self.a.drain(..) {
+                st.push(s, &mut self.b);
+            }
+            std::mem::swap(&mut self.a, &mut self.b);
+        }
+        out.append(&mut self.a);
+    }
+
+    /// A whole recording through the pipeline, look-ahead included: one output per input, in
+    /// order.
+    pub fn run_all(&mut self, samples: &[Sample]) -> Vec<Sample> {
+        let mut out = Vec::with_capacity(samples.len());
+        for s in samples {
+            self.push(*s, &mut out);
+        }
+        self.flush(&mut out);
+        out
     }
 
     pub fn stage_names(&self) -> Vec<&'static str> {
@@ -65,4 +146,14 @@ impl Pipeline {
         }
         out
     }
+}
+
+/// A whole recording through one stage, its look-ahead included: one output per input, in order.
+pub fn run_through(stage: &mut dyn Stage, samples: &[Sample]) -> Vec<Sample> {
+    let mut out = Vec::with_capacity(samples.len());
+    for s in samples {
+        stage.push(*s, &mut out);
+    }
+    stage.flush(&mut out);
+    out
 }
