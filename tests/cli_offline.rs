@@ -27,18 +27,22 @@ fn fit_and_replay(fit_args: &[&str]) -> (tempfile::TempDir, String, serde_json::
         ),
     )
     .unwrap();
-    let summary = dir.path().join("s.json");
+    let h = replay_summary("replay/static_bench.log", &cfg);
+    (dir, fit_out, h)
+}
+
+/// `replay LOG --config CFG`: the health summary (JSON, written beside CFG).
+fn replay_summary(log: &str, cfg: &Path) -> serde_json::Value {
+    let summary = cfg.with_extension("summary.json");
     run(&[
         "replay",
-        "replay/static_bench.log",
+        log,
         "--config",
         cfg.to_str().unwrap(),
         "--summary-json",
         summary.to_str().unwrap(),
     ]);
-    let h: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(summary).unwrap()).unwrap();
-    (dir, fit_out, h)
+    serde_json::from_str(&std::fs::read_to_string(summary).unwrap()).unwrap()
 }
 
 /// What a replay with fitted models must show.
@@ -128,16 +132,7 @@ fn replay_drive(lookahead: usize) -> serde_json::Value {
         format!("[source]\nkind = \"stdin\"\n[gross_error]\nenabled = true\n[gross_error.settings]\nlookahead_samples = {lookahead}\n[bias]\nenabled = true\n"),
     )
     .unwrap();
-    let summary = dir.path().join("s.json");
-    run(&[
-        "replay",
-        "replay/drive.log",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--summary-json",
-        summary.to_str().unwrap(),
-    ]);
-    serde_json::from_str(&std::fs::read_to_string(summary).unwrap()).unwrap()
+    replay_summary("replay/drive.log", &cfg)
 }
 
 #[test]

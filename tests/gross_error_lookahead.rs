@@ -8,7 +8,9 @@
 //! Every stream is seeded white noise of σ = 0.01 on all six channels, with a white-noise model
 //! of that σ given (no warm-up); events are placed 300 samples apart so the trackers settle.
 
-use imuprep::model::arima::{ArimaChannelModel, ArimaModelFile};
+mod common;
+
+use imuprep::model::arima::ArimaModelFile;
 use imuprep::rng::Rng;
 use imuprep::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use imuprep::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
@@ -24,17 +26,7 @@ fn models() -> ArimaModelFile {
     ArimaModelFile {
         channels: CHANNEL_NAMES
             .iter()
-            .map(|c| ArimaChannelModel {
-                channel: c.to_string(),
-                p: 0,
-                d: 0,
-                q: 0,
-                constant: 0.0,
-                ar: vec![],
-                ma: vec![],
-                sigma: SIGMA,
-                diagnostics: None,
-            })
+            .map(|c| common::white_arima(c, SIGMA))
             .collect(),
     }
 }

@@ -2,6 +2,8 @@
 //! saturated input, warm-up identification, gaps, scale tracking, and manoeuvres on seeded
 //! synthetic drives.
 
+mod common;
+
 use imuprep::analysis::gate_sweep::{SyntheticSpec, run_stage, score_run, synthetic_stream};
 use imuprep::model::arima::{ArimaChannelModel, ArimaModelFile};
 use imuprep::rng::Rng;
@@ -32,17 +34,7 @@ fn gz_only(mut s: GrossErrorSettings) -> GrossErrorSettings {
 
 fn white_model(sigma: f64) -> ArimaModelFile {
     ArimaModelFile {
-        channels: vec![ArimaChannelModel {
-            channel: "gz".into(),
-            p: 0,
-            d: 0,
-            q: 0,
-            constant: 0.0,
-            ar: vec![],
-            ma: vec![],
-            sigma,
-            diagnostics: None,
-        }],
+        channels: vec![common::white_arima("gz", sigma)],
     }
 }
 

@@ -81,3 +81,18 @@ pub fn run_cli(args: &[&str]) -> String {
     assert!(out.status.success(), "imuprep {args:?} failed:\n{text}");
     text
 }
+
+/// A white-noise ARIMA(0,0,0) model of `channel` with innovation σ `sigma`, mean 0.
+pub fn white_arima(channel: &str, sigma: f64) -> imuprep::model::arima::ArimaChannelModel {
+    imuprep::model::arima::ArimaChannelModel {
+        channel: channel.to_string(),
+        p: 0,
+        d: 0,
+        q: 0,
+        constant: 0.0,
+        ar: vec![],
+        ma: vec![],
+        sigma,
+        diagnostics: None,
+    }
+}
