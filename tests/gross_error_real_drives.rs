@@ -5,15 +5,12 @@
 //! `docs/flag_review_real.md`).
 //!
 //! Two configurations, measured on the same input:
-//! - the default, causal stage (no look-ahead, tail gain 0.75);
-//! - the look-ahead profile: `lookahead_samples = 11` (max_run + 1: every event seen to its end)
-//!   with `tail_gain = 1.5` — the stronger widening the look-ahead's gain in precision pays for
-//!   on the ADIS16405 injected-spike target (`tests/gross_error_real.rs`).
-//!
-//! Measured (2026-11-23): rtklibexplorer 6.4e-4 → 6.6e-5, comma2k19 4.9e-3 → 5.1e-4. The
-//! target is asserted where it is met (rtklibexplorer with the look-ahead); comma2k19 is a 60-s
-//! clip whose warm-up runs while driving and whose two jolts every channel sees leave 13
-//! replaced channel-samples of 25 536, so the test only asserts that the look-ahead lowers it.
+//! - the default, causal stage: the target is missed (measured 2026-11-23: 6.4e-4 on
+//!   rtklibexplorer, 4.9e-3 on comma2k19), asserted only to stay what the look-ahead improves on;
+//! - with the look-ahead, `lookahead_samples = 11` (max_run + 1: every event seen to its end):
+//!   measured 9.5e-5 (30 channel-samples of 317 160) and 7.8e-5 (2 of 25 536), within the
+//!   target. comma2k19's 1e-4 is 2.5 channel-samples: its two left are the impulses the
+//!   independent classifier calls genuine glitches.
 
 mod common;
 
@@ -34,27 +31,23 @@ fn flag_rate(samples: &[Sample], settings: GrossErrorSettings) -> f64 {
     f64::from(n) / ((out.len() - from) * N_CHANNELS) as f64
 }
 
-fn look_ahead_profile() -> GrossErrorSettings {
-    GrossErrorSettings {
-        lookahead_samples: 11,
-        tail_gain: 1.5,
-        ..GrossErrorSettings::default()
-    }
-}
-
 /// (causal, look-ahead) flag rates of one recording, or None when it is absent.
 fn rates(rel: &str) -> Option<(f64, f64)> {
     let path = common::real_data(rel)?;
     let (_, samples) = read_csv(&path, &ImportOptions::default()).unwrap();
     let causal = flag_rate(&samples, GrossErrorSettings::default());
-    let ahead = flag_rate(&samples, look_ahead_profile());
+    let look_ahead = GrossErrorSettings {
+        lookahead_samples: 11,
+        ..GrossErrorSettings::default()
+    };
+    let ahead = flag_rate(&samples, look_ahead);
     eprintln!("{rel}: flag rate {causal:.2e} causal (default), {ahead:.2e} with the look-ahead");
     Some((causal, ahead))
 }
 
-#[test]
-fn rtklibexplorer_drive_meets_the_flag_rate_target_with_the_look_ahead() {
-    let Some((causal, ahead)) = rates("rtklibexplorer_drive_walk/drive_0708_imu.csv") else {
+/// The target with the look-ahead; the causal rate for contrast.
+fn assert_target(rel: &str) {
+    let Some((causal, ahead)) = rates(rel) else {
         return;
     };
     assert!(ahead <= 1e-4, "look-ahead flag rate {ahead:.2e}");
@@ -62,9 +55,11 @@ fn rtklibexplorer_drive_meets_the_flag_rate_target_with_the_look_ahead() {
 }
 
 #[test]
-fn comma2k19_flag_rate_falls_with_the_look_ahead() {
-    let Some((causal, ahead)) = rates("comma2k19_car_segment/imu.csv") else {
-        return;
-    };
-    assert!(ahead < causal / 3.0, "{ahead:.2e} vs {causal:.2e}");
+fn rtklibexplorer_drive_meets_the_flag_rate_target_with_the_look_ahead() {
+    assert_target("rtklibexplorer_drive_walk/drive_0708_imu.csv");
+}
+
+#[test]
+fn comma2k19_meets_the_flag_rate_target_with_the_look_ahead() {
+    assert_target("comma2k19_car_segment/imu.csv");
 }
