@@ -125,7 +125,10 @@ pub fn compare_detectors(
     let mut rows = Vec::new();
     for d in 0..=offline.len() {
         let name = if d == 0 {
-            format!("online ARIMA gate (k {})", settings.k)
+            match settings.lookahead_samples {
+                0 => format!("online ARIMA gate (k {})", settings.k),
+                l => format!("online ARIMA gate (k {}, look-ahead {l})", settings.k),
+            }
         } else {
             offline[d - 1].0.to_string()
         };
@@ -230,16 +233,23 @@ impl DetectorReport {
             },
             self.gross_samples
         );
+        let w = self
+            .rows
+            .iter()
+            .map(|r| r.detector.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(30);
         let _ = writeln!(
             o,
-            "{:<30} {:>9} {:>9} {:>7} {:>12} {:>8} {:>10}",
+            "{:<w$} {:>9} {:>9} {:>7} {:>12} {:>8} {:>10}",
             "detector", "precision", "recall", "F1", "false alarms", "(count)", "RMSE ratio"
         );
         for r in &self.rows {
             let p = &r.pooled;
             let _ = writeln!(
                 o,
-                "{:<30} {:>9.4} {:>9.4} {:>7.4} {:>12.2e} {:>8} {:>10.3}",
+                "{:<w$} {:>9.4} {:>9.4} {:>7.4} {:>12.2e} {:>8} {:>10.3}",
                 r.detector,
                 p.precision,
                 p.recall,
