@@ -206,20 +206,11 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
                 Some(SourceEvent::Samples(batch, stats)) => {
                     health.decoder = stats;
                     health.samples_in += batch.len() as u64;
-                    let out = if pipeline.lookahead() == 0 {
-                        let mut out = batch;
-                        for s in out.iter_mut() {
-                            *s = pipeline.process(*s);
-                        }
-                        out
-                    } else {
-                        // A stage looks ahead: what comes out lags what went in.
-                        let mut out = Vec::with_capacity(batch.len());
-                        for s in batch {
-                            pipeline.push(s, &mut out);
-                        }
-                        out
-                    };
+                    // With a stage that looks ahead, what comes out lags what went in.
+                    let mut out = Vec::with_capacity(batch.len());
+                    for s in batch {
+                        pipeline.push(s, &mut out);
+                    }
                     publish(out, &mut health, &sinks).await;
                 }
                 Some(SourceEvent::Descriptor(d)) => {

@@ -1005,6 +1005,13 @@ impl GrossErrorStage {
         pred.update(r, r - xh);
         let clean = finite && !saturated;
         if ch.run == 0 {
+            ch.counters.runs += 1;
+            ch.first_raw = v;
+            ch.first_ratio2 = if clean {
+                nu * nu / (r2 * ch.sig2)
+            } else {
+                f64::INFINITY
+            };
             ch.ev_start = idx;
             ch.ev_jump2 = ch.jump2;
             ch.ev_max_step2 = 0.0;
@@ -1014,15 +1021,6 @@ impl GrossErrorStage {
             ch.ev_max_step2 = ch.ev_max_step2.max(d * d);
         } else {
             ch.ev_clean = false;
-        }
-        if ch.run == 0 {
-            ch.counters.runs += 1;
-            ch.first_raw = v;
-            ch.first_ratio2 = if finite && !saturated {
-                nu * nu / (r2 * ch.sig2)
-            } else {
-                f64::INFINITY
-            };
         }
         ch.run = ch.run.saturating_add(1);
         ch.h = ch.h.saturating_add(1);
@@ -1045,7 +1043,6 @@ impl GrossErrorStage {
             self.ch[c].ended = None;
             self.ch[c].big <<= 1;
             let v = s.channel(c);
-
             let saturated = s.flags & flags::sat_ch(c) != 0;
             if !v.is_finite() {
                 s.flags |= flags::NON_FINITE;
