@@ -43,28 +43,18 @@ fn a_late_bias_step_is_found_by_the_windowed_scan_only() {
             .filter(|(t, _)| (t - 900.0).abs() <= 1.0)
             .collect::<Vec<_>>()
     };
-    let one = dir.path().join("one");
-    let text = common::run_cli(&[
-        "diagnose",
-        log_s,
-        "--channel",
-        "gz",
-        "--out-dir",
-        one.to_str().unwrap(),
-    ]);
+    // `diagnose LOG --channel gz EXTRA... --out-dir DIR/OUT`: its report.
+    let diagnose_gz = |out: &str, extra: &[&str]| {
+        let out_dir = dir.path().join(out);
+        let mut args = vec!["diagnose", log_s, "--channel", "gz"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out-dir", out_dir.to_str().unwrap()]);
+        common::run_cli(&args)
+    };
+    let text = diagnose_gz("one", &[]);
     // The step lies in the single run's test part: it can never be a candidate there.
     assert!(near(&steps(&text)).is_empty(), "{text}");
-    let win = dir.path().join("win");
-    let text = common::run_cli(&[
-        "diagnose",
-        log_s,
-        "--channel",
-        "gz",
-        "--window-s",
-        "600",
-        "--out-dir",
-        win.to_str().unwrap(),
-    ]);
+    let text = diagnose_gz("win", &["--window-s", "600"]);
     let summary = text.split("summary:").nth(1).expect("a summary");
     let found = near(&steps(summary));
     eprintln!("steps near 900 s in the windowed scan: {found:?} (true size {true_size:.4e})");
@@ -75,5 +65,6 @@ fn a_late_bias_step_is_found_by_the_windowed_scan_only() {
             .any(|(_, s)| (s - true_size).abs() <= 0.1 * true_size),
         "{summary}"
     );
+    let win = dir.path().join("win");
     assert!(win.join("window_810s").join("bias.toml").exists());
 }
