@@ -221,6 +221,23 @@ enum Cmd {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Do-no-harm audit: the embedded default pipeline over every recording under DIR (CSV as
+    /// `import` reads it, or native logs), scored against the targets of issue 12, with seeded
+    /// injections of spikes, outliers and bad values.
+    Audit {
+        /// Folder searched recursively for .csv, .csv.gz and .log recordings.
+        #[arg(default_value = "../shared/data/real")]
+        dir: PathBuf,
+        /// Seed of every injection.
+        #[arg(long, default_value_t = 12)]
+        seed: u64,
+        /// Audit this config's pipeline instead of the embedded default.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Write the report as JSON here.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Write a log's samples as canonical CSV plus seq and flags.
     Export {
         log: PathBuf,
@@ -257,6 +274,15 @@ fn load_config(path: &Option<PathBuf>) -> Result<Config> {
 
 fn run(cmd: Cmd) -> Result<ExitCode> {
     match cmd {
+        Cmd::Audit {
+            dir,
+            seed,
+            config,
+            json,
+        } => {
+            let cfg = load_config(&config)?;
+            audit(&dir, seed, cfg, json)
+        }
         Cmd::Run {
             config,
             out,
@@ -424,6 +450,26 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
     }
+}
+
+fn audit(dir: &std::path::Path, seed: u64, cfg: Config, json: Option<PathBuf>) -> Result<ExitCode> {
+    let report = imuprep::report::audit::audit_dir(dir, seed, &cfg)
+        .with_context(|| format!("cannot read {}", dir.display()))?;
+    anyhow::ensure!(
+        !report.recordings.is_empty(),
+        "no recording under {} could be audited",
+        dir.display()
+    );
+    print!("{report}");
+    if let Some(p) = json {
+        std::fs::write(&p, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("cannot write {}", p.display()))?;
+    }
+    Ok(if report.missed().is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
 }
 
 fn add_outs(cfg: &mut Config, outs: &[String]) -> Result<()> {

@@ -1,0 +1,729 @@
+//! `imuprep audit`: the embedded default pipeline over every real recording under a folder, scored
+//! against issue 12's "do no harm" targets, plus seeded injections that check gross errors are
+//! still caught.
+//!
+//! Per recording (read with the same importer as `imuprep import`, nothing tuned):
+//!
+//! - **Class.** *Static* when the 1-s windows' three-axis gyro sd is stationary (99th percentile
+//!   < 2 × the 1st: ADIS16405 1.2, MPU6050 1.1, every moving recording ≥ 5.7); else *moving*.
+//!   The rule uses the data only, never the file name.
+//! - **Replacements.** Channel-samples the pipeline replaced, per channel and per channel-sample.
+//!   Target ≤ 1e-4 on every channel (static) and over each moving recording.
+//! - **Invented angle.** `|Σ (out − raw + bias) dt|` per gyro axis: what replacements (not the
+//!   bias) changed in the integrated angle. Target ≤ 0.5°.
+//! - **Bias.** Share of samples with the bias removed by a running estimate (`BIAS_REMOVED`, not
+//!   `WARMING_UP`), the time to the first; on static recordings ≥ 95 % and ≤ 60 s. Around every
+//!   motion onset (STILL → not STILL, and a 1-s window of the raw gyro 3× rougher than the
+//!   recording's quietest within the next second) with an estimate running 2 s before it, the
+//!   estimate may not move by more than its own published 3σ from then to 2 s after the onset
+//!   (so motion that leaked in before the detector noticed it counts too).
+//! - **Allan (static).** Overlapping ADEV of output and raw per channel at octave τ, from the
+//!   first sample with a running bias estimate on (the step from 0 to the removed turn-on bias
+//!   is the stage's job, not noise it adds); the output
+//!   may exceed the raw by at most the estimate's 1σ, `1/√(2(K−1))` with `K = ⌊T/τ⌋`
+//!   non-overlapping clusters (conservative: the overlapping estimate is tighter). At the longest
+//!   τ with K ≥ 9 the gyro output must be ≥ 50 % lower than raw on records of an hour or more
+//!   (where the model can see drift); shorter records report it without a target.
+//! - **Injections** (seeded; each on a copy of the recording, scored after the gross-error stage's
+//!   warm-up):
+//!   - moving: spikes and runs (2..=10 samples, one third of events) of 6–30 local σ, one
+//!     channel at a time, ≥ 40 samples apart (gross errors are rare; each is judged on its own),
+//!     local σ = robust spread of the raw channel within ±100 samples (the `flag_review` scale);
+//!     F1 of the replaced flags against the labels ≥ 0.95;
+//!   - static: 2 % isolated outliers of 8–30 robust σ on each gyro channel; recall and
+//!     precision ≥ 0.9;
+//!   - all: NaN, ±Inf, ±1e30 on random channels, a quarter of them inside the first 2000
+//!     samples (the warm-up); none may reach the output unflagged or non-finite.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::analysis::allan::overlapping_adev;
+use crate::config::Config;
+use crate::frame::Descriptor;
+use crate::io::csv::{ImportOptions, read_csv, read_log};
+use crate::rng::Rng;
+use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
+
+const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
+/// Samples skipped before scoring injections (the gross-error stage's default warm-up).
+const SCORE_FROM: usize = 2000;
+/// Least spacing of injected spikes and runs, samples (any channel).
+const SPIKE_GAP: usize = 40;
+
+/// Static or moving, decided from the data (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Class {
+    Static,
+    Moving,
+}
+
+/// One target, measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct TargetRow {
+    pub recording: String,
+    /// Channel name, or "all".
+    pub channel: String,
+    pub target: String,
+    pub measured: f64,
+    /// The limit, and whether the measured value must stay at most (true) or at least it.
+    pub limit: f64,
+    pub at_most: bool,
+    pub met: bool,
+}
+
+/// Per-channel figures of the default run.
+#[derive(Debug, Clone, Serialize)]
+pub struct ChannelFigures {
+    pub replaced: u64,
+    pub replaced_rate: f64,
+    pub suspect: u64,
+    /// Gyro only: invented angle, degrees.
+    pub invented_angle_deg: Option<f64>,
+    /// Static only: worst (out/raw ADEV) / (1 + 1σ) over τ (≤ 1 meets the target), and the
+    /// output's ADEV change at the longest τ with ≥ 9 clusters, %.
+    pub adev_worst_ratio: Option<f64>,
+    pub adev_longest_change_pct: Option<f64>,
+}
+
+/// One recording's audit.
+#[derive(Debug, Clone, Serialize)]
+pub struct RecordingAudit {
+    pub name: String,
+    pub path: PathBuf,
+    pub class: Class,
+    pub samples: usize,
+    pub rate_hz: f64,
+    pub duration_s: f64,
+    pub channels: Vec<ChannelFigures>,
+    /// Share of samples with a running bias estimate removed, and the time to the first, s.
+    pub bias_engaged_share: f64,
+    pub bias_first_engaged_s: Option<f64>,
+    /// Share of samples flagged STILL.
+    pub still_share: f64,
+    /// Motion onsets seen, and the worst bias move across one in its own 3σ.
+    pub onsets: usize,
+    pub onset_worst_move_3sigma: f64,
+    pub injected_f1: Option<f64>,
+    pub contamination_recall: Option<f64>,
+    pub contamination_precision: Option<f64>,
+    pub bad_values_injected: usize,
+    pub bad_values_unflagged: usize,
+    pub targets: Vec<TargetRow>,
+}
+
+/// A recording that could not be audited, and why.
+#[derive(Debug, Clone, Serialize)]
+pub struct Skipped {
+    pub path: PathBuf,
+    pub reason: String,
+}
+
+/// The whole audit.
+#[derive(Debug, Clone, Serialize)]
+pub struct AuditReport {
+    pub dir: PathBuf,
+    pub recordings: Vec<RecordingAudit>,
+    pub skipped: Vec<Skipped>,
+}
+
+impl AuditReport {
+    /// Every target row of every recording.
+    pub fn targets(&self) -> impl Iterator<Item = &TargetRow> {
+        self.recordings.iter().flat_map(|r| r.targets.iter())
+    }
+
+    /// Targets missed.
+    pub fn missed(&self) -> Vec<&TargetRow> {
+        self.targets().filter(|t| !t.met).collect()
+    }
+}
+
+/// Recordings under `dir`: `.log` (native), `.csv`, `.csv.gz`, sorted by path.
+pub fn find_recordings(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d)? {
+            let p = e?.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let n = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
+                if n.ends_with(".log") || n.ends_with(".csv") || n.ends_with(".csv.gz") {
+                    out.push(p);
+                }
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
+}
+
+/// Read a recording as `imuprep import` (CSV) or `imuprep replay` (native log) would.
+pub fn load_recording(path: &Path) -> Result<(Descriptor, Vec<Sample>), String> {
+    let name = path.to_string_lossy();
+    if name.ends_with(".log") {
+        let (d, s, _) = read_log(path).map_err(|e| e.to_string())?;
+        Ok((d.unwrap_or_default(), s))
+    } else {
+        read_csv(path, &ImportOptions::default()).map_err(|e| e.to_string())
+    }
+}
+
+/// `cfg`'s pipeline over `samples` (the stages' rate from the descriptor).
+pub fn run_config(
+    cfg: &Config,
+    desc: &Descriptor,
+    samples: &[Sample],
+) -> Result<Vec<Sample>, String> {
+    let mut cfg = cfg.clone();
+    cfg.stages.set_sample_rate(desc.sample_rate_hz);
+    let mut p = cfg.stages.build()?;
+    Ok(p.run_all(samples))
+}
+
+/// Three-axis gyro sd of consecutive 1-s windows.
+fn window_gyro_sd(samples: &[Sample], rate_hz: f64) -> Vec<f64> {
+    let w = (rate_hz.round() as usize).max(10);
+    samples
+        .chunks_exact(w)
+        .map(|c| {
+            let n = c.len() as f64;
+            (0..3)
+                .map(|a| {
+                    let m = c.iter().map(|s| s.gyro[a]).sum::<f64>() / n;
+                    c.iter().map(|s| (s.gyro[a] - m).powi(2)).sum::<f64>() / n
+                })
+                .sum::<f64>()
+                .sqrt()
+        })
+        .filter(|v| v.is_finite())
+        .collect()
+}
+
+fn percentile(v: &mut [f64], p: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * p).round() as usize]
+}
+
+/// Static or moving (module docs).
+pub fn classify(samples: &[Sample], rate_hz: f64) -> Class {
+    let mut sd = window_gyro_sd(samples, rate_hz);
+    let lo = percentile(&mut sd, 0.01);
+    let hi = percentile(&mut sd, 0.99);
+    if hi < 2.0 * lo {
+        Class::Static
+    } else {
+        Class::Moving
+    }
+}
+
+/// Robust σ (MAD) of a slice of finite values.
+fn robust_sigma(v: &[f64]) -> f64 {
+    let mut a: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if a.is_empty() {
+        return 0.0;
+    }
+    let med = percentile(&mut a, 0.5);
+    let mut d: Vec<f64> = a.iter().map(|x| (x - med).abs()).collect();
+    let mad = percentile(&mut d, 0.5) * MAD_TO_SIGMA;
+    if mad > 0.0 {
+        mad
+    } else {
+        // Quantised to about one LSB: the mean absolute deviation (× √(π/2)).
+        d.iter().sum::<f64>() / d.len() as f64 * (std::f64::consts::PI / 2.0).sqrt()
+    }
+}
+
+/// Local robust spread of channel `c` around each sample (±100 samples, every 25th sample
+/// computed and held: the scale changes slowly).
+fn local_sigma(samples: &[Sample], c: usize) -> Vec<f64> {
+    let n = samples.len();
+    let x: Vec<f64> = samples.iter().map(|s| s.channel(c)).collect();
+    let mut out = vec![0.0; n];
+    let mut i = 0;
+    while i < n {
+        let lo = i.saturating_sub(100);
+        let hi = (i + 101).min(n);
+        let s = robust_sigma(&x[lo..hi]);
+        for o in out.iter_mut().skip(i).take(25) {
+            *o = s;
+        }
+        i += 25;
+    }
+    out
+}
+
+/// Seeded spikes and runs (module docs); returns the labels. Events land on a random channel at
+/// 1.2e-2 per sample (2e-3 per channel-sample) and never within `SPIKE_GAP` samples of another
+/// event on any channel: gross errors are rare in real data, and each one must be judged on its
+/// own, not against a neighbour's.
+pub fn inject_spikes(samples: &mut [Sample], seed: u64) -> Vec<[bool; N_CHANNELS]> {
+    let n = samples.len();
+    let mut labels = vec![[false; N_CHANNELS]; n];
+    let sig: Vec<Vec<f64>> = (0..N_CHANNELS).map(|c| local_sigma(samples, c)).collect();
+    let mut rng = Rng::new(seed);
+    let mut i = SCORE_FROM.min(n);
+    while i < n {
+        if rng.uniform() < 6.0 * 2e-3 {
+            let c = rng.below(N_CHANNELS as u64) as usize;
+            let len = if rng.uniform() < 1.0 / 3.0 {
+                2 + rng.below(9) as usize
+            } else {
+                1
+            };
+            let sign = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+            for j in i..(i + len).min(n) {
+                let a = 6.0 + 24.0 * rng.uniform();
+                let v = samples[j].channel(c) + sign * a * sig[c][i].max(1e-9);
+                samples[j].set_channel(c, v);
+                labels[j][c] = true;
+            }
+            i += len + SPIKE_GAP;
+        } else {
+            i += 1;
+        }
+    }
+    labels
+}
+
+/// 2 % isolated outliers of 8–30 robust σ on each gyro channel; returns the labels.
+#[allow(clippy::needless_range_loop)] // c indexes labels rows and the channel alike
+pub fn inject_outliers(samples: &mut [Sample], seed: u64) -> Vec<[bool; N_CHANNELS]> {
+    let n = samples.len();
+    let mut labels = vec![[false; N_CHANNELS]; n];
+    for c in 0..3 {
+        let x: Vec<f64> = samples.iter().map(|s| s.channel(c)).collect();
+        let s = robust_sigma(&x).max(1e-9);
+        let mut rng = Rng::fork(seed, 100 + c as u64);
+        let mut i = SCORE_FROM.min(n);
+        while i < n {
+            if rng.uniform() < 0.02 {
+                let sign = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+                let a = 8.0 + 22.0 * rng.uniform();
+                samples[i].set_channel(c, x[i] + sign * a * s);
+                labels[i][c] = true;
+                i += 2; // isolated
+            } else {
+                i += 1;
+            }
+        }
+    }
+    labels
+}
+
+/// Seeded bad values (module docs); returns their (index, channel).
+pub fn inject_bad_values(samples: &mut [Sample], seed: u64) -> Vec<(usize, usize)> {
+    let n = samples.len();
+    let mut rng = Rng::new(seed);
+    let bad = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e30, -1e30];
+    let mut at = Vec::new();
+    for k in 0..40 {
+        let i = if k % 4 == 0 {
+            rng.below(SCORE_FROM.min(n) as u64) as usize
+        } else {
+            rng.below(n as u64) as usize
+        };
+        let c = rng.below(N_CHANNELS as u64) as usize;
+        samples[i].set_channel(c, bad[k % bad.len()]);
+        at.push((i, c));
+    }
+    at.sort();
+    at.dedup();
+    at
+}
+
+/// Channel `c` of `s` is flagged as bad or replaced.
+fn flagged_bad(s: &Sample, c: usize) -> bool {
+    s.flags & (flags::NON_FINITE | flags::replaced_ch(c) | flags::sat_ch(c)) != 0
+}
+
+/// F1, recall and precision of the replaced flags against labels, after `SCORE_FROM`.
+fn score(out: &[Sample], labels: &[[bool; N_CHANNELS]], chans: &[usize]) -> (f64, f64, f64) {
+    let (mut tp, mut fp, mut fn_) = (0u64, 0u64, 0u64);
+    for (s, l) in out.iter().zip(labels).skip(SCORE_FROM) {
+        for &c in chans {
+            let r = s.flags & flags::replaced_ch(c) != 0;
+            match (r, l[c]) {
+                (true, true) => tp += 1,
+                (true, false) => fp += 1,
+                (false, true) => fn_ += 1,
+                _ => {}
+            }
+        }
+    }
+    let p = tp as f64 / (tp + fp).max(1) as f64;
+    let r = tp as f64 / (tp + fn_).max(1) as f64;
+    let f1 = if p + r > 0.0 {
+        2.0 * p * r / (p + r)
+    } else {
+        0.0
+    };
+    (f1, r, p)
+}
+
+/// Audit one recording (already loaded) with `cfg`'s pipeline. `seed` drives every injection.
+pub fn audit_recording(
+    name: &str,
+    path: &Path,
+    desc: &Descriptor,
+    raw: &[Sample],
+    seed: u64,
+    cfg: &Config,
+) -> Result<RecordingAudit, String> {
+    let n = raw.len();
+    if n < 3 * SCORE_FROM {
+        return Err(format!("{n} samples: too short to audit"));
+    }
+    let rate = if desc.sample_rate_hz > 0.0 {
+        desc.sample_rate_hz
+    } else {
+        100.0
+    };
+    let duration_s = raw[n - 1].t_s() - raw[0].t_s();
+    let class = classify(raw, rate);
+    let out = run_config(cfg, desc, raw)?;
+    let mut targets = Vec::new();
+    let mut target = |channel: &str, what: &str, measured: f64, limit: f64, at_most: bool| {
+        let met = if at_most {
+            measured <= limit
+        } else {
+            measured >= limit
+        };
+        targets.push(TargetRow {
+            recording: name.to_string(),
+            channel: channel.to_string(),
+            target: what.to_string(),
+            measured,
+            limit,
+            at_most,
+            met,
+        });
+    };
+
+    // Replacements, suspects, invented angle.
+    let max_dt = 5.0 / rate;
+    let mut channels = Vec::new();
+    for (c, name) in CHANNEL_NAMES.iter().enumerate() {
+        let bit = flags::replaced_ch(c);
+        let replaced = out.iter().filter(|s| s.flags & bit != 0).count() as u64;
+        let suspect = out
+            .iter()
+            .filter(|s| s.flags & flags::suspect_ch(c) != 0)
+            .count() as u64;
+        let invented = (c < 3).then(|| {
+            let mut acc = 0.0;
+            for i in 1..n {
+                let dt = ((out[i].t_ns as f64 - out[i - 1].t_ns as f64) * 1e-9).clamp(0.0, max_dt);
+                let d = out[i].channel(c) - raw[i].channel(c) + f64::from(out[i].bias[c]);
+                if d.is_finite() {
+                    acc += d * dt;
+                }
+            }
+            acc.abs().to_degrees()
+        });
+        let rate_c = replaced as f64 / n as f64;
+        target(name, "replaced per channel-sample", rate_c, 1e-4, true);
+        if let Some(a) = invented {
+            target(name, "invented angle, deg", a, 0.5, true);
+        }
+        channels.push(ChannelFigures {
+            replaced,
+            replaced_rate: rate_c,
+            suspect,
+            invented_angle_deg: invented,
+            adev_worst_ratio: None,
+            adev_longest_change_pct: None,
+        });
+    }
+
+    // Bias engagement and motion onsets.
+    let engaged = |s: &Sample| s.has(flags::BIAS_REMOVED) && !s.has(flags::WARMING_UP);
+    let n_engaged = out.iter().filter(|s| engaged(s)).count();
+    let bias_first_engaged_s = out
+        .iter()
+        .position(engaged)
+        .map(|i| out[i].t_s() - out[0].t_s());
+    let still_share = out.iter().filter(|s| s.has(flags::STILL)).count() as f64 / n as f64;
+    let w2 = (2.0 * rate).round() as usize;
+    let mut onsets = 0;
+    let mut worst_onset: f64 = 0.0;
+    // A motion onset, independently of the detector: within 1 s after it a 1-s window of the raw
+    // gyro is at least 3× as rough (three-axis sd) as the recording's quietest windows.
+    let sd_1s = window_gyro_sd(raw, rate);
+    let quiet = percentile(&mut sd_1s.clone(), 0.01);
+    let w1 = (rate.round() as usize).max(10);
+    let moving_after =
+        |i: usize| (i / w1..=(i + w1) / w1).any(|k| sd_1s.get(k).is_some_and(|v| *v > 3.0 * quiet));
+    for i in 1..n {
+        if out[i - 1].has(flags::STILL)
+            && !out[i].has(flags::STILL)
+            && i > w2
+            && i + w2 < n
+            && moving_after(i)
+        {
+            // Only an estimate that existed before the onset can be moved by it.
+            if !(engaged(&out[i - w2]) && out[i - w2].bias_sd[..3].iter().all(|v| *v > 0.0)) {
+                continue;
+            }
+            onsets += 1;
+            for c in 0..3 {
+                let b0 = f64::from(out[i - w2].bias[c]);
+                for s in &out[i - w2..=i + w2] {
+                    let sd = f64::from(s.bias_sd[c]);
+                    let mv = (f64::from(s.bias[c]) - b0).abs();
+                    if sd > 0.0 && engaged(s) {
+                        worst_onset = worst_onset.max(mv / (3.0 * sd));
+                    }
+                }
+            }
+        }
+    }
+    if onsets > 0 {
+        target(
+            "gyro",
+            "bias move across a motion onset / own 3σ",
+            worst_onset,
+            1.0,
+            true,
+        );
+    }
+    let bias_engaged_share = n_engaged as f64 / n as f64;
+    if class == Class::Static {
+        target(
+            "gyro",
+            "bias engaged, share",
+            bias_engaged_share,
+            0.95,
+            false,
+        );
+        target(
+            "gyro",
+            "bias engaged after, s",
+            bias_first_engaged_s.unwrap_or(f64::INFINITY),
+            60.0,
+            true,
+        );
+        // Allan deviation, output against raw, from the first sample with a running estimate
+        // on: removing a turn-on bias is a step from 0 to the bias, the stage doing its job, not
+        // noise it adds.
+        let from = out.iter().position(engaged).unwrap_or(n);
+        let span_s = if from < n {
+            out[n - 1].t_s() - out[from].t_s()
+        } else {
+            0.0
+        };
+        for (c, fig) in channels.iter_mut().enumerate() {
+            if n - from < 1000 {
+                break;
+            }
+            let x: Vec<f64> = raw[from..].iter().map(|s| s.channel(c)).collect();
+            let y: Vec<f64> = out[from..].iter().map(|s| s.channel(c)).collect();
+            if x.iter().chain(&y).any(|v| !v.is_finite()) {
+                continue;
+            }
+            let a = overlapping_adev(&x, rate);
+            let b = overlapping_adev(&y, rate);
+            let mut worst: f64 = 0.0;
+            let mut longest = None;
+            for i in 0..a.tau_s.len().min(b.tau_s.len()) {
+                let k = (span_s / a.tau_s[i]).floor();
+                if k < 2.0 {
+                    break;
+                }
+                let one_sigma = 1.0 / (2.0 * (k - 1.0)).sqrt();
+                worst = worst.max(b.adev[i] / a.adev[i] / (1.0 + one_sigma));
+                if k >= 9.0 {
+                    longest = Some(100.0 * (b.adev[i] / a.adev[i] - 1.0));
+                }
+            }
+            fig.adev_worst_ratio = Some(worst);
+            fig.adev_longest_change_pct = longest;
+            target(
+                CHANNEL_NAMES[c],
+                "ADEV out/raw / (1 + 1σ), worst τ",
+                worst,
+                1.0,
+                true,
+            );
+            if c < 3
+                && duration_s >= 3600.0
+                && let Some(l) = longest
+            {
+                target(
+                    CHANNEL_NAMES[c],
+                    "ADEV change at the longest τ (≥ 9 clusters), %",
+                    l,
+                    -50.0,
+                    true,
+                );
+            }
+        }
+    }
+
+    // Injections.
+    let mut injected_f1 = None;
+    let (mut contamination_recall, mut contamination_precision) = (None, None);
+    match class {
+        Class::Moving => {
+            let mut x = raw.to_vec();
+            let labels = inject_spikes(&mut x, seed);
+            let o = run_config(cfg, desc, &x)?;
+            let (f1, _, _) = score(&o, &labels, &[0, 1, 2, 3, 4, 5]);
+            injected_f1 = Some(f1);
+            target("all", "injected spikes and runs, F1", f1, 0.95, false);
+        }
+        Class::Static => {
+            let mut x = raw.to_vec();
+            let labels = inject_outliers(&mut x, seed);
+            let o = run_config(cfg, desc, &x)?;
+            let (_, r, p) = score(&o, &labels, &[0, 1, 2]);
+            contamination_recall = Some(r);
+            contamination_precision = Some(p);
+            target("gyro", "2 % outliers > 8σ, recall", r, 0.9, false);
+            target("gyro", "2 % outliers > 8σ, precision", p, 0.9, false);
+        }
+    }
+    let mut x = raw.to_vec();
+    let bad = inject_bad_values(&mut x, seed);
+    let o = run_config(cfg, desc, &x)?;
+    let unflagged = bad
+        .iter()
+        .filter(|&&(i, c)| !flagged_bad(&o[i], c) || !o[i].channel(c).is_finite())
+        .count();
+    target(
+        "all",
+        "NaN/Inf/1e30 passed unflagged or non-finite",
+        unflagged as f64,
+        0.0,
+        true,
+    );
+
+    Ok(RecordingAudit {
+        name: name.to_string(),
+        path: path.to_path_buf(),
+        class,
+        samples: n,
+        rate_hz: rate,
+        duration_s,
+        channels,
+        bias_engaged_share,
+        bias_first_engaged_s,
+        still_share,
+        onsets,
+        onset_worst_move_3sigma: worst_onset,
+        injected_f1,
+        contamination_recall,
+        contamination_precision,
+        bad_values_injected: bad.len(),
+        bad_values_unflagged: unflagged,
+        targets,
+    })
+}
+
+/// Audit every recording under `dir` (a file that does not import is listed as skipped).
+pub fn audit_dir(dir: &Path, seed: u64, cfg: &Config) -> std::io::Result<AuditReport> {
+    let mut report = AuditReport {
+        dir: dir.to_path_buf(),
+        recordings: Vec::new(),
+        skipped: Vec::new(),
+    };
+    for p in find_recordings(dir)? {
+        let name = p
+            .strip_prefix(dir)
+            .unwrap_or(&p)
+            .to_string_lossy()
+            .into_owned();
+        let res =
+            load_recording(&p).and_then(|(d, s)| audit_recording(&name, &p, &d, &s, seed, cfg));
+        match res {
+            Ok(r) => report.recordings.push(r),
+            Err(reason) => report.skipped.push(Skipped { path: p, reason }),
+        }
+    }
+    Ok(report)
+}
+
+impl std::fmt::Display for AuditReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "imuprep audit of {} (embedded default config)",
+            self.dir.display()
+        )?;
+        for r in &self.recordings {
+            writeln!(
+                f,
+                "\n## {} — {:?}, {} samples, {:.1} s at {:.2} Hz",
+                r.name, r.class, r.samples, r.duration_s, r.rate_hz
+            )?;
+            writeln!(
+                f,
+                "still {:.1} %, bias engaged {:.1} % (first at {}), {} motion onsets (worst bias move {:.2} × 3σ)",
+                100.0 * r.still_share,
+                100.0 * r.bias_engaged_share,
+                r.bias_first_engaged_s
+                    .map_or("never".to_string(), |t| format!("{t:.1} s")),
+                r.onsets,
+                r.onset_worst_move_3sigma
+            )?;
+            writeln!(
+                f,
+                "| ch | replaced | per ch-sample | suspect | invented angle ° | ADEV worst out/raw/(1+1σ) | ADEV at longest τ |"
+            )?;
+            writeln!(f, "|---|---|---|---|---|---|---|")?;
+            for (c, ch) in r.channels.iter().enumerate() {
+                let opt =
+                    |v: Option<f64>, p: usize| v.map_or("–".to_string(), |v| format!("{v:.p$}"));
+                writeln!(
+                    f,
+                    "| {} | {} | {:.1e} | {} | {} | {} | {} |",
+                    CHANNEL_NAMES[c],
+                    ch.replaced,
+                    ch.replaced_rate,
+                    ch.suspect,
+                    opt(ch.invented_angle_deg, 3),
+                    opt(ch.adev_worst_ratio, 3),
+                    ch.adev_longest_change_pct
+                        .map_or("–".to_string(), |v| format!("{v:+.1} %")),
+                )?;
+            }
+            if let Some(f1) = r.injected_f1 {
+                writeln!(f, "injected spikes and runs: F1 {f1:.4}")?;
+            }
+            if let (Some(rc), Some(p)) = (r.contamination_recall, r.contamination_precision) {
+                writeln!(f, "2 % gyro outliers: recall {rc:.4}, precision {p:.4}")?;
+            }
+            writeln!(
+                f,
+                "bad values: {} injected, {} unflagged or non-finite in the output",
+                r.bad_values_injected, r.bad_values_unflagged
+            )?;
+        }
+        for s in &self.skipped {
+            writeln!(f, "\nskipped {}: {}", s.path.display(), s.reason)?;
+        }
+        let missed = self.missed();
+        let total = self.targets().count();
+        writeln!(f, "\ntargets: {} of {} met", total - missed.len(), total)?;
+        for t in missed {
+            writeln!(
+                f,
+                "  MISSED {} {}: {} = {:.4} (limit {} {})",
+                t.recording,
+                t.channel,
+                t.target,
+                t.measured,
+                if t.at_most { "≤" } else { "≥" },
+                t.limit
+            )?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,4 @@
+//! The commands' drivers: each runs library code over recordings and returns a report type
+//! (`Display` for people, `Serialize` for machines).
+
+pub mod audit;
