@@ -48,15 +48,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let samples_with_flag = out.iter().filter(|s| s.has(flags::REPLACED)).count();
     println!("samples with any channel replaced: {samples_with_flag}");
-    if settings.lookahead_samples > 0 {
-        let (ev, n): (u64, u64) = (0..CHANNEL_NAMES.len())
-            .map(|c| stage.channel_counters(c))
-            .fold((0, 0), |a, k| (a.0 + k.revised_events, a.1 + k.revised));
-        println!(
-            "look-ahead {} samples: {ev} events ({n} channel-samples) restored as motion",
-            settings.lookahead_samples
-        );
-    }
+    let (ev, n): (u64, u64) = (0..CHANNEL_NAMES.len())
+        .map(|c| stage.channel_counters(c))
+        .fold((0, 0), |a, k| (a.0 + k.suspect_events, a.1 + k.suspect));
+    println!("{ev} events ({n} channel-samples) not confirmed: passed, flagged suspect");
     println!(
         "{:<13} {:>7} {:>9} {:>10}  largest (channel, t s, length, size in local σ)",
         "class", "events", "samples", "rate"

@@ -22,8 +22,10 @@ pub struct Health {
     pub samples_out: u64,
     /// Output samples carrying each flag of interest.
     pub flagged_replaced: u64,
-    /// Restored by the gross-error stage's look-ahead (motion, not a gross error).
-    pub flagged_revised: u64,
+    /// Any channel suspect: the gross-error gate fired, the evidence did not confirm it.
+    pub flagged_suspect: u64,
+    /// Stale repeats of the previous sample.
+    pub flagged_repeated: u64,
     pub flagged_gap: u64,
     pub flagged_duplicate: u64,
     pub flagged_non_finite: u64,
@@ -42,7 +44,8 @@ impl Health {
         self.samples_out += 1;
         let f = s.flags;
         self.flagged_replaced += u64::from(f & flags::REPLACED != 0);
-        self.flagged_revised += u64::from(f & flags::REVISED != 0);
+        self.flagged_suspect += u64::from(f & flags::SUSPECT_ANY != 0);
+        self.flagged_repeated += u64::from(f & flags::REPEATED != 0);
         self.flagged_gap += u64::from(f & flags::GAP != 0);
         self.flagged_duplicate += u64::from(f & flags::DUPLICATE != 0);
         self.flagged_non_finite += u64::from(f & flags::NON_FINITE != 0);
@@ -96,11 +99,12 @@ impl Health {
         );
         let _ = writeln!(
             o,
-            "  samples    : {} in, {} out; flagged: {} replaced, {} revised, {} non-finite, {} saturated, {} warming up, {} bias removed",
+            "  samples    : {} in, {} out; flagged: {} replaced, {} suspect, {} repeated, {} non-finite, {} saturated, {} warming up, {} bias removed",
             self.samples_in,
             self.samples_out,
             self.flagged_replaced,
-            self.flagged_revised,
+            self.flagged_suspect,
+            self.flagged_repeated,
             self.flagged_non_finite,
             self.flagged_saturated,
             self.flagged_warming_up,

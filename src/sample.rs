@@ -55,15 +55,26 @@ pub mod flags {
     pub const REPLACED_ANY: u32 = 0x3f << 16;
     /// A learned effect (temperature, vibration line, g-sensitivity, step) was compensated.
     pub const EFFECT_COMPENSATED: u32 = 1 << 22;
-    /// The gross-error stage's look-ahead restored the raw value of a channel it had replaced:
-    /// the event proved to be motion (a level change, a smooth excursion, a shock on several
-    /// axes). The channel's replaced bit is cleared.
-    pub const REVISED: u32 = 1 << 23;
+    /// Per-channel suspect bits, bit `24 + c` for channel `c`: the gross-error gate fired on
+    /// this value but the evidence did not show a gross error (it may be real motion), so the
+    /// value was passed unchanged. A filter may down-weight it; nothing was replaced.
+    pub const SUSPECT_CH0: u32 = 1 << 24;
+    /// All six per-channel suspect bits.
+    pub const SUSPECT_ANY: u32 = 0x3f << 24;
+    /// All six channels are bit-identical to the previous sample's: a stale repeat (a logger
+    /// writing faster than its sensor, a stuck bus), not a new measurement. Stages give it the
+    /// verdicts of the measurement it repeats and learn nothing from it.
+    pub const REPEATED: u32 = 1 << 30;
 
     /// Per-channel replaced bit for channel `c`.
     #[inline]
     pub const fn replaced_ch(c: usize) -> u32 {
         REPLACED_CH0 << c
+    }
+    /// Per-channel suspect bit for channel `c`.
+    #[inline]
+    pub const fn suspect_ch(c: usize) -> u32 {
+        SUSPECT_CH0 << c
     }
     /// Saturation bit for channel `c`.
     #[inline]

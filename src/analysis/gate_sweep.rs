@@ -22,7 +22,6 @@ use serde::{Deserialize, Serialize};
 use crate::analysis::detectors::{DetectorScore, score};
 use crate::rng::Rng;
 use crate::sample::{N_CHANNELS, Sample, flags};
-use crate::stage::Stage;
 use crate::stage::gross_error::{GrossErrorError, GrossErrorSettings, GrossErrorStage};
 
 /// Specification of a synthetic channel.
@@ -227,27 +226,31 @@ pub fn run_stage(
     s.enabled = [false; N_CHANNELS];
     s.enabled[channel] = true;
     let mut stage = GrossErrorStage::new(s, None)?;
-    let mut replaced = Vec::with_capacity(x.len());
-    let mut corrected = Vec::with_capacity(x.len());
-    let mut active_from = x.len();
-    let mut level_changes = 0;
-    for (i, &v) in x.iter().enumerate() {
-        let mut smp = Sample {
-            seq: i as u32,
-            t_ns: i as u64 * 5_000_000,
-            ..Sample::default()
-        };
-        smp.set_channel(channel, v);
-        let out = stage.process(smp);
-        if !out.has(flags::WARMING_UP) && active_from == x.len() {
-            active_from = i;
-        }
-        if out.has(flags::LEVEL_CHANGE) {
-            level_changes += 1;
-        }
-        replaced.push(out.has(flags::replaced_ch(channel)));
-        corrected.push(out.channel(channel));
-    }
+    let input: Vec<Sample> = x
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| {
+            let mut smp = Sample {
+                seq: i as u32,
+                t_ns: i as u64 * 5_000_000,
+                ..Sample::default()
+            };
+            smp.set_channel(channel, v);
+            smp
+        })
+        .collect();
+    // Through the stage as the pipeline runs it: look-ahead and all.
+    let out = crate::stage::run_through(&mut stage, &input);
+    let active_from = out
+        .iter()
+        .position(|o| !o.has(flags::WARMING_UP))
+        .unwrap_or(x.len());
+    let level_changes = out.iter().filter(|o| o.has(flags::LEVEL_CHANGE)).count() as u64;
+    let replaced = out
+        .iter()
+        .map(|o| o.has(flags::replaced_ch(channel)))
+        .collect();
+    let corrected = out.iter().map(|o| o.channel(channel)).collect();
     Ok(StageRun {
         replaced,
         corrected,

@@ -1,0 +1,682 @@
+//! The causal one-step gate of one channel (Chen, Li & Zhang 2013, §2.5): which samples are
+//! gross-error *candidates*. Heap-free per sample.
+//!
+//! With the model's one-step prediction `x̂_t` from the channel's own (corrected) history, `h` =
+//! samples since the last accepted one (1 outside runs and gaps), and `ℓ_J`, `s` a fast Holt
+//! local linear trend of the accepted samples:
+//!
+//! ```text
+//!   ν_t = x_t − x̂_t                          innovation (an h-step forecast error inside a run)
+//!   J_t = x_t − (ℓ_J + h·s)                   jump from the local trend of the accepted samples
+//!   outside a run:  candidate ⇔ ν_t² > k² r_h² σ² ∧ J_t² > k_Δ² σ_Δ²   (r_h² = Σ_{i<h} ψ_i²)
+//!   inside a run:   candidate ⇔ ν_t² > run_k² σ²                 (hysteresis, run_k < k)
+//!   at max_run:     candidate ⇔ ν_t² > k² r_h² σ²                (else a level change)
+//!   always:         x_t non-finite, implausible or saturated
+//! ```
+//!
+//! A candidate's prediction (or the median of recent predictions) — never the sample — enters the
+//! history, so a spike cannot drag the forecast. At most `max_run` successive candidates; the next
+//! one is a genuine level change: the predictor restarts there. The release rule ends an event
+//! whose first sample was borderline (< `release_k` σ) and that continues smoothly. Whether a
+//! candidate is *replaced* is not decided here: the stage confirms it two-sidedly (`confirm.rs`).
+//!
+//! **Scale tracking.** σ² and σ_Δ² are exponentially weighted, Huber-winsorised mean squares of
+//! accepted one-step samples (`min(ν², c²σ²)/β(c)`, c = 2.5, β(c) = E[min(Z², c²)]): candidates
+//! do not contribute, unusual accepted samples at most c²σ².
+//!
+//! **Tail adaptation.** The share p₃ of accepted one-step innovations beyond 3σ is tracked (EWMA,
+//! `tail_window_samples`); while it exceeds twice the Gaussian 0.27 % the gate widens to
+//! `k (1 + β ln(p₃ / 0.54 %))`: heavy-tailed vibration makes fewer candidates.
+//!
+//! **Saturation.** A saturated sample is a candidate and never enters the history. A saturated
+//! stretch longer than `max_run` freezes the predictor (its values pass, flagged, as the best
+//! measurement there is: the rail), and the first unsaturated sample re-seeds it — so a
+//! saturated value can never become a prediction the model trusts.
+//!
+//! **Gaps.** Up to `bridge_max_missing` missing frames are bridged with the model's own
+//! predictions (h grows, the gate widens by r_h); longer gaps reset, and the next good sample
+//! re-seeds the history.
+//!
+//! **No model.** A channel without a fitted model collects `warmup_samples` finite samples,
+//! cleans them with a Hampel filter, and identifies its ARIMA model once (the only allocation
+//! after construction); a failed identification falls back to white noise about the median.
+
+// `!(v > 0.0)` is used on purpose: unlike `v <= 0.0` it is also true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use super::settings::{GrossErrorSettings, MAX_MEDIAN_WINDOW, Replacement};
+use crate::analysis::detectors::hampel;
+use crate::analysis::special::{normal_cdf, normal_pdf};
+use crate::model::arima::{
+    ArimaChannelModel, ArimaError, ArimaPredictor, MAX_D, MAX_P, identify, psi_weights,
+};
+
+/// Huber clip of the scale trackers, in units of the current scale.
+const SCALE_CLIP: f64 = 2.5;
+/// Warm-up samples used to seed the predictor before it is run through the rest (p + d ≤ 4).
+pub const RAW_KEEP: usize = MAX_P + MAX_D;
+/// Horizons for which the h-step widening r_h is tabulated (longer horizons use the last).
+const PSI_N: usize = 32;
+/// P(|Z| > 3) for a standard normal Z.
+const GAUSS_TAIL3: f64 = 0.002_699_796;
+/// Tail adaptation: no widening until the tracked share beyond 3σ is this many times Gaussian.
+const TAIL_DEAD_ZONE: f64 = 2.0;
+/// 1/Φ⁻¹(¾): MAD → σ for Gaussian data.
+const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
+
+/// Constants of the gate derived once from the settings.
+#[derive(Debug, Clone, Copy)]
+pub struct GateParams {
+    k2: f64,
+    jump_k2: f64,
+    run_k2: f64,
+    release_k2: f64,
+    tail_w: f64,
+    tail_gain: f64,
+    scale_w: f64,
+    inv_beta: f64,
+    keep_preds: bool,
+    median_window: usize,
+    confirm: bool,
+    max_run: u32,
+    slope_alpha: f64,
+    jump_level_alpha: f64,
+    level_alpha: f64,
+    trend_beta: f64,
+    scale_window: f64,
+}
+
+impl GateParams {
+    pub fn new(s: &GrossErrorSettings) -> Self {
+        GateParams {
+            k2: s.k * s.k,
+            jump_k2: s.jump_k * s.jump_k,
+            run_k2: s.run_k * s.run_k,
+            release_k2: s.release_k * s.release_k,
+            tail_w: if s.tail_window_samples > 0.0 {
+                1.0 / s.tail_window_samples
+            } else {
+                0.0
+            },
+            tail_gain: s.tail_gain,
+            scale_w: 1.0 / s.scale_window_samples,
+            inv_beta: 1.0 / huber_beta(SCALE_CLIP),
+            keep_preds: s.replacement == Replacement::MedianOfPredictions,
+            median_window: s.median_window,
+            confirm: s.confirm_jump,
+            max_run: s.max_run,
+            slope_alpha: s.slope_alpha,
+            jump_level_alpha: s.jump_level_alpha,
+            level_alpha: s.level_alpha,
+            trend_beta: s.trend_beta,
+            scale_window: s.scale_window_samples,
+        }
+    }
+}
+
+/// Health counters of one channel.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct ChannelCounters {
+    /// Samples replaced (confirmed gross errors and bad values).
+    pub replaced: u64,
+    /// Events (runs of successive candidates; a single spike is a run of 1).
+    pub runs: u64,
+    /// Events confirmed as gross errors (replaced).
+    pub confirmed: u64,
+    /// Events passed unchanged, flagged suspect, and their samples.
+    pub suspect_events: u64,
+    pub suspect: u64,
+    /// Runs longer than `max_run` accepted as level changes.
+    pub level_changes: u64,
+    /// Events released by the release rule.
+    pub released: u64,
+    /// Non-finite values seen.
+    pub non_finite: u64,
+    /// Finite values beyond the plausible range of any MEMS sensor.
+    pub implausible: u64,
+    /// Saturated samples seen.
+    pub saturated: u64,
+    /// Samples passed through while warming up.
+    pub warmup: u64,
+    /// Identifications that fell back to the white-noise model.
+    pub fallback_models: u64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    Disabled,
+    WarmingUp,
+    Active,
+}
+
+/// What the gate made of one sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Outcome {
+    /// Accepted into the history.
+    Passed,
+    /// A candidate; `pred` is what entered the history in its place.
+    Candidate { pred: f64 },
+    /// A run outlasted `max_run`: the value is accepted as a new level.
+    LevelChange,
+    /// The channel has no model yet.
+    Warming,
+}
+
+/// How the event that just ended ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct EventEnd {
+    /// Motion by the gate's own rules (a level change or the release rule).
+    pub motion: bool,
+}
+
+/// The gate of one channel.
+#[derive(Debug, Clone)]
+pub struct ChannelGate {
+    pub mode: Mode,
+    pred: Option<ArimaPredictor>,
+    /// Tracked innovation variance σ² and jump variance σ_Δ².
+    sig2: f64,
+    jump2: f64,
+    min_var: f64,
+    /// Successive candidates so far.
+    pub run: u32,
+    /// Samples since the last accepted one.
+    h: u32,
+    /// Jump reference: Holt level ℓ_J and slope s of the accepted samples.
+    x_acc: f64,
+    slope: f64,
+    r2: [f64; PSI_N],
+    needs_seed: bool,
+    /// A saturated stretch outlasted max_run: the predictor is frozen until it ends.
+    sat_frozen: bool,
+    tail3: f64,
+    first_raw: f64,
+    first_ratio2: f64,
+    /// The event that ended at the current sample.
+    pub ended: Option<EventEnd>,
+    preds: [f64; MAX_MEDIAN_WINDOW],
+    n_preds: usize,
+    pub counters: ChannelCounters,
+    warm: Vec<f64>,
+    pub model: Option<ArimaChannelModel>,
+}
+
+/// `E[min(Z², c²)]` for Z ~ N(0, 1).
+pub fn huber_beta(c: f64) -> f64 {
+    let p_in = 2.0 * normal_cdf(c) - 1.0;
+    p_in - 2.0 * c * normal_pdf(c) + c * c * (1.0 - p_in)
+}
+
+/// Var(x_t − x_{t−1}) implied by a model (from the ψ-weights of its ARMA part).
+pub fn model_increment_var(m: &ArimaChannelModel) -> f64 {
+    let mut psi_hist = [0.0f64; MAX_P];
+    let (mut g0, mut g1, mut prev) = (0.0, 0.0, 0.0);
+    for j in 0..5000 {
+        let mut psi = if j == 0 {
+            1.0
+        } else if j <= m.q {
+            m.ma[j - 1]
+        } else {
+            0.0
+        };
+        if j > 0 {
+            for (i, phi) in m.ar.iter().enumerate() {
+                if j > i {
+                    psi += phi * psi_hist[i];
+                }
+            }
+        }
+        g0 += psi * psi;
+        if j > 0 {
+            g1 += prev * psi;
+        }
+        prev = psi;
+        for i in (1..MAX_P).rev() {
+            psi_hist[i] = psi_hist[i - 1];
+        }
+        psi_hist[0] = psi;
+        if j > 50 && psi.abs() < 1e-12 {
+            break;
+        }
+    }
+    let s2 = m.sigma * m.sigma;
+    if m.d == 1 {
+        s2 * g0
+    } else {
+        2.0 * s2 * (g0 - g1)
+    }
+}
+
+/// One Holt step: forecast m = ℓ + b, then ℓ ← m + α (x − m), b ← b + β (ℓ_new − ℓ − b).
+#[inline]
+fn holt_step(level: f64, slope: f64, x: f64, alpha: f64, beta: f64) -> (f64, f64) {
+    let m = level + slope;
+    let l_new = m + alpha * (x - m);
+    (l_new, slope + beta * (l_new - level - slope))
+}
+
+/// Median of `v` (≤ 5 values, copied).
+pub fn median_small(v: &[f64]) -> f64 {
+    let mut a = [0.0f64; MAX_MEDIAN_WINDOW];
+    let n = v.len().min(MAX_MEDIAN_WINDOW);
+    a[..n].copy_from_slice(&v[..n]);
+    for i in 1..n {
+        let mut j = i;
+        while j > 0 && a[j - 1] > a[j] {
+            a.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+    if n % 2 == 1 {
+        a[n / 2]
+    } else {
+        0.5 * (a[n / 2 - 1] + a[n / 2])
+    }
+}
+
+/// Median and MAD-based σ of a slice (allocates; warm-up only).
+fn median_and_robust_sigma(v: &[f64]) -> (f64, f64) {
+    let mut a: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if a.is_empty() {
+        return (0.0, 0.0);
+    }
+    a.sort_by(f64::total_cmp);
+    let med = a[a.len() / 2];
+    let mut dev: Vec<f64> = a.iter().map(|x| (x - med).abs()).collect();
+    dev.sort_by(f64::total_cmp);
+    (med, MAD_TO_SIGMA * dev[dev.len() / 2])
+}
+
+impl ChannelGate {
+    /// A gate with scale floor `min_sigma`, enabled or not; it warms up until it gets a model.
+    pub fn new(enabled: bool, min_sigma: f64) -> Self {
+        let v = min_sigma * min_sigma;
+        ChannelGate {
+            mode: if enabled {
+                Mode::WarmingUp
+            } else {
+                Mode::Disabled
+            },
+            pred: None,
+            sig2: v,
+            jump2: v,
+            min_var: v,
+            run: 0,
+            h: 1,
+            x_acc: 0.0,
+            slope: 0.0,
+            r2: [1.0; PSI_N],
+            needs_seed: true,
+            sat_frozen: false,
+            tail3: GAUSS_TAIL3,
+            first_raw: 0.0,
+            first_ratio2: f64::INFINITY,
+            ended: None,
+            preds: [0.0; MAX_MEDIAN_WINDOW],
+            n_preds: 0,
+            counters: ChannelCounters::default(),
+            warm: Vec::new(),
+            model: None,
+        }
+    }
+
+    /// Reserve the warm-up buffer (construction time).
+    pub fn reserve_warmup(&mut self, n: usize) {
+        self.warm.reserve_exact(n);
+    }
+
+    /// Tracked innovation σ (None unless active).
+    pub fn sigma(&self) -> Option<f64> {
+        (self.mode == Mode::Active).then(|| self.sig2.sqrt())
+    }
+
+    /// Tracked jump σ_Δ (None unless active).
+    pub fn jump_sigma(&self) -> Option<f64> {
+        (self.mode == Mode::Active).then(|| self.jump2.sqrt())
+    }
+
+    /// Switch to `model`; with `warm` (warm-up samples, oldest first) the predictor is run
+    /// through them to set its history and the initial scales robustly.
+    pub fn activate(
+        &mut self,
+        p: &GateParams,
+        model: ArimaChannelModel,
+        warm: Option<&[f64]>,
+    ) -> Result<(), ArimaError> {
+        let mut pred = ArimaPredictor::new(&model, p.level_alpha, p.trend_beta)?;
+        let mut psi = [0.0; PSI_N];
+        psi_weights(&model, &mut psi);
+        let mut acc = 0.0;
+        for (r, ps) in self.r2.iter_mut().zip(&psi) {
+            acc += ps * ps;
+            *r = acc;
+        }
+        match warm {
+            Some(w) if w.len() > RAW_KEEP + 1 => {
+                let seed: Vec<f64> = w[..RAW_KEEP].iter().rev().copied().collect();
+                pred.reseed(&seed);
+                let mut innov = Vec::with_capacity(w.len());
+                let mut jumps = Vec::with_capacity(w.len());
+                let mut level = w[RAW_KEEP - 1];
+                let mut slope = 0.0;
+                for &v in &w[RAW_KEEP..] {
+                    let e = v - pred.predict();
+                    jumps.push(v - level - slope);
+                    innov.push(e);
+                    pred.update(v, e);
+                    (level, slope) = holt_step(level, slope, v, p.jump_level_alpha, p.slope_alpha);
+                }
+                // Initial scales from the most recent part of the window (conditions may have
+                // changed during the warm-up).
+                let recent = (p.scale_window.round() as usize).max(50).min(innov.len());
+                let (_, s_e) = median_and_robust_sigma(&innov[innov.len() - recent..]);
+                let (_, s_d) = median_and_robust_sigma(&jumps[jumps.len() - recent..]);
+                self.sig2 = (s_e * s_e).max(self.min_var);
+                self.jump2 = (s_d * s_d).max(self.min_var);
+                self.x_acc = level;
+                self.slope = slope;
+                self.needs_seed = false;
+            }
+            _ => {
+                self.sig2 = (model.sigma * model.sigma).max(self.min_var);
+                self.jump2 = model_increment_var(&model).max(self.min_var);
+                self.needs_seed = true;
+            }
+        }
+        self.pred = Some(pred);
+        self.model = Some(model);
+        self.mode = Mode::Active;
+        self.run = 0;
+        self.h = 1;
+        self.warm = Vec::new();
+        Ok(())
+    }
+
+    /// One warm-up sample (finite, plausible, unsaturated ones are kept); at `needed` samples
+    /// the channel identifies its model and activates. Returns true when it activated.
+    pub fn warm_push(
+        &mut self,
+        p: &GateParams,
+        v: Option<f64>,
+        needed: usize,
+        id: &crate::model::arima::IdentifySettings,
+        name: &str,
+    ) -> bool {
+        self.counters.warmup += 1;
+        if let Some(v) = v {
+            self.warm.push(v); // within the reserved capacity: no allocation
+        }
+        if self.warm.len() < needed {
+            return false;
+        }
+        let raw = std::mem::take(&mut self.warm);
+        // Hampel (half-width 10, k = 4): strips spikes and runs ≤ 10 before identification.
+        let cleaned = hampel(&raw, 10, 4.0)
+            .map(|r| r.corrected)
+            .unwrap_or_else(|_| raw.clone());
+        let white = |cleaned: &[f64], min_var: f64| {
+            let (med, sd) = median_and_robust_sigma(cleaned);
+            ArimaChannelModel {
+                channel: name.to_string(),
+                p: 0,
+                d: 0,
+                q: 0,
+                constant: med,
+                ar: vec![],
+                ma: vec![],
+                sigma: sd.max(min_var.sqrt()),
+                diagnostics: None,
+            }
+        };
+        let model = match identify(&cleaned, id) {
+            Ok(m) => m.to_channel_model(name),
+            Err(_) => {
+                self.counters.fallback_models += 1;
+                white(&cleaned, self.min_var)
+            }
+        };
+        if self.activate(p, model, Some(&cleaned)).is_err() {
+            // Cannot happen with validated settings; fall back regardless.
+            self.counters.fallback_models += 1;
+            let fallback = white(&cleaned, self.min_var);
+            // A white-noise model with a positive σ always validates.
+            let _ = self.activate(p, fallback, Some(&cleaned));
+        }
+        true
+    }
+
+    /// Advance through `m` missing samples with the model's own predictions (a bridged gap).
+    pub fn bridge(&mut self, m: u32) {
+        if let Some(pr) = self.pred.as_mut() {
+            for _ in 0..m {
+                let xh = pr.predict();
+                pr.update(xh, 0.0);
+            }
+            self.h = self.h.saturating_add(m);
+        }
+    }
+
+    /// Forget the history: the next good sample re-seeds it.
+    pub fn reset(&mut self) {
+        if self.mode == Mode::Active {
+            self.needs_seed = true;
+        }
+    }
+
+    /// The stage judged the current event to be motion: end it, and continue from the raw
+    /// values (newest first) instead of the predictions the event fed in.
+    pub fn resume_from(&mut self, recent_newest_first: &[f64]) {
+        let Some(pr) = self.pred.as_mut() else {
+            return;
+        };
+        let Some(&v) = recent_newest_first.first() else {
+            return;
+        };
+        pr.reseed(recent_newest_first);
+        self.x_acc = v;
+        self.slope = pr.slope();
+        self.run = 0;
+        self.h = 1;
+        self.n_preds = 0;
+        self.first_ratio2 = f64::INFINITY;
+    }
+
+    /// Gate one value of an active channel (`bad`: non-finite or implausible; `forced`: the jump
+    /// guard calls it a candidate). Per sample: no allocation.
+    #[inline]
+    pub fn gate(
+        &mut self,
+        p: &GateParams,
+        v: f64,
+        bad: bool,
+        saturated: bool,
+        forced: bool,
+    ) -> Outcome {
+        self.ended = None;
+        let k2 = {
+            let r = self.tail3 / (GAUSS_TAIL3 * TAIL_DEAD_ZONE);
+            if p.tail_w > 0.0 && r > 1.0 {
+                let f = 1.0 + p.tail_gain * r.ln();
+                p.k2 * f * f
+            } else {
+                p.k2
+            }
+        };
+        let Some(pred) = self.pred.as_mut() else {
+            return Outcome::Passed;
+        };
+        let usable = !bad && !saturated;
+        if saturated && !bad && self.sat_frozen {
+            // A saturated stretch beyond max_run: real motion beyond the sensor's range. The
+            // predictor stays frozen; the first unsaturated sample re-seeds it.
+            return Outcome::Passed;
+        }
+        if self.sat_frozen && usable {
+            self.sat_frozen = false;
+            self.needs_seed = true;
+        }
+        if self.needs_seed && usable {
+            pred.reseed(&[v]);
+            self.needs_seed = false;
+            self.n_preds = 0;
+            self.run = 0;
+            self.h = 1;
+            self.x_acc = v;
+            self.slope = 0.0;
+            return Outcome::Passed;
+        }
+        let xh = pred.predict();
+        if p.keep_preds {
+            for i in (1..MAX_MEDIAN_WINDOW).rev() {
+                self.preds[i] = self.preds[i - 1];
+            }
+            self.preds[0] = xh;
+            self.n_preds = (self.n_preds + 1).min(MAX_MEDIAN_WINDOW);
+        }
+        let h = self.h.max(1);
+        let r2 = self.r2[(h as usize).min(PSI_N) - 1];
+        let nu = v - xh;
+        let jump = v - self.x_acc - h as f64 * self.slope;
+        let strict = nu * nu > k2 * r2 * self.sig2;
+        let candidate = if !usable {
+            true
+        } else if self.run >= p.max_run {
+            strict
+        } else if self.run > 0 {
+            nu * nu > p.run_k2 * self.sig2 || forced
+        } else {
+            strict && (!p.confirm || jump * jump > p.jump_k2 * self.jump2) || forced
+        };
+        if !candidate {
+            pred.update(v, nu);
+            if h == 1 {
+                let cap = SCALE_CLIP * SCALE_CLIP;
+                if p.tail_w > 0.0 {
+                    let beyond = if nu * nu > 9.0 * self.sig2 { 1.0 } else { 0.0 };
+                    self.tail3 += p.tail_w * (beyond - self.tail3);
+                }
+                self.sig2 += p.scale_w * ((nu * nu).min(cap * self.sig2) * p.inv_beta - self.sig2);
+                self.jump2 +=
+                    p.scale_w * ((jump * jump).min(cap * self.jump2) * p.inv_beta - self.jump2);
+                self.sig2 = self.sig2.max(self.min_var);
+                self.jump2 = self.jump2.max(self.min_var);
+            }
+            if self.run > 0 {
+                self.ended = Some(EventEnd { motion: false });
+            }
+            if h == 1 {
+                (self.x_acc, self.slope) =
+                    holt_step(self.x_acc, self.slope, v, p.jump_level_alpha, p.slope_alpha);
+            } else {
+                self.slope += p.slope_alpha * ((v - self.x_acc) / h as f64 - self.slope);
+                self.x_acc = v;
+            }
+            self.h = 1;
+            self.run = 0;
+            return Outcome::Passed;
+        }
+        if usable && self.run >= 1 && self.first_ratio2 < p.release_k2 {
+            // Release rule: a borderline first sample, continued smoothly twice from the
+            // pre-event trend — a manoeuvre the forecast lagged, not a gross error.
+            let d = v - (self.first_raw + self.run as f64 * self.slope);
+            if d * d > p.jump_k2 * self.jump2 {
+                self.first_ratio2 = f64::INFINITY;
+            } else if self.run >= 2 {
+                self.slope += p.slope_alpha * ((v - self.first_raw) / self.run as f64 - self.slope);
+                self.x_acc = v;
+                pred.restart(v, self.slope);
+                self.h = 1;
+                self.run = 0;
+                self.n_preds = 0;
+                self.counters.released += 1;
+                self.ended = Some(EventEnd { motion: true });
+                return Outcome::Passed;
+            }
+        }
+        if self.run >= p.max_run {
+            if usable {
+                // Too long to be a gross error: accept the new level.
+                pred.restart(v, self.slope);
+                self.x_acc = v;
+                self.h = 1;
+                self.run = 0;
+                self.n_preds = 0;
+                self.counters.level_changes += 1;
+                self.ended = Some(EventEnd { motion: true });
+                return Outcome::LevelChange;
+            }
+            if saturated && !bad {
+                // Saturated beyond max_run: freeze (see the module docs).
+                self.sat_frozen = true;
+                self.run = 0;
+                self.h = 1;
+                self.counters.level_changes += 1;
+                self.ended = Some(EventEnd { motion: true });
+                return Outcome::Passed;
+            }
+        }
+        let r = if p.keep_preds && self.n_preds > 0 {
+            median_small(&self.preds[..self.n_preds.min(p.median_window)])
+        } else {
+            xh
+        };
+        pred.update(r, r - xh);
+        if self.run == 0 {
+            self.counters.runs += 1;
+            self.first_raw = v;
+            self.first_ratio2 = if usable {
+                nu * nu / (r2 * self.sig2)
+            } else {
+                f64::INFINITY
+            };
+        }
+        self.run = self.run.saturating_add(1);
+        self.h = self.h.saturating_add(1);
+        Outcome::Candidate { pred: r }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model(p: Vec<f64>, d: usize, q: Vec<f64>) -> ArimaChannelModel {
+        ArimaChannelModel {
+            channel: "gz".into(),
+            p: p.len(),
+            d,
+            q: q.len(),
+            constant: 0.0,
+            ar: p,
+            ma: q,
+            sigma: 2.0,
+            diagnostics: None,
+        }
+    }
+
+    #[test]
+    fn increment_variance_matches_closed_forms() {
+        // AR(1): Var(Δx) = 2σ²/(1+φ). MA(1): Var(Δx) = 2σ²(1+θ²−θ). d = 1 random walk: σ².
+        let v = model_increment_var(&model(vec![0.6], 0, vec![]));
+        assert!((v - 2.0 * 4.0 / 1.6).abs() < 1e-9, "{v}");
+        let v = model_increment_var(&model(vec![], 0, vec![0.4]));
+        assert!((v - 2.0 * 4.0 * (1.0 + 0.16 - 0.4)).abs() < 1e-9, "{v}");
+        let v = model_increment_var(&model(vec![], 1, vec![]));
+        assert!((v - 4.0).abs() < 1e-12, "{v}");
+    }
+
+    #[test]
+    fn huber_consistency_factor_is_the_clipped_second_moment() {
+        // scipy's quadrature of min(z², 6.25)φ(z) (tests/reference/special.py): 1e-12.
+        assert!((huber_beta(40.0) - 1.0).abs() < 1e-14);
+        assert!(huber_beta(0.0).abs() < 1e-15);
+        assert!((huber_beta(2.5) - 0.9775599834528068).abs() < 1e-12);
+    }
+
+    #[test]
+    fn median_of_small_windows() {
+        assert_eq!(median_small(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median_small(&[5.0, -1.0, 4.0, 0.0, 2.0]), 2.0);
+        assert_eq!(median_small(&[1.0, 3.0]), 2.0);
+    }
+}

@@ -1,0 +1,770 @@
+//! Gross errors: online ARIMA one-step gate per channel (Chen, Li & Zhang 2013), confirmed
+//! two-sidedly before anything is replaced.
+//!
+//! 1. **Candidates** (`gate.rs`): a sample the channel's ARIMA forecast did not expect by more
+//!    than k tracked σ (with a jump test, run hysteresis, `max_run`, level changes), or a bad
+//!    value (non-finite, beyond any MEMS range, saturated). Without a model a channel identifies
+//!    one from its first `warmup_samples`; meanwhile a robust jump test on the raw increments
+//!    makes the candidates, so warm-up is guarded too.
+//! 2. **Confirmation** (`confirm.rs`): an event (successive candidates of one channel) is held
+//!    until `post_samples` samples after it have arrived; it is a gross error only if it breaks
+//!    the signal around it by more than `confirm_k` times that signal's own roughness, and it is
+//!    not part of a shock seen on several axes (≥ 2 other channels beyond 4σ within one sample of
+//!    its start; a one-sample event whose partners were off on that sample only is a corrupted
+//!    frame, not a shock). The gate's own motion verdicts (a level change, the release rule) are
+//!    final.
+//! 3. **Output.** A confirmed event is replaced (default: by the two-sided interpolation) and
+//!    flagged `REPLACED` + per-channel bit. An unconfirmed one passes unchanged, flagged
+//!    per-channel `SUSPECT`: weak evidence never changes a value. Bad values are always
+//!    replaced (`NON_FINITE` or the channel's saturation bit says why), saturated ones only when
+//!    confirmed (the rail is the best measurement there is).
+//!
+//! **Latency.** Samples are held only while an event is open on some channel: then the output
+//! waits until every event that touches a sample is judged (at most `lookahead_samples`, default
+//! 16; an event still open then is passed as suspect). Outside events — all but a few samples in
+//! a thousand on the real recordings — a sample leaves in the same call it arrived in. With
+//! `lookahead_samples = 0` the stage is strictly causal: nothing is held, and candidates pass
+//! flagged suspect (bad values are replaced by the prediction).
+//!
+//! After an event judged motion the gate continues from the raw values, not from the
+//! predictions it fed itself during the event, so one real manoeuvre does not cascade into a
+//! string of events.
+
+pub mod confirm;
+pub mod gate;
+pub mod guard;
+pub mod settings;
+
+use std::collections::VecDeque;
+
+pub use gate::ChannelCounters;
+use gate::{ChannelGate, GateParams, Mode, Outcome, RAW_KEEP};
+use guard::JumpGuard;
+
+/// A partner channel of the several-axes test is sharp beyond this many times its roughness.
+const SHOCK_K: f64 = 4.0;
+pub use settings::{
+    GrossErrorSettings, MAX_CONTEXT, MAX_LOOKAHEAD, MAX_MEDIAN_WINDOW, MAX_POST, Replacement,
+};
+
+use crate::model::arima::{ArimaError, ArimaModelFile};
+use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
+use crate::stage::Stage;
+
+/// The flags a repeat copies from the sample it repeats, besides its values.
+const VERDICT_FLAGS: u32 = flags::REPLACED
+    | flags::REPLACED_ANY
+    | flags::SUSPECT_ANY
+    | flags::NON_FINITE
+    | flags::SAT_ANY
+    | flags::WARMING_UP;
+
+/// Raw history kept per channel (samples): context + look-ahead + post context fit in it.
+const RING: usize = 2048;
+/// Events per channel awaiting a verdict at once; one more forces the oldest's verdict.
+const MAX_PENDING: usize = 8;
+/// Longest event the confirmation judges (samples); longer ones pass as suspect.
+const MAX_EVENT: usize = 64;
+
+/// Why the stage could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GrossErrorError {
+    #[error("invalid gross_error settings: {}", .0.join("; "))]
+    InvalidSettings(Vec<String>),
+    #[error(transparent)]
+    Model(#[from] ArimaError),
+}
+
+/// An event of one channel awaiting its verdict.
+#[derive(Debug, Clone, Copy)]
+struct OpenEvent {
+    /// Index of its first sample.
+    start: u64,
+    /// Index of the first sample after it, once it has ended.
+    end: Option<u64>,
+    /// The gate's own verdict: motion (a level change or the release rule).
+    motion: bool,
+}
+
+/// One channel's stage state.
+#[derive(Debug, Clone)]
+struct Channel {
+    gate: ChannelGate,
+    guard: JumpGuard,
+    /// Events awaiting their verdict, oldest first; only the newest may still be open (no end).
+    /// An event's verdict waits for the samples after it even if another event starts there.
+    pending: VecDeque<OpenEvent>,
+    /// Best values so far (raw, or the replacement of a confirmed gross error), by index % RING.
+    ring: Box<[f64; RING]>,
+    /// The gate's prediction at each index (what a bad value falls back to).
+    preds: Box<[f64; RING]>,
+}
+
+/// One sample held while an event that touches it is judged.
+#[derive(Debug, Clone, Copy)]
+struct Held {
+    idx: u64,
+    out: Sample,
+}
+
+/// The gross-error stage (module docs).
+#[derive(Debug, Clone)]
+pub struct GrossErrorStage {
+    s: GrossErrorSettings,
+    p: GateParams,
+    ch: Vec<Channel>,
+    last_seq: Option<u32>,
+    gaps_bridged: u64,
+    gaps_reset: u64,
+    /// Index of the measurement being processed (repeats share their original's).
+    n_in: u64,
+    /// Raw channels of the last sample, to recognise a stale repeat.
+    last_raw: Option<[f64; N_CHANNELS]>,
+    /// The last sample emitted and its measurement index (a repeat of it copies its verdicts).
+    last_out: Option<(u64, Sample)>,
+    /// Stale repeats seen.
+    repeats: u64,
+    held: VecDeque<Held>,
+    /// Samples that waited in `held`, and the longest wait (samples).
+    delayed: u64,
+    max_delay: u64,
+}
+
+impl GrossErrorStage {
+    /// Build the stage. Channels with a model in `models` (matched by name) start active; the
+    /// other enabled channels warm up and identify their own.
+    pub fn new(
+        settings: GrossErrorSettings,
+        models: Option<&ArimaModelFile>,
+    ) -> Result<Self, GrossErrorError> {
+        settings
+            .validate()
+            .map_err(GrossErrorError::InvalidSettings)?;
+        let p = GateParams::new(&settings);
+        let mut ch = Vec::with_capacity(N_CHANNELS);
+        for (c, name) in CHANNEL_NAMES.iter().enumerate() {
+            let min_sigma = if c < 3 {
+                settings.min_sigma_gyro_rad_s
+            } else {
+                settings.min_sigma_accel_m_s2
+            };
+            let mut gate = ChannelGate::new(settings.enabled[c], min_sigma);
+            if gate.mode != Mode::Disabled {
+                match models.and_then(|m| m.channel(name)) {
+                    Some(m) => gate.activate(&p, m.clone(), None)?,
+                    None => gate.reserve_warmup(settings.warmup_samples),
+                }
+            }
+            ch.push(Channel {
+                gate,
+                guard: JumpGuard::new(min_sigma),
+                pending: VecDeque::with_capacity(MAX_PENDING),
+                ring: Box::new([f64::NAN; RING]),
+                preds: Box::new([f64::NAN; RING]),
+            });
+        }
+        Ok(GrossErrorStage {
+            held: VecDeque::with_capacity(4 * settings.lookahead_samples + 8),
+            s: settings,
+            p,
+            ch,
+            last_seq: None,
+            gaps_bridged: 0,
+            gaps_reset: 0,
+            n_in: 0,
+            last_raw: None,
+            last_out: None,
+            repeats: 0,
+            delayed: 0,
+            max_delay: 0,
+        })
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &GrossErrorSettings {
+        &self.s
+    }
+
+    /// Models in use (given or identified so far), for writing a model file.
+    pub fn models(&self) -> ArimaModelFile {
+        ArimaModelFile {
+            channels: self
+                .ch
+                .iter()
+                .filter_map(|c| c.gate.model.clone())
+                .collect(),
+        }
+    }
+
+    /// Counters of channel `c`.
+    pub fn channel_counters(&self, c: usize) -> ChannelCounters {
+        self.ch[c].gate.counters
+    }
+
+    /// Tracked innovation σ of channel `c` (None unless active).
+    pub fn sigma(&self, c: usize) -> Option<f64> {
+        self.ch[c].gate.sigma()
+    }
+
+    /// Tracked jump σ_Δ of channel `c` (None unless active).
+    pub fn jump_sigma(&self, c: usize) -> Option<f64> {
+        self.ch[c].gate.jump_sigma()
+    }
+
+    /// Samples that were held for an event's verdict, and the longest hold (samples).
+    pub fn delays(&self) -> (u64, u64) {
+        (self.delayed, self.max_delay)
+    }
+
+    /// `s` repeats the previous sample bit for bit (every channel finite): a stale sample.
+    /// Remembers `s` as the previous sample otherwise.
+    fn is_repeat(&mut self, s: &Sample) -> bool {
+        let v = s.channels();
+        let repeat = self.last_raw.is_some_and(|l| {
+            l.iter()
+                .zip(&v)
+                .all(|(a, b)| a.to_bits() == b.to_bits() && a.is_finite())
+        });
+        if !repeat {
+            self.last_raw = Some(v);
+        }
+        repeat
+    }
+
+    /// Give repeat `s` the output values and verdict flags of the sample it repeats.
+    fn copy_verdicts(&self, s: &mut Sample) {
+        if let Some((_, prev)) = &self.last_out {
+            s.set_channels(&prev.channels());
+            s.flags |= prev.flags & VERDICT_FLAGS;
+        }
+    }
+
+    /// The causal path's repeat handling: true (and `s` completed) if `s` is a repeat.
+    fn take_repeat(&mut self, s: &mut Sample) -> bool {
+        if !self.is_repeat(s) {
+            return false;
+        }
+        s.flags |= flags::REPEATED;
+        self.repeats += 1;
+        self.copy_verdicts(s);
+        true
+    }
+
+    fn min_sigma(&self, c: usize) -> f64 {
+        if c < 3 {
+            self.s.min_sigma_gyro_rad_s
+        } else {
+            self.s.min_sigma_accel_m_s2
+        }
+    }
+
+    fn plausible(&self, c: usize) -> f64 {
+        if c < 3 {
+            self.s.plausible_gyro_rad_s
+        } else {
+            self.s.plausible_accel_m_s2
+        }
+    }
+
+    /// Gate every enabled channel of `s` (index `n_in`); open, end and resolve events. With
+    /// `hold`, verdicts wait for the look-ahead; without, they are applied to `s` at once.
+    fn step(&mut self, s: &mut Sample, hold: bool) {
+        if s.has(flags::GAP) {
+            self.on_gap(s.seq);
+        }
+        self.last_seq = Some(s.seq);
+        let idx = self.n_in;
+        let slot = (idx % RING as u64) as usize;
+        let mut warming = false;
+        for c in 0..N_CHANNELS {
+            if self.ch[c].gate.mode == Mode::Disabled {
+                continue;
+            }
+            let v = s.channel(c);
+            let saturated = s.flags & flags::sat_ch(c) != 0;
+            let finite = v.is_finite();
+            let implausible = finite && v.abs() > self.plausible(c);
+            let bad = !finite || implausible;
+            {
+                let k = &mut self.ch[c].gate.counters;
+                if !finite {
+                    s.flags |= flags::NON_FINITE;
+                    k.non_finite += 1;
+                }
+                if implausible {
+                    s.flags |= flags::sat_ch(c);
+                    k.implausible += 1;
+                }
+                if saturated {
+                    k.saturated += 1;
+                }
+            }
+            self.ch[c].ring[slot] = v;
+            let was_warm = self.ch[c].gate.mode == Mode::WarmingUp;
+            let usable = !bad && !saturated;
+            let jumped = usable && self.ch[c].guard.candidate(v, self.s.k, self.s.max_run);
+            let outcome = if was_warm {
+                warming = true;
+                self.warm_step(c, v, usable, jumped)
+            } else {
+                self.ch[c].gate.gate(&self.p, v, bad, saturated, jumped)
+            };
+            let accepted = usable && !matches!(outcome, Outcome::Candidate { .. });
+            self.ch[c].guard.commit(v, accepted);
+            self.ch[c].preds[slot] = match outcome {
+                Outcome::Candidate { pred } => pred,
+                _ => f64::NAN,
+            };
+            let ended = self.ch[c].gate.ended.take();
+            match outcome {
+                Outcome::Candidate { pred } => {
+                    if !hold {
+                        // Causal: no evidence beyond the gate; bad values are replaced.
+                        self.apply_causal(c, s, bad, pred);
+                        continue;
+                    }
+                    let open = self.ch[c].pending.back().is_some_and(|e| e.end.is_none());
+                    if !open {
+                        if self.ch[c].pending.len() == MAX_PENDING {
+                            self.resolve(c, idx);
+                        }
+                        self.open(c, idx);
+                    }
+                }
+                Outcome::LevelChange => {
+                    s.flags |= flags::LEVEL_CHANGE;
+                    if let Some(ev) = self.ch[c].pending.back_mut()
+                        && ev.end.is_none()
+                    {
+                        ev.end = Some(idx);
+                        ev.motion = true;
+                    }
+                }
+                Outcome::Passed | Outcome::Warming => {
+                    if let (Some(e), Some(ev)) = (ended, self.ch[c].pending.back_mut())
+                        && ev.end.is_none()
+                    {
+                        ev.end = Some(idx);
+                        ev.motion |= e.motion;
+                    }
+                }
+            }
+            // The warm-up ended on this sample: an open warm-up event ends with it (the gate
+            // starts afresh and knows nothing of it).
+            if was_warm
+                && self.ch[c].gate.mode == Mode::Active
+                && let Some(ev) = self.ch[c].pending.back_mut()
+                && ev.end.is_none()
+            {
+                ev.end = Some(idx + 1);
+            }
+        }
+        if warming {
+            s.flags |= flags::WARMING_UP;
+        }
+    }
+
+    /// Warm-up of channel `c`: feed the identification buffer; the jump guard alone makes the
+    /// candidates (`jumped`), and bad values are candidates too.
+    fn warm_step(&mut self, c: usize, v: f64, usable: bool, jumped: bool) -> Outcome {
+        let ch = &mut self.ch[c];
+        let candidate = !usable || jumped;
+        if !candidate && ch.guard.run() > 0 {
+            ch.gate.ended = Some(gate::EventEnd { motion: false });
+        }
+        ch.gate.warm_push(
+            &self.p,
+            usable.then_some(v),
+            self.s.warmup_samples,
+            &self.s.identify,
+            CHANNEL_NAMES[c],
+        );
+        if candidate {
+            Outcome::Candidate {
+                pred: ch.guard.last(),
+            }
+        } else {
+            Outcome::Warming
+        }
+    }
+
+    fn open(&mut self, c: usize, idx: u64) {
+        self.ch[c].pending.push_back(OpenEvent {
+            start: idx,
+            end: None,
+            motion: false,
+        });
+    }
+
+    /// Causal verdict on a candidate (no look-ahead): bad values are replaced by the prediction,
+    /// the rest pass flagged suspect.
+    fn apply_causal(&mut self, c: usize, s: &mut Sample, bad: bool, pred: f64) {
+        let k = &mut self.ch[c].gate.counters;
+        if bad && pred.is_finite() {
+            s.set_channel(c, pred);
+            s.flags |= flags::REPLACED | flags::replaced_ch(c);
+            k.replaced += 1;
+        } else {
+            s.flags |= flags::suspect_ch(c);
+            k.suspect += 1;
+        }
+    }
+
+    /// Judge the oldest pending event of channel `c` with the context that has arrived (samples
+    /// before index `upto`), and write the verdict into the held samples.
+    fn resolve(&mut self, c: usize, upto: u64) {
+        let Some(ev) = self.ch[c].pending.pop_front() else {
+            return;
+        };
+        let end = ev.end.unwrap_or(upto).min(upto);
+        let m = (end - ev.start) as usize;
+        let ctx = self.s.context_samples;
+        let post_n = self.s.post_samples;
+        let mut pre = [0.0f64; MAX_CONTEXT];
+        let mut event = [0.0f64; MAX_EVENT];
+        let mut post = [0.0f64; MAX_POST];
+        let ring = &self.ch[c].ring;
+        let at = |i: u64| ring[(i % RING as u64) as usize];
+        let n_pre = (ev.start as usize).min(ctx);
+        for (j, p) in pre[..n_pre].iter_mut().enumerate() {
+            *p = at(ev.start - n_pre as u64 + j as u64);
+        }
+        let n_post = if ev.end.is_some() {
+            ((upto - end) as usize).min(post_n)
+        } else {
+            0
+        };
+        for (j, p) in post[..n_post].iter_mut().enumerate() {
+            *p = at(end + j as u64);
+        }
+        let m_judged = m.min(event.len());
+        for (j, e) in event[..m_judged].iter_mut().enumerate() {
+            *e = at(ev.start + j as u64);
+        }
+        let mut interp = [0.0f64; MAX_EVENT];
+        // A verdict needs the signal on both sides: at least three samples after the event (the
+        // break out of it, and one second difference of roughness), or it stays unconfirmed.
+        let eligible = m_judged == m && n_post >= 3;
+        // Leading and trailing samples that continue the signal are not part of the break.
+        let (lead, keep) = if eligible {
+            confirm::trim(
+                &pre[..n_pre],
+                &event[..m],
+                &post[..n_post],
+                self.s.edge_k,
+                self.min_sigma(c),
+            )
+        } else {
+            (0, m)
+        };
+        // The judged part's surroundings: the context before plus the leading samples, and the
+        // trailing samples plus the context after.
+        let mut before = [0.0f64; MAX_CONTEXT + MAX_EVENT];
+        let n_before = n_pre + lead;
+        before[..n_pre].copy_from_slice(&pre[..n_pre]);
+        before[n_pre..n_before].copy_from_slice(&event[..lead]);
+        let before = &before[n_before.saturating_sub(ctx)..n_before];
+        let mut after = [0.0f64; MAX_POST];
+        let n_after = (m - keep + n_post).min(post_n);
+        for (j, a) in after[..n_after].iter_mut().enumerate() {
+            *a = if keep + j < m {
+                event[keep + j]
+            } else {
+                post[keep + j - m]
+            };
+        }
+        let evidence = if eligible {
+            confirm::confirm(
+                before,
+                &event[lead..keep],
+                &after[..n_after],
+                self.min_sigma(c),
+                &mut interp,
+            )
+        } else {
+            None
+        };
+        // A partner of a shock must be sharp on its own scale, and at least a quarter as sharp
+        // as the event: a 20σ glitch during a walk's 4σ footfalls is no part of them.
+        let partner_k = evidence.map_or(SHOCK_K, |e| SHOCK_K.max(0.25 * e.z_in));
+        let shock = self.shock(c, ev.start, m, upto, partner_k);
+        let gross = !shock
+            && evidence.is_some_and(|e| {
+                e.gross(
+                    keep - lead,
+                    self.s.confirm_k,
+                    self.s.edge_k,
+                    self.s.stand_out,
+                )
+            });
+        let use_interp = evidence.is_some() && self.s.replacement == Replacement::Interpolation;
+        // Write the verdict into the held samples.
+        let bit = flags::replaced_ch(c);
+        let plausible = self.plausible(c);
+        let mut replaced = 0u64;
+        let mut suspect = 0u64;
+        for h in self.held.iter_mut() {
+            if h.idx < ev.start || h.idx >= end {
+                continue;
+            }
+            let j = (h.idx - ev.start) as usize;
+            let slot = (h.idx % RING as u64) as usize;
+            let v = h.out.channel(c);
+            let bad = !v.is_finite() || v.abs() > plausible;
+            if gross && (j < lead || j >= keep) && !bad {
+                continue; // outside the break: the signal itself
+            }
+            if gross || bad {
+                let r = if use_interp && (lead..keep).contains(&j) {
+                    interp[j - lead]
+                } else {
+                    self.ch[c].preds[slot]
+                };
+                if r.is_finite() {
+                    h.out.set_channel(c, r);
+                    h.out.flags |= flags::REPLACED | bit;
+                    self.ch[c].ring[slot] = r;
+                    replaced += 1;
+                    continue;
+                }
+            }
+            h.out.flags |= flags::suspect_ch(c);
+            suspect += 1;
+        }
+        let k = &mut self.ch[c].gate.counters;
+        k.replaced += replaced;
+        k.suspect += suspect;
+        if gross {
+            k.confirmed += 1;
+        } else {
+            k.suspect_events += 1;
+        }
+        if !gross && ev.end.is_none() && self.ch[c].gate.mode == Mode::Active {
+            // Forced while still open and judged motion: end the gate's run on the raw values.
+            let mut recent = [0.0f64; RAW_KEEP];
+            let last = upto.saturating_sub(1);
+            for (j, r) in recent.iter_mut().enumerate() {
+                *r = at_ring(&self.ch[c].ring, last.saturating_sub(j as u64));
+            }
+            self.ch[c].gate.resume_from(&recent);
+        }
+    }
+
+    /// Several-axes test: at least two other channels are *sharp* within one sample of `start`
+    /// — their centred second difference beyond `SHOCK_K` times their own roughness over the
+    /// `context_samples` before — a knock moves the whole body, a glitch stays in its channel.
+    /// Model-free, so it holds during warm-up too. Not for a one-sample event whose partners were
+    /// sharp on that sample only: that is what a corrupted whole frame looks like. Needs the
+    /// samples up to `start + 2` (`upto` is one past the last available).
+    fn shock(&self, c: usize, start: u64, len: usize, upto: u64, partner_k: f64) -> bool {
+        let ctx = self.s.context_samples as u64;
+        if start < ctx + 2 || start + 3 > upto {
+            return false;
+        }
+        let mut partners = 0;
+        let mut all_same = true;
+        for (o, other) in self.ch.iter().enumerate() {
+            if o == c || other.gate.mode == Mode::Disabled {
+                continue;
+            }
+            let x = |i: u64| at_ring(&other.ring, i);
+            let d = |i: u64| x(i) - 0.5 * (x(i - 1) + x(i + 1));
+            let (mut sum, mut n) = (0.0, 0u32);
+            for i in start - ctx..start - 1 {
+                let v = d(i);
+                if v.is_finite() {
+                    sum += v * v;
+                    n += 1;
+                }
+            }
+            if n == 0 {
+                continue;
+            }
+            let lim2 = partner_k * partner_k * (sum / f64::from(n)).max(f64::MIN_POSITIVE);
+            let mut mask = 0u8;
+            for (bit, i) in [start - 1, start, start + 1].into_iter().enumerate() {
+                let v = d(i);
+                if v.is_finite() && v * v > lim2 {
+                    mask |= 1 << bit;
+                }
+            }
+            if mask != 0 {
+                partners += 1;
+                all_same &= mask == 0b010;
+            }
+        }
+        partners >= 2 && !(len == 1 && all_same)
+    }
+
+    /// Handle `flags::GAP`: bridge or reset; open events are judged at once (their context ends
+    /// at the gap).
+    fn on_gap(&mut self, seq: u32) {
+        let upto = self.n_in;
+        for c in 0..N_CHANNELS {
+            if let Some(ev) = self.ch[c].pending.back_mut() {
+                ev.end.get_or_insert(upto);
+            }
+            while !self.ch[c].pending.is_empty() {
+                self.resolve(c, upto);
+            }
+        }
+        let missing = self
+            .last_seq
+            .map(|last| seq.wrapping_sub(last).wrapping_sub(1));
+        match missing {
+            Some(m) if m <= self.s.bridge_max_missing => {
+                self.gaps_bridged += 1;
+                for ch in self.ch.iter_mut() {
+                    ch.gate.bridge(m);
+                }
+            }
+            _ => {
+                self.gaps_reset += 1;
+                for ch in self.ch.iter_mut() {
+                    ch.gate.reset();
+                    ch.guard.reset();
+                }
+            }
+        }
+    }
+
+    /// Judge the events that have all the context they wait for (or have waited too long).
+    fn resolve_ready(&mut self) {
+        let now = self.n_in;
+        let lookahead = self.s.lookahead_samples as u64;
+        let post = self.s.post_samples as u64;
+        for c in 0..N_CHANNELS {
+            while let Some(ev) = self.ch[c].pending.front().copied() {
+                let ready = ev.end.is_some_and(|e| now + 1 >= e + post);
+                if ready || now + 1 - ev.start >= lookahead {
+                    self.resolve(c, now + 1);
+                } else {
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Emit the held samples no open event touches, oldest first.
+    fn emit(&mut self, out: &mut Vec<Sample>) {
+        let oldest_open = self
+            .ch
+            .iter()
+            .filter_map(|c| c.pending.front().map(|e| e.start))
+            .min()
+            .unwrap_or(u64::MAX);
+        while let Some(h) = self.held.front() {
+            if h.idx >= oldest_open {
+                break;
+            }
+            let h = self.held.pop_front().expect("front exists");
+            let wait = self.n_in - h.idx;
+            if wait > 0 {
+                self.delayed += 1;
+                self.max_delay = self.max_delay.max(wait);
+            }
+            self.last_out = Some((h.idx, h.out));
+            out.push(h.out);
+        }
+    }
+}
+
+fn at_ring(ring: &[f64; RING], i: u64) -> f64 {
+    ring[(i % RING as u64) as usize]
+}
+
+impl Stage for GrossErrorStage {
+    fn name(&self) -> &'static str {
+        "gross_error"
+    }
+
+    /// The causal stage: one sample in, the same sample out, no look-ahead (module docs).
+    fn process(&mut self, mut s: Sample) -> Sample {
+        if self.take_repeat(&mut s) {
+            return s;
+        }
+        self.step(&mut s, false);
+        self.last_out = Some((self.n_in, s));
+        self.n_in += 1;
+        s
+    }
+
+    fn push(&mut self, mut s: Sample, out: &mut Vec<Sample>) {
+        if self.s.lookahead_samples == 0 {
+            out.push(self.process(s));
+            return;
+        }
+        if self.is_repeat(&s) {
+            s.flags |= flags::REPEATED;
+            self.repeats += 1;
+            match self.held.back() {
+                // Its measurement is still being judged: it gets the same verdict.
+                Some(h) => {
+                    let idx = h.idx;
+                    self.held.push_back(Held { idx, out: s });
+                }
+                None => {
+                    self.copy_verdicts(&mut s);
+                    out.push(s);
+                }
+            }
+            return;
+        }
+        self.step(&mut s, true);
+        self.held.push_back(Held {
+            idx: self.n_in,
+            out: s,
+        });
+        self.resolve_ready();
+        self.emit(out);
+        self.n_in += 1;
+    }
+
+    fn flush(&mut self, out: &mut Vec<Sample>) {
+        let upto = self.n_in;
+        for c in 0..N_CHANNELS {
+            while !self.ch[c].pending.is_empty() {
+                self.resolve(c, upto);
+            }
+        }
+        self.emit(out);
+    }
+
+    fn lookahead(&self) -> usize {
+        self.s.lookahead_samples
+    }
+
+    fn counters(&self) -> Vec<(String, u64)> {
+        let mut out = vec![
+            ("gaps_bridged".to_string(), self.gaps_bridged),
+            ("gaps_reset".to_string(), self.gaps_reset),
+            ("held_samples".to_string(), self.delayed),
+            ("longest_hold".to_string(), self.max_delay),
+            ("repeats".to_string(), self.repeats),
+        ];
+        for (c, ch) in self.ch.iter().enumerate() {
+            if ch.gate.mode == Mode::Disabled {
+                continue;
+            }
+            let n = CHANNEL_NAMES[c];
+            let k = &ch.gate.counters;
+            for (name, v) in [
+                ("replaced", k.replaced),
+                ("runs", k.runs),
+                ("confirmed", k.confirmed),
+                ("suspect_events", k.suspect_events),
+                ("suspect", k.suspect),
+                ("level_changes", k.level_changes),
+                ("released", k.released),
+                ("non_finite", k.non_finite),
+                ("implausible", k.implausible),
+                ("saturated", k.saturated),
+                ("warmup", k.warmup),
+                ("fallback_models", k.fallback_models),
+            ] {
+                out.push((format!("{n}.{name}"), v));
+            }
+        }
+        out
+    }
+}
