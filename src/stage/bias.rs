@@ -19,7 +19,7 @@
 //!    [`crate::model::bias_state_space::state_space_from_model`]). Measurement `z = y - mean`
 //!    (the expected true rate at rest is 0; the Earth rate, ≤ 7.3e-5 rad/s, is below consumer
 //!    MEMS noise and is absorbed into the estimate) is used **only while still**, and with a delay
-//!    of `update_delay_samples`: a sample becomes a measurement only when the detector still
+//!    of `update_delay_s`: a sample becomes a measurement only when the detector still
 //!    reports rest that many samples later, so the onset of a manoeuvre never reaches the
 //!    estimate. The published estimate is the filter's prediction over that delay. While moving
 //!    the filter only predicts: the subtracted bias is the model's propagation, never the motion.
@@ -43,14 +43,25 @@
 //! was subtracted, or a step re-anchored the estimate), `NON_FINITE`.
 //!
 //! **Warm-up.** A gyro channel without a model collects the first contiguous still stretch of
-//! `warmup.still_samples` (into a buffer allocated at construction), fits AR(`warmup.ar_order`) by
-//! Burg on it (the one allocation, at that moment) with the white-noise variance unknown (the
-//! largest the fitted spectrum admits), adds the configured default rate random walk (a short
-//! stretch cannot reveal the slow wander), and starts its filter. Until then, once the still
-//! stretch holds one second of samples, its running mean is subtracted as a *provisional* bias
-//! (published with its standard error; flags `WARMING_UP` and `BIAS_REMOVED`), and kept through
-//! motion that interrupts the stretch: the turn-on bias of a consumer gyro (~1 °/s) is far larger
-//! than anything a wrong provisional mean could add.
+//! `warmup.still_samples` (into a buffer allocated at construction) and measures the sensor's
+//! own white-noise variance R on it (about a fitted line, so drift is not counted as noise). Its
+//! filter is then a random-walk bias under that noise, the walk's variance R/(T² fs) per second
+//! for the time constant T = `warmup.time_constant_s`: a first-order low-pass whose complement
+//! never amplifies any frequency, so the output's Allan deviation cannot rise at any τ, and
+//! whose gain follows from the sensor's measured noise, not from a rate that fits one sensor
+//! class. It starts at the stretch's mean with that mean's standard error. Until then, once the
+//! still stretch holds one second of samples, its running mean is subtracted as a *provisional*
+//! bias (published with its standard error; flags `WARMING_UP` and `BIAS_REMOVED`).
+//!
+//! **Guarded updates.** A still measurement whose innovation lies beyond `GUARD_K` σ of its
+//! predicted spread is not used (counted `rejected_updates`): a slow rotation the stillness
+//! tests could not see must not move the estimate, so across a motion onset the estimate stays
+//! within its own published σ. A bias that really moved (a shock) is still taken up: when every
+//! still measurement has disagreed for `REANCHOR_S` seconds, the estimate's variance is
+//! inflated to the disagreement and it re-anchors (counted `reanchors`).
+//!
+//! **Repeats.** A stale repeat (`REPEATED`) is no new measurement: it neither feeds the
+//! stillness detector nor updates a filter, and it gets the current bias.
 //!
 //! **Time.** Steps between samples come from the sequence counter (robust to bursty host
 //! timestamps), falling back to `t_ns` and the nominal rate when the counter does not advance.
@@ -59,7 +70,7 @@
 
 use nalgebra::Vector3;
 
-use crate::model::bias_model::{ArOf, BiasModelFile, ChannelBiasModel, Effect};
+use crate::model::bias_model::{BiasModelFile, Effect};
 use crate::model::bias_state_space::{BiasStateSpace, StateSpaceError, state_space_from_model};
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use crate::stage::Stage;
@@ -76,6 +87,10 @@ use crate::stage::temperature::TemperatureComp;
 pub const MAX_LINES: usize = 4;
 /// Gaps longer than this (samples) flush the delay line and restart the stillness detector.
 const BIG_GAP_STEPS: u32 = 100;
+/// Consistency guard: a still measurement beyond this many σ of its prediction is not used.
+const GUARD_K: f64 = 4.0;
+/// Still time during which every measurement disagreed before the estimate re-anchors, s.
+const REANCHOR_S: f64 = 2.0;
 
 /// Why the stage cannot be built.
 #[derive(Debug, thiserror::Error)]
@@ -129,6 +144,8 @@ struct ChannelKf {
     lead_nominal: Lead,
     cusum: Option<Cusum>,
     step_size: f64,
+    /// Successive still measurements the guard rejected.
+    rejected_run: u32,
 }
 
 #[derive(Debug, Clone)]
@@ -164,6 +181,9 @@ struct Counters {
     long_gaps: u64,
     white_noise_clamped: u64,
     ignored_effects: u64,
+    rejected_updates: u64,
+    reanchors: u64,
+    repeats: u64,
 }
 
 /// The bias stage (6 channels). See the module docs for what it does.
@@ -182,7 +202,6 @@ pub struct BiasStage {
     prev: Option<(u32, u64)>,
     warmup: WarmupSettings,
     constant_prior_var: f64,
-    gyro_mean_max_rad_s: f64,
     step_arl_samples: f64,
     step_inflation: f64,
     default_step: f64,
@@ -245,7 +264,11 @@ impl BiasStage {
             gyro_cal,
             accel_cal,
             detector: StillnessDetector::new(&settings.stillness, fs),
-            delay: settings.update_delay_samples,
+            delay: (settings.update_delay_s * fs).round().clamp(
+                0.0,
+                crate::stage::stillness::window_samples(settings.stillness.window_s, fs)
+                    .min(MAX_UPDATE_DELAY) as f64,
+            ) as usize,
             ring: [DelayEntry {
                 steps: 0,
                 z: [0.0; 3],
@@ -258,7 +281,6 @@ impl BiasStage {
             prev: None,
             warmup: settings.warmup,
             constant_prior_var: settings.turn_on_bias_sd_rad_s.powi(2),
-            gyro_mean_max_rad_s: settings.stillness.gyro_mean_max_rad_s,
             step_arl_samples: settings.step_false_alarm_interval_s * fs,
             step_inflation: settings.step_inflation_factor,
             default_step: settings.default_step_rad_s,
@@ -396,6 +418,7 @@ impl BiasStage {
             ss,
             cusum,
             step_size: if has_step { step_size } else { 0.0 },
+            rejected_run: 0,
         }
     }
 
@@ -452,16 +475,14 @@ impl BiasStage {
             let st = &mut self.ch[c];
             if let Some(est) = st.est.as_mut() {
                 est.kf.predict_steps(e.steps);
-                if still
-                    && e.usable[c]
-                    && let Some((nu, s)) = est.kf.update(e.z[c] - est.kf.mean())
-                {
-                    st.diag.updated = true;
-                    st.diag.innovation = nu;
-                    st.diag.innovation_var = s;
-                    self.counters.updates += 1;
+                if still && e.usable[c] {
+                    let z = e.z[c] - est.kf.mean();
+                    let (nu0, s0) = est.kf.innovation(z);
+                    // A declared step's CUSUM sees every still measurement, before the guard: a
+                    // step is exactly the disagreement the guard would otherwise reject.
                     if let Some(cu) = est.cusum.as_mut()
-                        && cu.update(nu / s.sqrt()) != 0
+                        && s0 > 0.0
+                        && cu.update(nu0 / s0.sqrt()) != 0
                     {
                         let v = (self.step_inflation * est.step_size).powi(2);
                         est.kf.inflate_constant(v);
@@ -469,6 +490,32 @@ impl BiasStage {
                         self.counters.step_alarms += 1;
                         *alarm_fired = true;
                     }
+                    let (nu0, s0) = est.kf.innovation(z);
+                    let consistent = nu0 * nu0 <= GUARD_K * GUARD_K * s0;
+                    if !consistent {
+                        self.counters.rejected_updates += 1;
+                        est.rejected_run = est.rejected_run.saturating_add(e.steps.max(1));
+                        if f64::from(est.rejected_run) >= REANCHOR_S * self.fs {
+                            // Still for REANCHOR_S and never consistent: the bias moved.
+                            est.kf.inflate_constant(nu0 * nu0);
+                            est.rejected_run = 0;
+                            self.counters.reanchors += 1;
+                            *alarm_fired = true;
+                        }
+                    }
+                    if (consistent || est.rejected_run == 0)
+                        && let Some((nu, s)) = est.kf.update(z)
+                    {
+                        if consistent {
+                            est.rejected_run = 0;
+                        }
+                        st.diag.updated = true;
+                        st.diag.innovation = nu;
+                        st.diag.innovation_var = s;
+                        self.counters.updates += 1;
+                    }
+                } else if !still {
+                    est.rejected_run = 0;
                 }
             } else if let Some(buf) = st.warm.as_mut() {
                 if !still {
@@ -494,43 +541,63 @@ impl BiasStage {
         }
     }
 
-    /// Fit the warm-up model of gyro channel `c` from its buffer and start its filter.
+    /// The warm-up model of gyro channel `c` from its still stretch (module docs): R measured
+    /// about a fitted line, a random-walk bias with time constant `warmup.time_constant_s`.
     fn finish_warmup(&mut self, c: usize) {
-        let Some(buf) = self.ch[c].warm.as_mut() else {
+        let Some(buf) = self.ch[c].warm.as_ref() else {
             return;
         };
-        let fit = crate::model::burg(buf, self.warmup.ar_order);
-        let built = fit.ok().and_then(|fit| {
-            let m = ChannelBiasModel {
-                channel: CHANNEL_NAMES[c].into(),
-                method: "warmup_burg".into(),
-                sample_rate_hz: self.fs,
-                mean: fit.mean,
-                ar: fit.coeffs,
-                innovation_var: fit.noise_var,
-                white_noise_var: 0.0, // unknown: the largest the fitted spectrum admits
-                ar_of: ArOf::Signal,
-                effects: Vec::new(),
-            };
-            state_space_from_model(&m).ok()
-        });
-        match built {
-            Some(ss) => {
-                // The warm-up's own rate random walk, declared so it overrides the default.
-                let q = self.warmup.rate_random_walk_q_per_s;
-                let effects = vec![Effect::RateRandomWalk { q_per_s: q }];
-                let est = self.channel_kf(ss, &effects);
-                self.ch[c].est = Some(est);
-                self.ch[c].warm = None;
-                self.counters.warmup_fits += 1;
-            }
-            None => {
-                self.counters.warmup_fit_failures += 1;
-                if let Some(b) = self.ch[c].warm.as_mut() {
-                    b.clear();
-                }
-            }
+        let n = buf.len() as f64;
+        // Least-squares line through (i, z_i); R = residual variance.
+        let tm = (n - 1.0) / 2.0;
+        let zm = buf.iter().sum::<f64>() / n;
+        let (mut sxy, mut sxx) = (0.0, 0.0);
+        for (i, z) in buf.iter().enumerate() {
+            let t = i as f64 - tm;
+            sxy += t * (z - zm);
+            sxx += t * t;
         }
+        let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+        let r = buf
+            .iter()
+            .enumerate()
+            .map(|(i, z)| (z - zm - slope * (i as f64 - tm)).powi(2))
+            .sum::<f64>()
+            / (n - 2.0).max(1.0);
+        if !(r.is_finite() && r > 0.0) {
+            // A constant stretch (a stuck or coarsely quantised channel): nothing to learn yet.
+            self.counters.warmup_fit_failures += 1;
+            if let Some(b) = self.ch[c].warm.as_mut() {
+                b.clear();
+            }
+            return;
+        }
+        let ss = BiasStateSpace {
+            mean: zm + slope * tm, // the line's value at the stretch's end
+            order: 0,
+            phi: [0.0; crate::model::bias_state_space::MAX_AR_ORDER],
+            q: 0.0,
+            r,
+            gamma: [0.0; crate::model::bias_state_space::MAX_AR_ORDER + 1],
+            white_noise_clamped: false,
+            sample_rate_hz: self.fs,
+        };
+        let steps = self.warmup.time_constant_s * self.fs;
+        let constant = ConstantState {
+            prior_var: r / n,
+            q_per_step: r / (steps * steps),
+        };
+        let kf = BiasKf::new(&ss, Some(constant));
+        self.ch[c].est = Some(ChannelKf {
+            lead_nominal: kf.lead(self.delay as u32),
+            kf,
+            ss,
+            cusum: None,
+            step_size: 0.0,
+            rejected_run: 0,
+        });
+        self.ch[c].warm = None;
+        self.counters.warmup_fits += 1;
     }
 
     fn push_entry(&mut self, e: DelayEntry) {
@@ -637,15 +704,22 @@ impl Stage for BiasStage {
         }
         let y: [f64; N_CHANNELS] = std::array::from_fn(|c| cal[c] - eff[c]);
 
-        // 4. Stillness, against the gyro bias estimate of each axis whose 1-σ is below a quarter
-        // of the mean-test threshold (an uncertain estimate must not veto rest).
-        let gyro_ref: [Option<f64>; 3] = std::array::from_fn(|c| {
+        // 4. Stillness, against the gyro bias estimate (and its σ) of each axis that has one. A
+        // stale repeat is no new measurement: the detector keeps its state.
+        let repeat = s.has(flags::REPEATED);
+        if repeat {
+            self.counters.repeats += 1;
+        }
+        let gyro_ref: [Option<(f64, f64)>; 3] = std::array::from_fn(|c| {
             let st = &self.ch[c];
-            (st.est.is_some() && st.bias_sd < 0.25 * self.gyro_mean_max_rad_s).then_some(st.bias)
+            st.est.is_some().then_some((st.bias, st.bias_sd))
         });
-        let still = self
-            .detector
-            .update(&[y[0], y[1], y[2]], &[y[3], y[4], y[5]], &gyro_ref);
+        let still = if repeat {
+            self.detector.is_still()
+        } else {
+            self.detector
+                .update(&[y[0], y[1], y[2]], &[y[3], y[4], y[5]], &gyro_ref)
+        };
         if still {
             s.flags |= flags::STILL;
             self.counters.still += 1;
@@ -664,7 +738,7 @@ impl Stage for BiasStage {
         let entry = DelayEntry {
             steps,
             z: [y[0], y[1], y[2]],
-            usable: std::array::from_fn(|c| finite[c] && steps > 0 && !bad(c)),
+            usable: std::array::from_fn(|c| finite[c] && steps > 0 && !bad(c) && !repeat),
         };
         self.push_entry(entry);
         if self.ring_len > self.delay {
@@ -737,6 +811,9 @@ impl Stage for BiasStage {
             ("long_gaps".into(), c.long_gaps),
             ("white_noise_clamped_channels".into(), c.white_noise_clamped),
             ("ignored_effects".into(), c.ignored_effects),
+            ("rejected_updates".into(), c.rejected_updates),
+            ("reanchors".into(), c.reanchors),
+            ("repeats".into(), c.repeats),
         ]
     }
 }

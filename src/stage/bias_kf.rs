@@ -200,6 +200,15 @@ impl BiasKf {
         }
     }
 
+    /// The innovation `nu = z - H x` a measurement `z` would have, and its variance `S`, without
+    /// updating (the stage's consistency guard looks before it leaps).
+    #[inline]
+    pub fn innovation(&self, z: f64) -> (f64, f64) {
+        let nu = z - self.x[0] - self.x[D0];
+        let s = self.pm[(0, 0)] + 2.0 * self.pm[(0, D0)] + self.pm[(D0, D0)] + self.r;
+        (nu, s)
+    }
+
     /// Measurement update with `z = y - mean` (expected true value already removed). Returns the
     /// innovation `nu = z - H x` and its variance `S`, or `None` if `S` is not positive.
     #[inline]

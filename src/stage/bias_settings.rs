@@ -19,7 +19,7 @@ use crate::model::bias_model::BiasModelFile;
 use crate::stage::stillness::StillnessSettings;
 
 /// Largest bias-update delay, samples (fixed-size delay line).
-pub const MAX_UPDATE_DELAY: usize = 64;
+pub const MAX_UPDATE_DELAY: usize = 512;
 
 /// Deterministic calibration of one triad.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -100,28 +100,28 @@ impl Calibration {
     }
 }
 
-/// Identifying a model online when the config has none for a gyro channel.
+/// The default bias model of a gyro channel the config gives none for: a random-walk bias under
+/// white noise, both measured on the sensor itself.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WarmupSettings {
-    /// Length of the contiguous still stretch the model is fitted on, samples. Default 1000
-    /// (10 s at 100 Hz: a typical stop; enough for the mean to ~1/30 of the noise sd and for a
-    /// low-order AR of the noise-dominated static signal).
+    /// Length of the first contiguous still stretch whose per-axis variance (about a fitted
+    /// line, so a drifting bias does not count as noise) is the white-noise variance R, samples.
+    /// Default 300 (3 s at 100 Hz: R to ±8 %).
     pub still_samples: usize,
-    /// AR order of the Burg fit (1..=4). Default 2.
-    pub ar_order: usize,
-    /// Rate random walk given to a warm-up model, (rad/s)²/s: a short stretch cannot reveal the
-    /// slow wander, so without it the filter's constant state would become certain and stop
-    /// following. Default 1e-10 (K = 1e-5 rad/s/√s ≈ 120 °/h/√h, a pessimistic consumer MEMS).
-    pub rate_random_walk_q_per_s: f64,
+    /// Time constant of the bias estimate, s: the random walk's variance per second is
+    /// R/(T² fs), so the estimate follows bias changes slower than T and averages away noise
+    /// faster than T. Its steady state is a first-order low-pass, so the output's Allan deviation
+    /// can only fall at every τ (|1 − H| ≤ 1). Default 60 (the rate random walk it implies,
+    /// N/T, is 1.1e-5 rad/s/√s for an ADIS16405 whose measured K is 1.0–1.8e-5).
+    pub time_constant_s: f64,
 }
 
 impl Default for WarmupSettings {
     fn default() -> Self {
         WarmupSettings {
-            still_samples: 1000,
-            ar_order: 2,
-            rate_random_walk_q_per_s: 1e-10,
+            still_samples: 300,
+            time_constant_s: 60.0,
         }
     }
 }
@@ -149,11 +149,12 @@ pub struct BiasSettings {
     /// random-constant state (unless a step or rate-random-walk effect needs it).
     /// Default 0.02 rad/s (1.1 °/s: consumer MEMS turn-on repeatability).
     pub turn_on_bias_sd_rad_s: f64,
-    /// Delay between a sample and its use as a bias measurement, samples (0..=64): a still sample
-    /// is trusted only once the detector has seen this many samples after it, so the onset of
-    /// motion never leaks into the estimate. Default 30 (0.3 s at 100 Hz; the detector needs
-    /// < 0.2 s for a smooth 0.3 rad/s turn onset).
-    pub update_delay_samples: usize,
+    /// Delay between a sample and its use as a bias measurement, s (0..=2): a still sample is
+    /// trusted only once the detector has seen this long after it, so the onset of motion never
+    /// leaks into the estimate. Default 0.3 (the detector needs < 0.2 s for a smooth 0.3 rad/s
+    /// turn onset). In time, not samples: the same protection at 100 Hz and at 1 kHz (at most
+    /// `MAX_UPDATE_DELAY` samples).
+    pub update_delay_s: f64,
     /// 3-dB bandwidth of each vibration-line canceller, Hz. Default 0.2: follows a phase drifting
     /// by 0.01 Hz with 10 % residual amplitude; time constant 1/(π·BW) = 1.6 s.
     pub vibration_bandwidth_hz: f64,
@@ -164,9 +165,9 @@ pub struct BiasSettings {
     pub step_inflation_factor: f64,
     /// Smallest gyro bias step (a shock) the CUSUM is tuned for on a channel whose model declares
     /// no `step` effect (warm-up models included), rad/s; 0 = no step detector on such channels.
-    /// Default 5e-4 (0.03 °/s, about half a consumer gyro's per-sample noise at 100 Hz): a shock
-    /// during a drive is otherwise absorbed by the AR state at the next stop and decays away
-    /// during the following motion.
+    /// Default 0: an absolute step size fits one sensor class only, and on real benches the
+    /// alarms it raised on noise made the estimate jump; a persistent change is re-anchored by
+    /// the consistency guard instead (see the stage docs). Models that learned a step declare it.
     pub default_step_rad_s: f64,
     /// Rate random walk of the constant state on a channel whose model declares no
     /// `rate_random_walk` effect, (rad/s)²/s; 0 = none. Default 1e-10 (as the warm-up's): a model
@@ -186,11 +187,11 @@ impl Default for BiasSettings {
             model: None,
             warmup: WarmupSettings::default(),
             turn_on_bias_sd_rad_s: 0.02,
-            update_delay_samples: 30,
+            update_delay_s: 0.3,
             vibration_bandwidth_hz: 0.2,
             step_false_alarm_interval_s: 36_000.0,
             step_inflation_factor: 3.0,
-            default_step_rad_s: 5e-4,
+            default_step_rad_s: 0.0,
             default_rate_random_walk_q_per_s: 1e-10,
         }
     }
@@ -203,7 +204,7 @@ pub struct SettingsErrors(pub Vec<String>);
 
 impl BiasSettings {
     /// Check every field; returns all problems with their key paths (relative to the `[bias]`
-    /// table, e.g. `stillness.window_samples`, `model.channels[0].ar`).
+    /// table, e.g. `stillness.window_s`, `model.channels[0].ar`).
     pub fn validate(&self) -> Result<(), SettingsErrors> {
         let mut e = Vec::new();
         let fs = self.sample_rate_hz;
@@ -236,22 +237,16 @@ impl BiasSettings {
                 }
             }
         }
-        if self.warmup.still_samples < 100 || self.warmup.still_samples > 1_000_000 {
+        if self.warmup.still_samples < 20 || self.warmup.still_samples > 1_000_000 {
             e.push(format!(
-                "warmup.still_samples: must be in 100..=1000000 (got {})",
+                "warmup.still_samples: must be in 20..=1000000 (got {})",
                 self.warmup.still_samples
             ));
         }
-        if !(1..=crate::model::bias_state_space::MAX_AR_ORDER).contains(&self.warmup.ar_order) {
+        let t = self.warmup.time_constant_s;
+        if !(t.is_finite() && (1.0..=1e6).contains(&t)) {
             e.push(format!(
-                "warmup.ar_order: must be in 1..=4 (got {})",
-                self.warmup.ar_order
-            ));
-        }
-        let q = self.warmup.rate_random_walk_q_per_s;
-        if !(q.is_finite() && q >= 0.0) {
-            e.push(format!(
-                "warmup.rate_random_walk_q_per_s: must be >= 0 (got {q})"
+                "warmup.time_constant_s: must be in [1, 1e6] s (got {t})"
             ));
         }
         if !(self.turn_on_bias_sd_rad_s.is_finite() && self.turn_on_bias_sd_rad_s >= 0.0) {
@@ -260,16 +255,16 @@ impl BiasSettings {
                 self.turn_on_bias_sd_rad_s
             ));
         }
-        if self.update_delay_samples > MAX_UPDATE_DELAY {
+        if !(self.update_delay_s.is_finite() && (0.0..=2.0).contains(&self.update_delay_s)) {
             e.push(format!(
-                "update_delay_samples: must be <= {MAX_UPDATE_DELAY} (got {})",
-                self.update_delay_samples
+                "update_delay_s: must be in [0, 2] s (got {})",
+                self.update_delay_s
             ));
-        } else if self.update_delay_samples > self.stillness.window_samples {
+        } else if self.update_delay_s > self.stillness.window_s {
             // A delayed sample must lie inside the window that declared it still.
             e.push(format!(
-                "update_delay_samples: must not exceed stillness.window_samples ({}) (got {})",
-                self.stillness.window_samples, self.update_delay_samples
+                "update_delay_s: must not exceed stillness.window_s ({} s) (got {} s)",
+                self.stillness.window_s, self.update_delay_s
             ));
         }
         if !(self.vibration_bandwidth_hz.is_finite()
@@ -330,14 +325,14 @@ mod tests {
     fn validation_reports_several_errors_at_once_with_key_paths() {
         let text = r#"
             sample_rate_hz = 100.0
-            update_delay_samples = 80
+            update_delay_s = 5.0
             model_path = "m.toml"
             [gyro]
             scale = [1.0, 0.1, 1.0]
             [stillness]
-            window_samples = 1
+            window_s = 0.0
             [warmup]
-            ar_order = 9
+            time_constant_s = 0.0
             [[model.channels]]
             channel = "gq"
             method = "burg"
@@ -351,11 +346,11 @@ mod tests {
         let errs = s.validate().unwrap_err().0;
         let all = errs.join("\n");
         for key in [
-            "update_delay_samples:",
+            "update_delay_s:",
             "model_path: give either",
             "gyro.scale[1]:",
-            "stillness.window_samples:",
-            "warmup.ar_order:",
+            "stillness.window_s:",
+            "warmup.time_constant_s:",
             "model.channels[0].channel:",
         ] {
             assert!(all.contains(key), "missing `{key}` in\n{all}");
@@ -368,11 +363,11 @@ mod tests {
         let text = r#"
             sample_rate_hz = 100.0
             turn_on_bias_sd_rad_s = 0.02
-            update_delay_samples = 30
+            update_delay_s = 0.3
             vibration_bandwidth_hz = 0.2
             step_false_alarm_interval_s = 36000.0
             step_inflation_factor = 3.0
-            default_step_rad_s = 5e-4
+            default_step_rad_s = 0.0
             default_rate_random_walk_q_per_s = 1e-10
             model_path = "models/imu.toml"
             [gyro]
@@ -382,19 +377,19 @@ mod tests {
             [accel]
             bias = [0.0, 0.0, 0.0]
             [stillness]
-            window_samples = 50
-            enter_after_s = 0.5
-            gyro_sd_max_rad_s = 0.01
-            gyro_mean_max_rad_s = 0.01
-            gyro_instant_max_rad_s = 0.02
-            accel_sd_max_m_s2 = 0.15
-            accel_norm_dev_max_m_s2 = 0.5
-            accel_instant_max_m_s2 = 0.5
+            window_s = 0.5
+            enter_after_s = 1.0
+            noise_factor = 1.6
+            instant_k = 6.0
+            mean_k = 4.0
+            floor_rise_s = 600.0
+            gyro_sd_max_rad_s = 0.1
+            accel_sd_max_m_s2 = 0.3
+            accel_norm_dev_max_m_s2 = 1.0
             gravity_m_s2 = 9.80665
             [warmup]
-            still_samples = 1000
-            ar_order = 2
-            rate_random_walk_q_per_s = 1e-10
+            still_samples = 300
+            time_constant_s = 60.0
         "#;
         let s: BiasSettings = toml::from_str(text).unwrap();
         s.validate().unwrap();
