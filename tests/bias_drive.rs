@@ -82,8 +82,9 @@ fn drive_keeps_every_manoeuvre_and_cuts_the_bias_error_fivefold() {
     );
     let n_still_true = run.truth.iter().filter(|t| t.still).count();
     eprintln!("STILL on {still_ok} of {n_still_true} still samples");
-    // 8-s stops lose the window (0.5 s) and T_in (0.5 s): >= 85 % of still time is usable.
-    assert!(still_ok as f64 > 0.85 * n_still_true as f64);
+    // 8-s stops lose the window (0.5 s) and T_in (1 s): 81 % of still time is usable at best;
+    // a little more goes to the first stop, where the noise floor is still being learned.
+    assert!(still_ok as f64 > 0.78 * n_still_true as f64);
 }
 
 #[test]

@@ -106,7 +106,15 @@ fn vibration_line_with_drifting_phase_is_cancelled_and_stillness_survives_it() {
     assert!(pw < 2.5e-3, "line not cancelled: {pw}");
     assert!(pwo > 0.014);
     let n_still = |run: &Run| run.flags.iter().filter(|f| *f & flags::STILL != 0).count();
-    assert_eq!(n_still(&without), 0, "the raw line should block stillness");
+    // The line is there at rest too, so it is part of the noise floor the stillness detector
+    // learns: rest is seen with and without the canceller (the old absolute thresholds needed
+    // the canceller to see it at all).
+    assert!(
+        n_still(&without) as f64 > 0.8 * n_still(&with) as f64,
+        "{} vs {}",
+        n_still(&without),
+        n_still(&with)
+    );
     assert!(
         n_still(&with) > 12_000,
         "stillness with the line cancelled: {}",
@@ -151,7 +159,13 @@ fn step_run_with(mut stage: BiasStage) -> Run {
 }
 
 #[test]
-fn detected_step_re_anchors_the_bias_within_two_seconds_of_the_stop() {
+fn a_declared_step_re_anchors_the_bias_early_in_the_stop_and_an_undeclared_one_later() {
+    // The stop begins at 120 s. Against a confident estimate the 5 mrad/s offset first looks
+    // like a slow turn: the stillness detector's mean test vetoes rest for 2 s (mean_veto_s),
+    // so STILL comes at ~123.5 s and measurements (delayed 0.3 s) at ~123.8 s. A declared step's
+    // CUSUM sees them at once and re-anchors; without one the consistency guard re-anchors
+    // after at most 2 s of disagreeing measurements (≤ 125.8 s). Both must be within 10 % of the
+    // step for the next drive (128–150 s), the declared one at 125 s, the other at 126.5 s.
     let with = step_run(vec![Effect::Step {
         t_s: 57.0,
         size: 0.005,
@@ -168,63 +182,37 @@ fn detected_step_re_anchors_the_bias_within_two_seconds_of_the_stop() {
             .sum::<f64>()
             / (b - a) as f64
     };
-    // The stop begins at 120 s; STILL at ~121 s; updates (delayed 0.3 s) from ~121.3 s.
-    let (w, wo) = (err_at(&with, 122.0), err_at(&without, 122.0));
+    let (w, wo) = (err_at(&with, 125.0), err_at(&without, 125.0));
     let (mw, mwo) = (
         mean_err(&with, 128.0, 150.0),
         mean_err(&without, 128.0, 150.0),
     );
     eprintln!(
-        "step: |error| at 122 s: {w:.2e} with, {wo:.2e} without; mean during the next drive: {mw:.2e} with, {mwo:.2e} without"
+        "step: |error| at 125 s: {w:.2e} with, {wo:.2e} without; mean during the next drive: {mw:.2e} with, {mwo:.2e} without"
     );
-    // Within 2 s of the stop (0.7 s of measurements) the re-anchored estimate is within 10 % of
-    // the step; without step detection the filter trusts its model and is not; during the next
-    // drive the re-anchored estimate stays within 10 % and is at least twice as good.
-    assert!(w < 0.1 * 0.005, "with step detection: {w}");
-    assert!(wo > 0.1 * 0.005, "without step detection: {wo}");
-    assert!(mw < 0.1 * 0.005, "next drive with step detection: {mw}");
-    assert!(mwo > 2.0 * mw, "next drive without step detection: {mwo}");
-    let alarms = with
-        .flags
-        .iter()
-        .filter(|f| *f & flags::EFFECT_COMPENSATED != 0)
-        .count();
-    assert!(alarms >= 1, "no step alarm flagged");
-    // No false alarms on the first 100 s (before the step).
+    assert!(w < 0.1 * 0.005, "declared step at 125 s: {w}");
     assert!(
-        with.flags[..10_000]
-            .iter()
-            .all(|f| f & flags::EFFECT_COMPENSATED == 0),
-        "false step alarm"
+        err_at(&without, 126.5) < 0.1 * 0.005,
+        "undeclared step at 126.5 s: {wo}"
     );
-}
-
-#[test]
-fn default_step_detector_re_anchors_an_undeclared_step() {
-    // The same model without a step effect, but the stage's default settings: the CUSUM tuned for
-    // the default 0.5 mrad/s step catches the undeclared 5 mrad/s one at the next stop.
-    let settings = BiasSettings {
-        model: Some(drive_model([vec![], vec![], vec![]])),
-        ..Default::default()
-    };
-    let run = step_run_with(BiasStage::new(&settings, None).unwrap());
-    let k = (122.0 * FS) as usize;
-    let e = (run.est[k][2] - run.bias[k][2]).abs();
-    let (a, b) = ((128.0 * FS) as usize, (150.0 * FS) as usize);
-    let m = (a..b)
-        .map(|k| (run.est[k][2] - run.bias[k][2]).abs())
-        .sum::<f64>()
-        / (b - a) as f64;
-    eprintln!("undeclared step, default detector: |error| at 122 s {e:.2e}, next drive {m:.2e}");
-    // Same bounds as the declared step above (10 % of the step).
-    assert!(e < 0.1 * 0.005, "{e}");
-    assert!(m < 0.1 * 0.005, "{m}");
+    assert!(mw < 0.1 * 0.005, "next drive, declared: {mw}");
+    // Re-anchored ~2 s later, the undeclared one has averaged over less of the stop: 15 %.
+    assert!(mwo < 0.15 * 0.005, "next drive, undeclared: {mwo}");
     assert!(
-        run.flags[..10_000]
+        with.flags
             .iter()
-            .all(|f| f & flags::EFFECT_COMPENSATED == 0),
-        "false step alarm before the step"
+            .any(|f| *f & flags::EFFECT_COMPENSATED != 0),
+        "the declared step's alarm is flagged"
     );
+    // No false alarm before the step, with or without a declared step.
+    for run in [&with, &without] {
+        assert!(
+            run.flags[..10_000]
+                .iter()
+                .all(|f| f & flags::EFFECT_COMPENSATED == 0),
+            "false re-anchoring before the step"
+        );
+    }
 }
 
 #[test]
@@ -325,7 +313,7 @@ fn rate_random_walk_effect_lets_the_filter_follow_a_walking_bias() {
 #[test]
 fn warm_up_identifies_a_model_at_the_first_stop_then_removes_the_bias() {
     // No model in the config: every gyro channel warms up on its first 5-s still stretch (the
-    // 8-s stops of this drive leave ~7 s of STILL), flagged WARMING_UP until then, with the
+    // 8-s stops of this drive leave ~6.5 s of STILL), flagged WARMING_UP until then, with the
     // stretch's running mean removed as a provisional bias from its first second on.
     let settings = BiasSettings {
         warmup: imuprep::stage::bias_settings::WarmupSettings {
@@ -351,11 +339,11 @@ fn warm_up_identifies_a_model_at_the_first_stop_then_removes_the_bias() {
         provisional as f64 / FS,
         done as f64 / FS
     );
-    // STILL after the window (0.49 s) + T_in (0.5 s); from then the delay line hands over samples
+    // STILL after the window (0.49 s) + T_in (1 s); from then the delay line hands over samples
     // from 0.3 s earlier, all inside the still window: one second of them gives the provisional
-    // bias (~1.98 s), 5 s of them complete the stretch (~5.98 s).
-    assert!((1.8..2.2).contains(&(provisional as f64 / FS)));
-    assert!((5.8..6.2).contains(&(done as f64 / FS)));
+    // bias (~2.48 s), 5 s of them complete the stretch (~6.48 s).
+    assert!((2.3..2.7).contains(&(provisional as f64 / FS)));
+    assert!((6.3..6.7).contains(&(done as f64 / FS)));
     assert!(run.flags[..done].iter().all(|f| f & flags::WARMING_UP != 0));
     assert!(
         run.flags[provisional..]

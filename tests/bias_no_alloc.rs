@@ -140,5 +140,7 @@ fn process_never_allocates_after_construction_except_at_the_warm_up_fit() {
         }
     }
     assert_eq!(fits(&stage), 3);
-    assert!((1..=3).contains(&allocating_samples));
+    // The warm-up model is measured in place (no fit, no buffer growth): nothing allocates, not
+    // even the sample that completes the warm-up.
+    assert_eq!(allocating_samples, 0);
 }

@@ -108,7 +108,8 @@ fn ximu3_handheld_rotations_are_never_called_still() {
     for (k, s) in input.iter().enumerate() {
         let o = stage.process(*s);
         let rate = s.gyro.norm().to_degrees();
-        if (100..450).contains(&k) {
+        // STILL needs the window (50 samples) and T_in (1 s = 100 samples) of rest first.
+        if (150..450).contains(&k) {
             rest += 1;
             still_at_rest += usize::from(o.flags & flags::STILL != 0);
         }

@@ -1,0 +1,113 @@
+//! Issue 12's "do no harm" targets on every real recording under `../shared/data/real`, with the
+//! embedded default config and nothing tuned per recording: the same audit `imuprep audit` prints
+//! (see `src/report/audit.rs` for what each target measures).
+//!
+//! Every target must be met, except the ones listed in `KNOWN_MISSES`: those the 2026-11-24
+//! design does not reach, each bounded at its measured value (with a margin for the next
+//! change's noise) so that it cannot get worse unnoticed, and each reported as missed in the
+//! closing note and `docs/real-data.md`. A known miss that is met now fails too, so the list
+//! stays true.
+//!
+//! Skipped (visibly, on stderr) when `../shared/data/real` is absent.
+
+use std::path::Path;
+
+use imuprep::config::Config;
+use imuprep::report::audit::audit_dir;
+
+/// (recording prefix, channel, target text prefix, regression bound): the measured value must
+/// stay on the right side of the bound (same direction as the target's limit).
+const KNOWN_MISSES: &[(&str, &str, &str, f64)] = &[
+    // Dense contamination and injections: weak single-sample evidence stays unreplaced by design.
+    (
+        "adis16405_static",
+        "gyro",
+        "2 % outliers > 8σ, recall",
+        0.85,
+    ),
+    ("mpu6050_static", "gyro", "2 % outliers > 8σ, recall", 0.78),
+    ("comma2k19", "all", "injected spikes and runs, F1", 0.90),
+    (
+        "rtklibexplorer_drive_walk/drive",
+        "all",
+        "injected spikes and runs, F1",
+        0.90,
+    ),
+    (
+        "rtklibexplorer_drive_walk/walk",
+        "all",
+        "injected spikes and runs, F1",
+        0.89,
+    ),
+    ("ximu3", "all", "injected spikes and runs, F1", 0.86),
+    // Real samples the confirmation still calls breaks: a handheld's jerks (x-IMU3), a few
+    // vibration peaks on the drives (measured 1.0–2.3e-4 where over).
+    ("comma2k19", "ax", "replaced per channel-sample", 3e-4),
+    (
+        "px4_sensor_combined",
+        "gx",
+        "replaced per channel-sample",
+        2e-4,
+    ),
+    (
+        "rtklibexplorer_drive_walk/walk",
+        "ax",
+        "replaced per channel-sample",
+        2e-4,
+    ),
+    ("ximu3", "gx", "replaced per channel-sample", 1.2e-3),
+    ("ximu3", "gy", "replaced per channel-sample", 1e-3),
+    ("ximu3", "az", "replaced per channel-sample", 6e-4),
+    ("ximu3", "gy", "invented angle, deg", 2.6),
+];
+
+#[test]
+fn every_real_recording_meets_the_do_no_harm_targets_or_a_known_bound() {
+    let dir = Path::new("../shared/data/real");
+    if !dir.is_dir() {
+        eprintln!(
+            "SKIPPED: {} is absent (real recordings live beside the repo)",
+            dir.display()
+        );
+        return;
+    }
+    let cfg = Config::default_embedded().unwrap();
+    let report = audit_dir(dir, 12, &cfg).unwrap();
+    eprint!("{report}");
+    assert!(
+        report.recordings.len() >= 7,
+        "{} recordings",
+        report.recordings.len()
+    );
+    let mut failures = Vec::new();
+    for t in report.targets() {
+        let known = KNOWN_MISSES.iter().find(|(rec, ch, what, _)| {
+            t.recording.starts_with(rec) && t.channel == *ch && t.target.starts_with(what)
+        });
+        match (t.met, known) {
+            (true, None) => {}
+            (true, Some(_)) => failures.push(format!(
+                "known miss now met (update KNOWN_MISSES and the docs): {} {} {} = {}",
+                t.recording, t.channel, t.target, t.measured
+            )),
+            (false, None) => failures.push(format!(
+                "MISSED {} {} {} = {} (limit {})",
+                t.recording, t.channel, t.target, t.measured, t.limit
+            )),
+            (false, Some((_, _, _, bound))) => {
+                let ok = if t.at_most {
+                    t.measured <= *bound
+                } else {
+                    t.measured >= *bound
+                };
+                if !ok {
+                    failures.push(format!(
+                        "known miss got worse: {} {} {} = {} (bound {bound})",
+                        t.recording, t.channel, t.target, t.measured
+                    ));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
