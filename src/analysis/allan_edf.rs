@@ -18,9 +18,14 @@
 //! `sw(t)` (α = 2: `−|t|`; α = 0: `|t|³`; α = −1: `t⁴ ln|t|`; α = −2: `|t|⁵`, signs immaterial
 //! because only squares enter), `sx(t) = F² (2 sw(t) − sw(t − 1/F) − sw(t + 1/F))` (`F = ∞`:
 //! `sx(t) = sw_{α+2}(t)`), `sz(t) = 6 sx(t) − 4 sx(t±1) + sx(t±2)`.
-//! As they prescribe for `α ≤ 0`: the sum directly when `J ≤ 100` (with `F = m` if `3m ≤ 100`,
-//! else the `F = ∞` limit); for `r = M/m > 3` the large-`r` form `1/ν = (a₀ − a₁/r)/r` with
-//! their Table 2 (`d = 2`); otherwise the sum with `J = M = 100` and `S = 100/r`, `F = ∞`.
+//! For `α ≤ 0`: the sum directly when `J ≤ 100`; for `r = M/m > 3` their large-`r` form
+//! `1/ν = (a₀ − a₁/r)/r` with their Table 2 (`d = 2`); otherwise the sum with `J = M = 100` and
+//! `S = 100/r`, all with `F = ∞`. Greenhall & Riley (and allantools) take `F = m` in the direct
+//! sum when `3m ≤ 100`; for rate samples — the phase is their running sum, i.e. exact samples of
+//! the integrated rate, not averages — `F = ∞` is the right model: for white FM it reproduces
+//! the Monte-Carlo scatter at m = 1 (EDF 2730 vs 2720 measured over 3000 records of 4096
+//! samples) where `F = m` gives 3205 (+18 %), and it is as close or closer for the other types
+//! (tests below; `F = m` and `F = ∞` agree within 1–5 % from m ≈ 16 on).
 //! For white PM (α = 2, `F = m`) `sx` is non-zero on the grid `j/m` only at `t = 0`, so the sum
 //! has three terms and is exact in closed form for every `r`:
 //! `1/ν = (1/M) [1 + (8/9)(1 − 1/r)₊ + (1/18)(1 − 2/r)₊]` (→ their `(a₀ − a₁/r)/M`,
@@ -131,8 +136,7 @@ pub fn edf_oadev(noise: NoiseType, m: usize, n_phase: usize) -> f64 {
     } else {
         let j = (n_phase - 2 * m).min(3 * m);
         if j <= J_MAX {
-            let f = (3 * m <= J_MAX).then_some(mf);
-            inv_edf_sum(j, big_m, mf, f, alpha)
+            inv_edf_sum(j, big_m, mf, None, alpha)
         } else if r > 3.0 {
             let (a0, a1) = table2_d2(alpha);
             (a0 - a1 / r) / r
@@ -170,22 +174,23 @@ mod tests {
 
     #[test]
     fn white_fm_edf_matches_the_howe_allan_barnes_formula() {
-        // Two independent approximations of the same quantity (HAB 1981 fit vs Greenhall's
-        // exact sum / asymptote): they agree within a few % away from the last octaves, where
-        // HAB's empirical fit is coarser; 5 % is the agreement NIST SP1065 shows between them.
+        // Two routes to the same quantity (HAB 1981's formula for white FM vs Greenhall's sum /
+        // asymptote): they agree within 1 % at every m up to the last octaves, where HAB's fit is
+        // coarser (2 %).
         let n = 100_001;
         for m in [1usize, 2, 4, 16, 64, 256, 1024, 4096] {
             let g = edf_oadev(NoiseType::WhiteFm, m, n);
             let h = edf_white(n - 1, m);
-            assert!((g / h - 1.0).abs() < 0.05, "m={m}: {g} vs {h}");
+            let tol = if m >= 1024 { 0.02 } else { 0.01 };
+            assert!((g / h - 1.0).abs() < tol, "m={m}: {g} vs {h}");
         }
     }
 
     #[test]
     fn table_form_continues_the_direct_sum() {
         // The large-r form is Greenhall's fit to the sum: at the switch point (J just above
-        // J_MAX) the direct sum with F = ∞ and the table must agree within the table's stated
-        // 3-digit precision and the neglected O(1/m²) of F = m vs ∞ (1 %).
+        // J_MAX) the direct sum with F = ∞ and the table must agree within the table's 3-digit
+        // precision and the Riemann-sum error of the sum at S = 40 (1 %).
         for noise in [
             NoiseType::WhiteFm,
             NoiseType::FlickerFm,
@@ -219,27 +224,34 @@ mod tests {
 
     #[test]
     fn empirical_scatter_of_white_noise_adev_matches_the_edf() {
-        // 400 seeded white-noise records of 4096 samples: the spread of σ̂²/σ² at m = 64 has
-        // variance 2/ν if ν is right. With 400 replicas the sample variance of that ratio has a
-        // relative sd of about sqrt(2/399 + excess kurtosis/400) ≈ 10 %; 25 % bounds it.
-        let (n, m, reps) = (4096usize, 64usize, 400);
+        // 2000 seeded white-noise records of 4096 samples: the spread of σ̂²/σ² at m has
+        // variance 2/ν if ν is right. The sample variance of that ratio over 2000 replicas has a
+        // relative sd of about sqrt((2 + excess kurtosis)/2000) ≈ 3–4 %; 12 % bounds it, and
+        // still fails the F = m form of the sum at m = 1 (18 % off).
+        let (n, reps) = (4096usize, 2000);
+        let ms = [1usize, 4, 64];
         let mut rng = Rng::new(21);
-        let i = m.trailing_zeros() as usize;
-        let mut ratios = Vec::with_capacity(reps);
+        let mut ratios = vec![Vec::with_capacity(reps); ms.len()];
         for _ in 0..reps {
             let y: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
-            let a = overlapping_adev(&y, 1.0).adev[i];
-            ratios.push(a * a * m as f64); // σ²(τ) = 1/m for unit white noise at rate 1
+            let r = overlapping_adev(&y, 1.0);
+            for (k, &m) in ms.iter().enumerate() {
+                let i = m.trailing_zeros() as usize;
+                ratios[k].push(r.adev[i].powi(2) * m as f64); // σ²(τ) = 1/m at rate 1
+            }
         }
-        let mean = ratios.iter().sum::<f64>() / reps as f64;
-        let var = ratios.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / (reps - 1) as f64;
-        let nu = edf_oadev(NoiseType::WhiteFm, m, n + 1);
-        let want = 2.0 / nu;
-        assert!((mean - 1.0).abs() < 0.05, "mean {mean}");
-        assert!(
-            (var / want - 1.0).abs() < 0.25,
-            "var {var} vs 2/ν {want} (ν {nu})"
-        );
+        for (k, &m) in ms.iter().enumerate() {
+            let v = &ratios[k];
+            let mean = v.iter().sum::<f64>() / reps as f64;
+            let var = v.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / (reps - 1) as f64;
+            let nu = edf_oadev(NoiseType::WhiteFm, m, n + 1);
+            let want = 2.0 / nu;
+            assert!((mean - 1.0).abs() < 0.02, "m={m}: mean {mean}");
+            assert!(
+                (var / want - 1.0).abs() < 0.12,
+                "m={m}: var {var} vs 2/ν {want} (ν {nu})"
+            );
+        }
     }
 
     #[test]

@@ -142,6 +142,13 @@ pub fn allan_report(
             ));
             continue;
         }
+        if y.iter().all(|v| *v == y[0]) {
+            out.skipped.push((
+                name.to_string(),
+                "constant: every sample is the same value (a stuck or absent axis)".to_string(),
+            ));
+            continue;
+        }
         let curve = overlapping_adev(&y, rate_hz);
         match fit_terms(&curve, rate_hz, y.len(), settings) {
             Ok(fit) => out.channels.push(ChannelAllan {

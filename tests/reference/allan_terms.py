@@ -7,7 +7,8 @@ edf_greenhall, confidence_interval) and scipy (nnls, brentq):
   sigma^2(tau) = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2,
   non-negative weighted least squares, sd(sigma^2_i) = model_i * sqrt(2/nu_i + eps^2),
   nu_i = Greenhall-Riley EDF (d=2, unmodified, overlapping) of the model's largest term at tau_i
-  (Q -> alpha 2, N -> 0, B -> -1, K and R -> -2), eps = model-error floor with chi^2 = dof;
+  (Q -> alpha 2, N -> 0, B -> -1, K and R -> -2; for alpha <= 0 with the filter factor F = inf,
+  see edf()), eps = model-error floor with chi^2 = dof;
   pass 0 with the measured sigma^2, white-FM EDFs and eps = 0; passes until every sqrt(c) and eps
   change by < 1e-6 (relative), at most 50.
   A term is resolved when c > 0, it is the largest contribution at one measured tau at least, and
@@ -55,6 +56,14 @@ def edf(alpha, m, n_phase):
         # allantools leaves white PM with r <= 2 unimplemented; the exact three-term sum there
         pos = lambda v: max(v, 0.0)
         return 1.0 / ((1.0 + 8.0 / 9.0 * pos(1.0 - 1.0 / r) + 1.0 / 18.0 * pos(1.0 - 2.0 / r)) / big_m)
+    j = min(big_m, 3 * m)
+    if alpha <= 0 and j <= 100:
+        # edf_greenhall takes F = m here when 3m <= 100; for rate samples (phase = their running
+        # sum) F = inf is right (src/analysis/allan_edf.rs: Monte Carlo, white FM at m = 1:
+        # F = m is 18 % high). allantools' own sum and sz with F = inf:
+        inf = float("inf")
+        return 1.0 / (atci.greenhall_BasicSum(j, big_m, m, inf, alpha, 2)
+                      / (big_m * atci.greenhall_sz(0, inf, alpha, 2) ** 2))
     return float(atci.edf_greenhall(alpha, 2, m, n_phase, overlapping=True, modified=False))
 
 
