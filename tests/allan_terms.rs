@@ -16,6 +16,7 @@ use imuprep::analysis::allan_export::{
 use imuprep::analysis::allan_report::allan_report;
 use imuprep::analysis::allan_terms::{FitSettings, Resolution, Term, TermFit, fit_terms};
 use imuprep::model::bias_model::{ArOf, BiasModelFile, Effect};
+use imuprep::model::bias_state_space::state_space_from_model;
 use imuprep::rng::Rng;
 use imuprep::sample::Sample;
 use rustfft::FftPlanner;
@@ -437,6 +438,9 @@ fn bias_model_export_loads_and_its_gauss_markov_meets_the_floor() {
     let back = BiasModelFile::from_toml_str(&text).unwrap();
     assert_eq!(back, file);
     for (ch, (m, note)) in r.channels.iter().zip(file.channels.iter().zip(&notes)) {
+        // the online stage's state space builds from it, with the file's R taken literally
+        let ss = state_space_from_model(m).unwrap();
+        assert_eq!(ss.r, m.white_noise_var);
         assert_eq!(m.ar_of, ArOf::Bias);
         assert_eq!(m.ar.len(), 1);
         // the Gauss–Markov's Allan peak is the flicker floor 0.664 B, at τ_min

@@ -294,7 +294,7 @@ fn nnls_small(a: &DMatrix<f64>, b: &DVector<f64>) -> (Vec<f64>, DMatrix<f64>) {
         let Ok(x) = sub.clone().svd(true, true).solve(b, 1e-12) else {
             continue;
         };
-        if x.iter().any(|v| !(*v > 0.0)) {
+        if x.iter().any(|v| v.is_nan() || *v <= 0.0) {
             continue;
         }
         let r = (&sub * &x - b).norm_squared();
@@ -493,7 +493,7 @@ pub fn fit_terms(
                 .filter(|&x| cj > 0.0 && dominant(&c, x) == t)
                 .collect();
             let dominant_tau_s = (!dom.is_empty()).then(|| [dom[0], dom[dom.len() - 1]]);
-            let resolution = if !(cj > 0.0) {
+            let resolution = if cj.is_nan() || cj <= 0.0 {
                 Resolution::FittedZero
             } else if dom.is_empty() {
                 Resolution::NeverDominant

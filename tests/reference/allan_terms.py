@@ -41,6 +41,7 @@ from scipy.optimize import nnls, brentq
 CHANNELS = ["gx", "gy", "gz", "ax", "ay", "az"]
 LETTERS = ["Q", "N", "B", "K", "R"]
 ALPHA = [2, 0, -1, -2, -2]
+STOCK_EDF = False  # --allantools-edf: edf_greenhall as it is (F = m for 3m <= 100)
 
 
 def basis(tau):
@@ -57,7 +58,7 @@ def edf(alpha, m, n_phase):
         pos = lambda v: max(v, 0.0)
         return 1.0 / ((1.0 + 8.0 / 9.0 * pos(1.0 - 1.0 / r) + 1.0 / 18.0 * pos(1.0 - 2.0 / r)) / big_m)
     j = min(big_m, 3 * m)
-    if alpha <= 0 and j <= 100:
+    if alpha <= 0 and j <= 100 and not STOCK_EDF:
         # edf_greenhall takes F = m here when 3m <= 100; for rate samples (phase = their running
         # sum) F = inf is right (src/analysis/allan_edf.rs: Monte Carlo, white FM at m = 1:
         # F = m is 18 % high). allantools' own sum and sz with F = inf:
@@ -175,7 +176,11 @@ def main():
     ap.add_argument("csv", help="canonical CSV from `imuprep export LOG -o CSV`")
     ap.add_argument("--rate", type=float, required=True, help="the log's declared rate, Hz")
     ap.add_argument("-o", "--out", required=True, help="fixture JSON")
+    ap.add_argument("--allantools-edf", action="store_true",
+                    help="use edf_greenhall unchanged (F = m at small m) to see what that choice moves")
     args = ap.parse_args()
+    global STOCK_EDF
+    STOCK_EDF = args.allantools_edf
     with open(args.csv) as f:
         header = f.readline().strip().split(",")
     assert header[1:7] == CHANNELS, header
