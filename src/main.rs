@@ -1069,7 +1069,14 @@ fn allan(
         std::fs::write(&p, serde_json::to_string_pretty(&report)?)
             .with_context(|| format!("writing {}", p.display()))?;
     }
-    println!("wrote {} files in {}", written.len(), out_dir.display());
+    let names: Vec<_> = written
+        .iter()
+        .filter_map(|p| p.file_name()?.to_str())
+        .collect();
+    println!("wrote {} in {}", names.join(", "), out_dir.display());
+    if !names.contains(&"imu.yaml") {
+        println!("(imu.yaml and gnss_imu_config.txt need gyro and accelerometer channels)");
+    }
     Ok(ExitCode::SUCCESS)
 }
 

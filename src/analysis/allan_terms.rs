@@ -33,16 +33,20 @@
 //! bends the shortest τ, a temperature drift the longest), and with 10⁶ samples the statistical
 //! error of the short-τ points is 0.1 %: statistically exact weights would let the few shortest
 //! τ decide every term. So a relative error ε of the model is added in quadrature and chosen
-//! after each pass so that χ² = dof (the "intrinsic scatter" of a fit; ε = 0 when the statistics
-//! alone explain the residuals). It is reported: it says how well the five-term model describes
-//! the curve.
+//! after each pass so that the residuals' χ² = dof (the "intrinsic scatter" of a fit; ε = 0 when
+//! the statistics alone explain the residuals), measured in logs where a low-EDF point's
+//! chi-squared scatter is nearly symmetric (see `model_error_floor`). It is reported: it says
+//! how well the five-term model describes the curve.
 //!
-//! **Resolved or not.** A term is reported as resolved only where the record shows it: its
-//! coefficient is positive, at least `min_z` formal standard errors from zero (covariance of the
-//! weighted fit on the active support; optimistic, since neighbouring octaves share data), and
-//! it is the largest of the five contributions at one measured τ at least. Otherwise the report
-//! says why (fitted to zero / never dominant / not significant) and gives an upper bound: the
-//! largest coefficient whose line stays under the upper confidence limit at every measured τ,
+//! **Which terms.** Backward elimination: after the passes converge, the positive term with the
+//! fewest formal standard errors (covariance of the weighted fit on the active support) is
+//! removed if that is below `min_z`, and the fit is redone without it, until every positive
+//! term is at least `min_z` standard errors from zero. (Without it two neighbouring terms, say K
+//! and R, can share a short rising end so that neither alone is significant although the rise
+//! is.) A term is reported as resolved when it survives, is positive, and is the largest of the
+//! five contributions at one measured τ at least. Otherwise the report says why (eliminated as
+//! not significant / fitted to zero / never the largest) and gives an upper bound: the largest
+//! coefficient whose line stays under the upper confidence limit at every measured τ,
 //! `min_i hiᵢ / sqrt(fⱼ(τᵢ))`.
 
 use super::AnalysisError;
@@ -50,6 +54,7 @@ use super::allan::AllanResult;
 use super::allan_edf::{NoiseType, chi2_interval, edf_oadev};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
+use statrs::function::gamma::digamma;
 use std::f64::consts::{LN_2, PI};
 
 /// One IEEE-952 term.
@@ -181,7 +186,7 @@ pub enum Resolution {
     FittedZero,
     /// Positive, but another term is larger at every measured τ.
     NeverDominant,
-    /// Dominant somewhere, but within `min_z` standard errors of zero.
+    /// Fewer than `min_z` standard errors from zero: eliminated from the model.
     NotSignificant,
 }
 
@@ -214,14 +219,14 @@ pub struct TermFit {
     pub points: Vec<CurvePoint>,
     /// Q, N, B, K, R in that order.
     pub terms: Vec<TermResult>,
-    /// Reweighting passes run after pass 0.
+    /// Reweighting passes run after pass 0 (summed over the elimination rounds).
     pub passes: usize,
     /// Whether the passes met `tol`.
     pub converged: bool,
     /// Model-error floor ε: relative error of σ² added in quadrature to the statistical one
     /// (module docs); 0 when the statistics explain the scatter.
     pub model_error: f64,
-    /// Weighted sum of squared residuals at the end (≈ `dof` when ε > 0).
+    /// Weighted sum of squared (linear) residuals at the end.
     pub chi2: f64,
     /// Points minus active terms.
     pub dof: usize,
@@ -269,11 +274,12 @@ fn dominant(c: &[f64; 5], tau_s: f64) -> Term {
     best
 }
 
-/// Non-negative least squares `min |A x − b|, x ≥ 0` for a handful of columns, exactly: every
-/// support set's unconstrained solution, the best feasible one kept. Columns are scaled to unit
+/// Non-negative least squares `min |A x − b|, x ≥ 0` over the `allowed` columns (the others are
+/// held at 0) for a handful of columns, exactly: every support set's unconstrained solution, the
+/// best feasible one kept. Columns are scaled to unit
 /// norm first (the basis spans many decades). Returns the solution and the support's
 /// `(AᵀA)⁻¹` in the original scaling (zero outside the support).
-fn nnls_small(a: &DMatrix<f64>, b: &DVector<f64>) -> (Vec<f64>, DMatrix<f64>) {
+fn nnls_small(a: &DMatrix<f64>, b: &DVector<f64>, allowed: &[bool]) -> (Vec<f64>, DMatrix<f64>) {
     let (n, k) = a.shape();
     let norms: Vec<f64> = (0..k)
         .map(|j| a.column(j).norm().max(f64::MIN_POSITIVE))
@@ -287,7 +293,7 @@ fn nnls_small(a: &DMatrix<f64>, b: &DVector<f64>) -> (Vec<f64>, DMatrix<f64>) {
     let mut best_cols: Vec<usize> = vec![];
     for mask in 1u32..(1 << k) {
         let cols: Vec<usize> = (0..k).filter(|j| mask & (1 << j) != 0).collect();
-        if cols.len() > n {
+        if cols.len() > n || cols.iter().any(|&j| !allowed[j]) {
             continue;
         }
         let sub = a_s.select_columns(&cols);
@@ -323,11 +329,16 @@ fn nnls_small(a: &DMatrix<f64>, b: &DVector<f64>) -> (Vec<f64>, DMatrix<f64>) {
 }
 
 /// One weighted solve: `sd[i]` is the standard deviation of point i's σ̂².
-fn solve_weighted(tau: &[f64], avar: &[f64], sd: &[f64]) -> ([f64; 5], DMatrix<f64>) {
+fn solve_weighted(
+    tau: &[f64],
+    avar: &[f64],
+    sd: &[f64],
+    allowed: &[bool; 5],
+) -> ([f64; 5], DMatrix<f64>) {
     let n = tau.len();
     let a = DMatrix::from_fn(n, 5, |i, j| Term::ALL[j].basis(tau[i]) / sd[i]);
     let b = DVector::from_fn(n, |i, _| avar[i] / sd[i]);
-    let (x, cov) = nnls_small(&a, &b);
+    let (x, cov) = nnls_small(&a, &b, allowed);
     let mut c = [0.0; 5];
     c.copy_from_slice(&x);
     (c, cov)
@@ -353,9 +364,26 @@ fn chi2(c: &[f64; 5], tau: &[f64], avar: &[f64], sd: &[f64]) -> f64 {
         .sum()
 }
 
-/// Model-error floor ε: the relative error of the IEEE model itself, added in quadrature to
-/// the statistical one so that χ² = dof (0 when the statistics alone explain the scatter).
-/// χ² falls monotonically in ε², so bisection on ln ε² over [1e-12, 1e4] finds it.
+/// Trigamma ψ'(x), x > 0: the recurrence ψ'(x) = ψ'(x + 1) + 1/x² up to x ≥ 12, then the
+/// asymptotic series (Abramowitz & Stegun 6.4.12), truncation error < 1e-13 there. (statrs has digamma but
+/// not trigamma.)
+fn trigamma(mut x: f64) -> f64 {
+    let mut acc = 0.0;
+    while x < 12.0 {
+        acc += 1.0 / (x * x);
+        x += 1.0;
+    }
+    let z = 1.0 / (x * x);
+    acc + 1.0 / x + z / 2.0 + z / x * (1.0 / 6.0 - z * (1.0 / 30.0 - z * (1.0 / 42.0 - z / 30.0)))
+}
+
+/// Model-error floor ε: the relative error of the IEEE model itself, chosen so that the
+/// log-domain residuals have χ² = dof (0 when the statistics alone explain them). In logs the
+/// chi-squared scatter of a low-EDF point is nearly symmetric: `ln(σ̂²/σ²)` has mean
+/// `ψ(ν/2) − ln(ν/2)` and variance `ψ'(ν/2)` for `ν σ̂²/σ² ~ χ²(ν)`, so one long-τ point that is
+/// 3× off by chance (not rare at ν ≈ 2) does not pass for a model error; a linear-domain χ² would
+/// let it set ε. The sum falls monotonically in ε², so bisection on ln ε² over [1e-12, 1e4]
+/// finds it.
 fn model_error_floor(
     c: &[f64; 5],
     tau: &[f64],
@@ -364,8 +392,15 @@ fn model_error_floor(
     dof: usize,
 ) -> f64 {
     let target = dof as f64;
-    let at = |e2: f64| chi2(c, tau, avar, &sds(c, tau, avar, nu, e2.sqrt()));
-    if dof == 0 || at(0.0) <= target {
+    let r: Vec<(f64, f64)> = (0..tau.len())
+        .map(|i| {
+            let h = 0.5 * nu[i].1;
+            let resid = (avar[i] / model_var(c, tau[i])).ln() - (digamma(h) - h.ln());
+            (resid * resid, trigamma(h))
+        })
+        .collect();
+    let at = |e2: f64| r.iter().map(|(r2, v)| r2 / (v + e2)).sum::<f64>();
+    if dof == 0 || !(at(0.0) > target) {
         return 0.0;
     }
     let (mut lo, mut hi) = ((1e-12f64).ln(), (1e4f64).ln());
@@ -393,6 +428,60 @@ fn edfs(c: Option<&[f64; 5]>, tau: &[f64], m: &[usize], n_phase: usize) -> Vec<(
             (noise, edf_oadev(noise, mi, n_phase))
         })
         .collect()
+}
+
+/// The reweighted passes with only the `allowed` terms (module docs).
+struct Passes {
+    c: [f64; 5],
+    cov: DMatrix<f64>,
+    eps: f64,
+    passes: usize,
+    converged: bool,
+}
+
+fn iterate(
+    tau: &[f64],
+    m: &[usize],
+    avar: &[f64],
+    n_phase: usize,
+    allowed: &[bool; 5],
+    settings: &FitSettings,
+) -> Passes {
+    let dof_of = |c: &[f64; 5]| tau.len().saturating_sub(n_active(c));
+    // pass 0: measured variances, white-FM EDFs, no model-error floor
+    let e0 = edfs(None, tau, m, n_phase);
+    let (mut c, mut cov) = solve_weighted(tau, avar, &sds(&[0.0; 5], tau, avar, &e0, 0.0), allowed);
+    let mut eps = model_error_floor(&c, tau, avar, &edfs(Some(&c), tau, m, n_phase), dof_of(&c));
+    let mut passes = 0;
+    let mut converged = false;
+    let rel = |a: f64, b: f64| {
+        let s = a.abs().max(b.abs());
+        if s > 0.0 { (a - b).abs() / s } else { 0.0 }
+    };
+    while passes < settings.max_passes {
+        passes += 1;
+        let e = edfs(Some(&c), tau, m, n_phase);
+        let (c_new, cov_new) = solve_weighted(tau, avar, &sds(&c, tau, avar, &e, eps), allowed);
+        let e_new = edfs(Some(&c_new), tau, m, n_phase);
+        let eps_new = model_error_floor(&c_new, tau, avar, &e_new, dof_of(&c_new));
+        let change = c
+            .iter()
+            .zip(&c_new)
+            .map(|(a, b)| rel(a.sqrt(), b.sqrt()))
+            .fold(rel(eps, eps_new), f64::max);
+        (c, cov, eps) = (c_new, cov_new, eps_new);
+        if change < settings.tol {
+            converged = true;
+            break;
+        }
+    }
+    Passes {
+        c,
+        cov,
+        eps,
+        passes,
+        converged,
+    }
 }
 
 /// Fit the IEEE-952 terms to an overlapping Allan deviation `curve` of `n_samples` rate samples
@@ -430,39 +519,26 @@ pub fn fit_terms(
     let avar: Vec<f64> = keep.iter().map(|&i| curve.adev[i].powi(2)).collect();
     let n_phase = n_samples + 1;
     let dof_of = |c: &[f64; 5]| tau.len().saturating_sub(n_active(c));
-    // pass 0: measured variances, white-FM EDFs, no model-error floor
-    let e0 = edfs(None, &tau, &m, n_phase);
-    let (mut c, mut cov) = solve_weighted(&tau, &avar, &sds(&[0.0; 5], &tau, &avar, &e0, 0.0));
-    let mut eps = model_error_floor(
-        &c,
-        &tau,
-        &avar,
-        &edfs(Some(&c), &tau, &m, n_phase),
-        dof_of(&c),
-    );
+    // backward elimination: refit without the least significant positive term until every
+    // positive term is at least min_z standard errors from zero
+    let mut allowed = [true; 5];
     let mut passes = 0;
-    let mut converged = false;
-    let rel = |a: f64, b: f64| {
-        let s = a.abs().max(b.abs());
-        if s > 0.0 { (a - b).abs() / s } else { 0.0 }
-    };
-    while passes < settings.max_passes {
-        passes += 1;
-        let e = edfs(Some(&c), &tau, &m, n_phase);
-        let (c_new, cov_new) = solve_weighted(&tau, &avar, &sds(&c, &tau, &avar, &e, eps));
-        let e_new = edfs(Some(&c_new), &tau, &m, n_phase);
-        let eps_new = model_error_floor(&c_new, &tau, &avar, &e_new, dof_of(&c_new));
-        let change = c
-            .iter()
-            .zip(&c_new)
-            .map(|(a, b)| rel(a.sqrt(), b.sqrt()))
-            .fold(rel(eps, eps_new), f64::max);
-        (c, cov, eps) = (c_new, cov_new, eps_new);
-        if change < settings.tol {
-            converged = true;
-            break;
+    let (c, cov, eps, converged) = loop {
+        let it = iterate(&tau, &m, &avar, n_phase, &allowed, settings);
+        passes += it.passes;
+        let weakest = (0..5)
+            .filter(|&j| it.c[j] > 0.0)
+            .map(|j| {
+                let v = it.cov[(j, j)];
+                (j, if v > 0.0 { it.c[j] / v.sqrt() } else { 0.0 })
+            })
+            .filter(|&(_, z)| z < settings.min_z)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match weakest {
+            Some((j, _)) => allowed[j] = false,
+            None => break (it.c, it.cov, it.eps, it.converged),
         }
-    }
+    };
     // final points: noise type and EDF from the final model, bands around the measurement
     let e = edfs(Some(&c), &tau, &m, n_phase);
     let points: Vec<CurvePoint> = (0..tau.len())
@@ -493,12 +569,12 @@ pub fn fit_terms(
                 .filter(|&x| cj > 0.0 && dominant(&c, x) == t)
                 .collect();
             let dominant_tau_s = (!dom.is_empty()).then(|| [dom[0], dom[dom.len() - 1]]);
-            let resolution = if cj.is_nan() || cj <= 0.0 {
+            let resolution = if !allowed[j] {
+                Resolution::NotSignificant
+            } else if cj.is_nan() || cj <= 0.0 {
                 Resolution::FittedZero
             } else if dom.is_empty() {
                 Resolution::NeverDominant
-            } else if !(var_c > 0.0 && cj >= settings.min_z * var_c.sqrt()) {
-                Resolution::NotSignificant
             } else {
                 Resolution::Resolved
             };
@@ -526,4 +602,20 @@ pub fn fit_terms(
         chi2: chi2(&c, &tau, &avar, &sd),
         dof: dof_of(&c),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trigamma_known_values() {
+        // ψ'(1) = π²/6, ψ'(1/2) = π²/2, ψ'(x + 1) = ψ'(x) − 1/x²: closed forms, to 1e-12.
+        let pi2 = PI * PI;
+        assert!((trigamma(1.0) - pi2 / 6.0).abs() < 1e-12);
+        assert!((trigamma(0.5) - pi2 / 2.0).abs() < 1e-12);
+        for x in [0.3, 2.7, 7.5, 40.0] {
+            assert!((trigamma(x + 1.0) - (trigamma(x) - 1.0 / (x * x))).abs() < 1e-12);
+        }
+    }
 }

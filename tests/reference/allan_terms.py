@@ -8,11 +8,14 @@ edf_greenhall, confidence_interval) and scipy (nnls, brentq):
   non-negative weighted least squares, sd(sigma^2_i) = model_i * sqrt(2/nu_i + eps^2),
   nu_i = Greenhall-Riley EDF (d=2, unmodified, overlapping) of the model's largest term at tau_i
   (Q -> alpha 2, N -> 0, B -> -1, K and R -> -2; for alpha <= 0 with the filter factor F = inf,
-  see edf()), eps = model-error floor with chi^2 = dof;
+  see edf()), eps = model-error floor with the log-domain chi^2 = dof
+  (sum_i (ln(s2_i/model_i) - psi(nu_i/2) + ln(nu_i/2))^2 / (psi'(nu_i/2) + eps^2) = dof);
   pass 0 with the measured sigma^2, white-FM EDFs and eps = 0; passes until every sqrt(c) and eps
   change by < 1e-6 (relative), at most 50.
-  A term is resolved when c > 0, it is the largest contribution at one measured tau at least, and
-  c >= 2 standard errors (covariance of the weighted fit on the active columns); upper bound =
+  Backward elimination: while a positive term has c < 2 standard errors (covariance of the
+  weighted fit on the active columns), the one with the fewest is dropped and the fit redone.
+  A term is resolved when it survives, c > 0, and it is the largest contribution at one measured
+  tau at least; upper bound =
   min_i hi_i / sqrt(f_j(tau_i)) with hi the upper end of the 68.27 % chi-squared interval.
 
 The taus are the octaves m = 1, 2, 4, ... with at least two second differences (N_phase - 2m >= 2),
@@ -37,6 +40,7 @@ import numpy as np
 import allantools
 from allantools import ci as atci
 from scipy.optimize import nnls, brentq
+from scipy.special import digamma, polygamma
 
 CHANNELS = ["gx", "gy", "gz", "ax", "ay", "az"]
 LETTERS = ["Q", "N", "B", "K", "R"]
@@ -91,12 +95,14 @@ def sds(c, taus, avar, nus, eps):
     return base * np.sqrt(2.0 / nu + eps * eps)
 
 
-def solve(taus, avar, sd):
+def solve(taus, avar, sd, allowed):
     a = basis(taus) / sd[:, None]
     b = avar / sd
     norms = np.maximum(np.linalg.norm(a, axis=0), np.finfo(float).tiny)
-    x, _ = nnls(a / norms, b)
-    c = x / norms
+    cols = np.flatnonzero(allowed)
+    x, _ = nnls((a / norms)[:, cols], b)
+    c = np.zeros(5)
+    c[cols] = x / norms[cols]
     cov = np.zeros((5, 5))
     act = np.flatnonzero(c > 0)
     if act.size:
@@ -111,30 +117,50 @@ def chi2(c, taus, avar, sd):
 
 
 def floor_eps(c, taus, avar, nus, dof):
+    # log-domain: ln(s2/sigma2) has mean psi(nu/2) - ln(nu/2) and variance psi'(nu/2)
     if dof == 0:
         return 0.0
-    f = lambda le2: chi2(c, taus, avar, sds(c, taus, avar, nus, math.sqrt(math.exp(le2)))) - dof
-    if f(-math.inf) <= 0:
+    h = np.array([n for _, n in nus]) / 2.0
+    r2 = (np.log(avar / model(c, taus)) - (digamma(h) - np.log(h))) ** 2
+    v = polygamma(1, h)
+    f = lambda le2: float(np.sum(r2 / (v + math.exp(le2)))) - dof
+    if not np.sum(r2 / v) > dof:
         return 0.0
     return math.sqrt(math.exp(brentq(f, math.log(1e-12), math.log(1e4), xtol=1e-14, rtol=1e-14)))
 
 
-def fit(taus, ms, adev, n_phase):
-    avar = adev**2
+def passes_with(taus, ms, avar, n_phase, allowed):
     dof = lambda c: len(taus) - int(np.sum(c > 0))
-    c, cov = solve(taus, avar, sds(np.zeros(5), taus, avar, edfs(None, taus, ms, n_phase), 0.0))
+    c, cov = solve(taus, avar, sds(np.zeros(5), taus, avar, edfs(None, taus, ms, n_phase), 0.0), allowed)
     eps = floor_eps(c, taus, avar, edfs(c, taus, ms, n_phase), dof(c))
     rel = lambda a, b: abs(a - b) / max(abs(a), abs(b)) if max(abs(a), abs(b)) > 0 else 0.0
     passes, converged = 0, False
     while passes < 50:
         passes += 1
-        c_new, cov_new = solve(taus, avar, sds(c, taus, avar, edfs(c, taus, ms, n_phase), eps))
+        c_new, cov_new = solve(taus, avar, sds(c, taus, avar, edfs(c, taus, ms, n_phase), eps), allowed)
         eps_new = floor_eps(c_new, taus, avar, edfs(c_new, taus, ms, n_phase), dof(c_new))
         change = max([rel(eps, eps_new)] + [rel(math.sqrt(a), math.sqrt(b)) for a, b in zip(c, c_new)])
         c, cov, eps = c_new, cov_new, eps_new
         if change < 1e-6:
             converged = True
             break
+    return c, cov, eps, passes, converged
+
+
+def fit(taus, ms, adev, n_phase):
+    avar = adev**2
+    allowed = np.ones(5, dtype=bool)
+    total = 0
+    while True:
+        # backward elimination of the least significant positive term (z < 2)
+        c, cov, eps, passes, converged = passes_with(taus, ms, avar, n_phase, allowed)
+        total += passes
+        z = [(c[j] / math.sqrt(cov[j, j]) if cov[j, j] > 0 else 0.0, j) for j in range(5) if c[j] > 0]
+        weak = [zj for zj in z if zj[0] < 2.0]
+        if not weak:
+            break
+        allowed[min(weak)[1]] = False
+    passes = total
     nus = edfs(c, taus, ms, n_phase)
     lo, hi = [], []
     for a, (_, nu) in zip(adev, nus):
@@ -146,12 +172,12 @@ def fit(taus, ms, adev, n_phase):
     f = basis(taus)
     for j, letter in enumerate(LETTERS):
         dom = [t for t in taus if c[j] > 0 and dominant(c, t) == j]
-        if not c[j] > 0:
+        if not allowed[j]:
+            res = "not_significant"
+        elif not c[j] > 0:
             res = "fitted_zero"
         elif not dom:
             res = "never_dominant"
-        elif not (cov[j, j] > 0 and c[j] >= 2.0 * math.sqrt(cov[j, j])):
-            res = "not_significant"
         else:
             res = "resolved"
         terms[letter] = {
