@@ -400,7 +400,8 @@ fn model_error_floor(
         })
         .collect();
     let at = |e2: f64| r.iter().map(|(r2, v)| r2 / (v + e2)).sum::<f64>();
-    if dof == 0 || !(at(0.0) > target) {
+    let at0 = at(0.0);
+    if dof == 0 || at0.is_nan() || at0 <= target {
         return 0.0;
     }
     let (mut lo, mut hi) = ((1e-12f64).ln(), (1e4f64).ln());
