@@ -238,6 +238,27 @@ enum Cmd {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Noise parameters: overlapping Allan deviation per channel with confidence bands, the
+    /// IEEE-952 terms fitted to it, a plot, and exports (Kalibr imu.yaml, GNSS_IMU config lines,
+    /// bias model TOML) in OUT_DIR.
+    Allan {
+        /// Static recording (replay log); the samples are taken as equally spaced at its rate.
+        log: PathBuf,
+        /// Channels (gx gy gz in rad/s, ax ay az in m/s^2); repeatable; default all.
+        #[arg(long = "channel")]
+        channels: Vec<String>,
+        /// Skip this many seconds at the start (start-up transients), s.
+        #[arg(long, default_value_t = 0.0)]
+        skip_s: f64,
+        /// Output directory: report.txt/.json, allan.svg, imu.yaml (densities in rad/s/sqrt(Hz),
+        /// m/s^2/sqrt(Hz); random walks in rad/s^2/sqrt(Hz), m/s^3/sqrt(Hz)), gnss_imu_config.txt
+        /// (deg/s/sqrt(Hz), ug/sqrt(Hz)), bias.toml.
+        #[arg(long, default_value = "allan-out")]
+        out_dir: PathBuf,
+        /// Also write the report as JSON here (tau in s, deviations in the channel's unit).
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Write a log's samples as canonical CSV plus seq and flags.
     Export {
         log: PathBuf,
@@ -437,6 +458,13 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 compare_bias(&log, &channels, skip_s, temp_exo, json)
             }
         }
+        Cmd::Allan {
+            log,
+            channels,
+            skip_s,
+            out_dir,
+            json,
+        } => allan(&log, &channels, skip_s, &out_dir, json),
         Cmd::Export { log, output } => {
             let (_, samples, stats) = csvio::read_log(&log)?;
             csvio::write_csv(&output, &samples)?;
@@ -1065,6 +1093,37 @@ fn diagnose_samples(
         out_dir.display()
     );
     Ok(added_all)
+}
+
+/// `allan`: the report on stdout, its files in `out_dir`.
+fn allan(
+    log: &std::path::Path,
+    channels: &[String],
+    skip_s: f64,
+    out_dir: &std::path::Path,
+    json: Option<PathBuf>,
+) -> Result<ExitCode> {
+    use imuprep::analysis::{allan_export, allan_report, allan_terms::FitSettings};
+    let (rate, samples) = load_span(log, skip_s)?;
+    let chans = parse_channels(channels)?;
+    let source = log.display().to_string();
+    let report =
+        allan_report::allan_report(&source, &samples, rate, &chans, &FitSettings::default())?;
+    print!("{report}");
+    let written = allan_export::write_outputs(&report, out_dir).map_err(anyhow::Error::msg)?;
+    if let Some(p) = json {
+        std::fs::write(&p, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    let names: Vec<_> = written
+        .iter()
+        .filter_map(|p| p.file_name()?.to_str())
+        .collect();
+    println!("wrote {} in {}", names.join(", "), out_dir.display());
+    if !names.contains(&"imu.yaml") {
+        println!("(imu.yaml and gnss_imu_config.txt need gyro and accelerometer channels)");
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 /// Channel names (gx gy gz ax ay az) → indices; none given = all six.

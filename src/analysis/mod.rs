@@ -2,6 +2,11 @@
 
 pub mod allan;
 pub mod allan_check;
+pub mod allan_edf;
+pub mod allan_export;
+pub mod allan_plot;
+pub mod allan_report;
+pub mod allan_terms;
 pub mod bias_compare;
 pub mod changepoint;
 pub mod detector_compare;
