@@ -325,6 +325,7 @@ impl MavlinkDecoder {
                 frame2: None,
                 slot: 0,
                 slots: 1,
+                offsets: [0; 4],
             }),
         )
     }

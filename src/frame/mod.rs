@@ -18,9 +18,9 @@
 
 pub mod codec;
 pub mod detect;
+pub mod inline;
 pub mod mavlink;
 mod mavlink_crc;
-pub mod mcap;
 pub mod protocol;
 pub mod ubx;
 pub mod ulog;

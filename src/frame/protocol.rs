@@ -1,4 +1,4 @@
-//! The one decoder contract every wire format keeps (native frames, UBX, MAVLink, ULog, MCAP).
+//! The one decoder contract every wire format keeps (native frames, UBX, MAVLink, ULog).
 //!
 //! A decoder takes bytes from the front of a buffer and yields [`Decoded`] items in input order:
 //! a sensor [`Descriptor`], an IMU [`Sample`] with the [`Carrier`] that can re-encode it, or the
@@ -31,8 +31,6 @@ pub enum Protocol {
     Mavlink,
     /// PX4 ULog: sensor_combined, or sensor_gyro + sensor_accel of one instance.
     Ulog,
-    /// MCAP (ROS 2 bag) with sensor_msgs/msg/Imu in CDR.
-    Mcap,
 }
 
 impl Protocol {
@@ -42,7 +40,6 @@ impl Protocol {
             Protocol::Ubx => "ubx",
             Protocol::Mavlink => "mavlink",
             Protocol::Ulog => "ulog",
-            Protocol::Mcap => "mcap",
         }
     }
 }
@@ -67,6 +64,9 @@ pub struct Carrier {
     pub slot: u16,
     /// Samples `frame` carries in all; the re-encoded frame is written after the last one.
     pub slots: u16,
+    /// Protocol-specific byte offsets of the values in the frame(s) (ULog: gyro, accel,
+    /// temperature (u16::MAX = none), pair flag); unused by UBX and MAVLink.
+    pub offsets: [u16; 4],
 }
 
 /// One item out of a decoder, in input order.

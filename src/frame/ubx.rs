@@ -365,6 +365,7 @@ impl UbxDecoder {
                 frame2: None,
                 slot: i as u16,
                 slots,
+                offsets: [0; 4],
             };
             self.emit(t, vals, carrier);
         }
@@ -423,6 +424,7 @@ impl UbxDecoder {
                         frame2: None,
                         slot: 0,
                         slots: 1,
+                        offsets: [0; 4],
                     },
                 };
                 if part.complete() {
