@@ -73,6 +73,9 @@ impl InlineEncoder {
                 }
                 if c.slot + 1 >= c.slots {
                     self.flush(out);
+                    if let Some(b) = &c.between {
+                        out.extend_from_slice(b);
+                    }
                     if let Some(f2) = &c.frame2 {
                         let mut f2 = f2.to_vec();
                         ubx::patch(&mut f2, 0, s);

@@ -323,6 +323,7 @@ impl MavlinkDecoder {
             Some(Carrier {
                 frame,
                 frame2: None,
+                between: None,
                 slot: 0,
                 slots: 1,
                 offsets: [0; 4],

@@ -60,6 +60,9 @@ pub struct Carrier {
     /// A second message that carried part of the same sample (UBX ESF-MEAS sends gyro and
     /// accel of one time tag in two messages), written right after `frame`.
     pub frame2: Option<Bytes>,
+    /// Messages that came between `frame` and `frame2` (written between them, so the
+    /// inline output keeps the input's order byte for byte).
+    pub between: Option<Bytes>,
     /// This sample's index among the samples `frame` carries (ESF-RAW packs several).
     pub slot: u16,
     /// Samples `frame` carries in all; the re-encoded frame is written after the last one.

@@ -206,6 +206,7 @@ struct Partial {
     tag: u32,
     vals: [Option<f64>; 7],
     carrier: Carrier,
+    between: Vec<u8>,
 }
 
 impl Partial {
@@ -292,7 +293,11 @@ impl UbxDecoder {
         self.stats.frames_ok += 1;
         self.stats.other_messages += 1;
         self.stats.other_bytes += frame.len() as u64;
-        self.ready.push_back(Decoded::Other(frame));
+        match self.meas_pending.as_mut() {
+            // Between the two halves of an ESF-MEAS sample: kept in the carrier, in order.
+            Some(p) => p.between.extend_from_slice(&frame),
+            None => self.ready.push_back(Decoded::Other(frame)),
+        }
     }
 
     fn emit(&mut self, tag_t_ns: u64, vals: [Option<f64>; 7], carrier: Carrier) {
@@ -334,6 +339,9 @@ impl UbxDecoder {
         if let Some(p) = self.meas_pending.take() {
             let t = self.meas_clock.t_ns(p.tag);
             self.emit(t, p.vals, p.carrier);
+            if !p.between.is_empty() {
+                self.ready.push_back(Decoded::Other(Bytes::from(p.between)));
+            }
         }
     }
 
@@ -363,6 +371,7 @@ impl UbxDecoder {
             let carrier = Carrier {
                 frame: frame.clone(),
                 frame2: None,
+                between: None,
                 slot: i as u16,
                 slots,
                 offsets: [0; 4],
@@ -408,6 +417,9 @@ impl UbxDecoder {
                     }
                 }
                 prev.carrier.frame2 = Some(frame);
+                if !prev.between.is_empty() {
+                    prev.carrier.between = Some(Bytes::from(std::mem::take(&mut prev.between)));
+                }
                 let t = self.meas_clock.t_ns(prev.tag);
                 self.emit(t, prev.vals, prev.carrier);
             }
@@ -417,11 +429,13 @@ impl UbxDecoder {
                     self.flush_meas();
                 }
                 let part = Partial {
+                    between: Vec::new(),
                     tag,
                     vals,
                     carrier: Carrier {
                         frame,
                         frame2: None,
+                        between: None,
                         slot: 0,
                         slots: 1,
                         offsets: [0; 4],

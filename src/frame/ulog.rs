@@ -336,6 +336,7 @@ impl UlogDecoder {
                 let c = Carrier {
                     frame: msg,
                     frame2: None,
+                    between: None,
                     slot: 0,
                     slots: 1,
                     offsets: off,
@@ -389,6 +390,7 @@ impl UlogDecoder {
         let c = Carrier {
             frame: g,
             frame2: Some(a),
+            between: None,
             slot: 0,
             slots: 1,
             offsets: off,
