@@ -212,7 +212,9 @@ pub enum Sink {
         format: Format,
     },
     /// Inline output (see [`SinkConfig::Inline`]); `None` = a new pseudo-terminal.
-    Inline { path: Option<PathBuf> },
+    Inline {
+        path: Option<PathBuf>,
+    },
 }
 
 /// A validated configuration: it can only exist if every check passed.

@@ -343,8 +343,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             let (d, samples) = if is_csv && proto.protocol.is_none() {
                 csvio::read_csv(&input, &o)?
             } else {
-                let mut pc = imuprep::frame::detect::ProtocolConfig::default();
-                pc.protocol = imuprep::frame::detect::ProtocolChoice::Auto;
+                let mut pc = imuprep::frame::detect::ProtocolConfig::auto();
                 proto.apply(&mut pc);
                 let f = imuprep::io::convert::read_any(&input, &pc)?;
                 eprintln!("{} input: {}", f.protocol, f.found);
@@ -449,8 +448,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             to,
             proto,
         } => {
-            let mut pc = imuprep::frame::detect::ProtocolConfig::default();
-            pc.protocol = imuprep::frame::detect::ProtocolChoice::Auto;
+            let mut pc = imuprep::frame::detect::ProtocolConfig::auto();
             proto.apply(&mut pc);
             let f = imuprep::io::convert::read_any(&log, &pc)?;
             let (samples, stats) = (f.samples, f.stats);
@@ -459,7 +457,8 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             } else {
                 let d = f.descriptor.unwrap_or_default();
                 let b = imuprep::io::convert::encode_stream(to, &d, &samples);
-                std::fs::write(&output, &b).with_context(|| format!("writing {}", output.display()))?;
+                std::fs::write(&output, &b)
+                    .with_context(|| format!("writing {}", output.display()))?;
             }
             eprintln!(
                 "exported {} samples to {} ({} CRC errors, {} resyncs in the log)",

@@ -82,8 +82,8 @@ fn ubx_values_equal_pyubx2() {
             let v: Vec<f64> = w[2..9].iter().map(|x| x.parse().unwrap()).collect();
             // Same integer fields on both sides; the only difference is float rounding of the
             // scale factors (2^-12 deg → rad), far below the 2^-12 deg/s resolution.
-            for c in 0..6 {
-                assert!((s.channel(c) - v[c]).abs() < 1e-12, "{c}: {} vs {}", s.channel(c), v[c]);
+            for (c, want) in v.iter().take(6).enumerate() {
+                assert!((s.channel(c) - want).abs() < 1e-12, "channel {c}");
             }
             assert!((s.temp_c.unwrap() - v[6]).abs() < 1e-9);
         }
@@ -102,7 +102,11 @@ fn ubx_time_tags_unwrap_and_sequence_from_time() {
     // One step back: from the ESF-RAW time base (24-bit tags, ~655 s) to the ESF-MEAS one (ms
     // since start, ~131 s); a receiver sends one or the other, the fixture both.
     assert_eq!(st.time_backwards, 1);
-    assert!(got[..48].iter().all(|s| s.flags & (flags::GAP | flags::DUPLICATE) == 0));
+    assert!(
+        got[..48]
+            .iter()
+            .all(|s| s.flags & (flags::GAP | flags::DUPLICATE) == 0)
+    );
 }
 
 #[test]
@@ -217,7 +221,10 @@ fn ulog_real_files_equal_pyulog() {
             let out = inline_identity(Protocol::Ulog, &items, 0.0, 0.0);
             assert!(out == bytes, "{f}: inline identity differs from the input");
         } else {
-            eprintln!("{f}: {} garbage bytes (appended sections), inline identity not checked", st.garbage_bytes);
+            eprintln!(
+                "{f}: {} garbage bytes (appended sections), inline identity not checked",
+                st.garbage_bytes
+            );
         }
     }
 }

@@ -43,6 +43,14 @@ pub struct ProtocolConfig {
 pub const SOURCE_KEYS: [&str; 4] = ["protocol", "ubx", "mavlink", "ulog"];
 
 impl ProtocolConfig {
+    /// Default options, protocol detected from the first bytes.
+    pub fn auto() -> Self {
+        ProtocolConfig {
+            protocol: ProtocolChoice::Auto,
+            ..Default::default()
+        }
+    }
+
     /// A decoder for `p` with these options.
     pub fn decoder(&self, p: Protocol) -> Box<dyn ProtocolDecoder> {
         match p {
@@ -73,19 +81,42 @@ impl ProtocolConfig {
             }
         };
         let u = &self.ubx;
-        check(u.raw_tick_us.is_finite() && u.raw_tick_us > 0.0, "ubx.raw_tick_us", "must be > 0 µs");
-        check(u.meas_tick_us.is_finite() && u.meas_tick_us > 0.0, "ubx.meas_tick_us", "must be > 0 µs");
-        check((1..=32).contains(&u.raw_tag_bits), "ubx.raw_tag_bits", "must be 1..32");
-        check((1..=32).contains(&u.meas_tag_bits), "ubx.meas_tag_bits", "must be 1..32");
+        check(
+            u.raw_tick_us.is_finite() && u.raw_tick_us > 0.0,
+            "ubx.raw_tick_us",
+            "must be > 0 µs",
+        );
+        check(
+            u.meas_tick_us.is_finite() && u.meas_tick_us > 0.0,
+            "ubx.meas_tick_us",
+            "must be > 0 µs",
+        );
+        check(
+            (1..=32).contains(&u.raw_tag_bits),
+            "ubx.raw_tag_bits",
+            "must be 1..32",
+        );
+        check(
+            (1..=32).contains(&u.meas_tag_bits),
+            "ubx.meas_tag_bits",
+            "must be 1..32",
+        );
         let m = &self.mavlink;
         check(
-            m.message.as_deref().is_none_or(|n| super::mavlink::message_id(n).is_some()),
+            m.message
+                .as_deref()
+                .is_none_or(|n| super::mavlink::message_id(n).is_some()),
             "mavlink.message",
             "must be highres_imu, scaled_imu, scaled_imu2, scaled_imu3 or raw_imu",
         );
-        check(m.gyro_scale_rad_s >= 0.0 && m.accel_scale_m_s2 >= 0.0, "mavlink.gyro_scale_rad_s", "RAW_IMU scales must be ≥ 0");
         check(
-            m.message.as_deref() != Some("raw_imu") || (m.gyro_scale_rad_s > 0.0 && m.accel_scale_m_s2 > 0.0),
+            m.gyro_scale_rad_s >= 0.0 && m.accel_scale_m_s2 >= 0.0,
+            "mavlink.gyro_scale_rad_s",
+            "RAW_IMU scales must be ≥ 0",
+        );
+        check(
+            m.message.as_deref() != Some("raw_imu")
+                || (m.gyro_scale_rad_s > 0.0 && m.accel_scale_m_s2 > 0.0),
             "mavlink.message",
             "raw_imu needs gyro_scale_rad_s and accel_scale_m_s2 (raw counts have no unit)",
         );
@@ -95,7 +126,11 @@ impl ProtocolConfig {
             "must be sensor_combined or sensor_gyro (paired with sensor_accel)",
         );
         for r in [u.rate_hz, m.rate_hz, self.ulog.rate_hz] {
-            check(r.is_finite() && r >= 0.0, "rate_hz", "must be ≥ 0 Hz (0 = learn from time stamps)");
+            check(
+                r.is_finite() && r >= 0.0,
+                "rate_hz",
+                "must be ≥ 0 Hz (0 = learn from time stamps)",
+            );
         }
         e
     }

@@ -138,15 +138,15 @@ struct Frame<'a> {
 }
 
 fn parse_header(f: &[u8]) -> Option<Frame<'_>> {
-    match f.first()? {
-        &STX_V1 => Some(Frame {
+    match *f.first()? {
+        STX_V1 => Some(Frame {
             v2: false,
             sysid: f[3],
             compid: f[4],
             msgid: f[5] as u32,
             payload: &f[6..6 + f[1] as usize],
         }),
-        &STX_V2 => Some(Frame {
+        STX_V2 => Some(Frame {
             v2: true,
             sysid: f[5],
             compid: f[6],
@@ -304,17 +304,19 @@ impl MavlinkDecoder {
             return self.other(frame);
         }
         self.tracker.track(&mut s, &mut self.stats);
-        if self.descriptor.is_none() {
-            if let Some(r) = self.tracker.rate_hz() {
-                let d = Descriptor {
-                    sample_rate_hz: r,
-                    device_id: (key.sysid as u32) << 16 | (key.compid as u32) << 8 | key.instance as u32,
-                    ..Descriptor::default()
-                };
-                self.descriptor = Some(d);
-                self.pending_desc = Some(d);
-                self.stats.descriptors += 1;
-            }
+        if self.descriptor.is_none()
+            && let Some(r) = self.tracker.rate_hz()
+        {
+            let d = Descriptor {
+                sample_rate_hz: r,
+                device_id: (key.sysid as u32) << 16
+                    | (key.compid as u32) << 8
+                    | key.instance as u32,
+                ..Descriptor::default()
+            };
+            self.descriptor = Some(d);
+            self.pending_desc = Some(d);
+            self.stats.descriptors += 1;
         }
         flag_values(&mut s, self.descriptor.as_ref(), &mut self.stats);
         self.stats.samples += 1;
@@ -576,7 +578,11 @@ pub fn highres_payload(s: &Sample, instance: u8) -> Vec<u8> {
 mod tests {
     use super::*;
 
-    fn decode_all(opts: MavlinkOptions, bytes: &[u8], chunk: usize) -> (Vec<Decoded>, DecoderStats) {
+    fn decode_all(
+        opts: MavlinkOptions,
+        bytes: &[u8],
+        chunk: usize,
+    ) -> (Vec<Decoded>, DecoderStats) {
         let mut d = MavlinkDecoder::new(opts);
         let mut buf = BytesMut::new();
         let mut out = Vec::new();
@@ -614,24 +620,51 @@ mod tests {
     fn two_instances_are_kept_apart() {
         let mut b = BytesMut::new();
         for i in 0..10u64 {
-            encode_v2(i as u8, 1, 1, MSG_HIGHRES_IMU, &highres_payload(&sample(i), 0), &mut b);
-            encode_v2(i as u8, 1, 1, MSG_HIGHRES_IMU, &highres_payload(&sample(i), 1), &mut b);
+            encode_v2(
+                i as u8,
+                1,
+                1,
+                MSG_HIGHRES_IMU,
+                &highres_payload(&sample(i), 0),
+                &mut b,
+            );
+            encode_v2(
+                i as u8,
+                1,
+                1,
+                MSG_HIGHRES_IMU,
+                &highres_payload(&sample(i), 1),
+                &mut b,
+            );
         }
         let opts = MavlinkOptions {
             instance: Some(1),
             ..Default::default()
         };
         let (out, st) = decode_all(opts, &b, 13);
-        let n = out.iter().filter(|d| matches!(d, Decoded::Sample(..))).count();
+        let n = out
+            .iter()
+            .filter(|d| matches!(d, Decoded::Sample(..)))
+            .count();
         assert_eq!(n, 10);
         assert_eq!(st.other_messages, 10);
-        assert_eq!(st.duplicates, 0, "the other instance's same time stamps are not duplicates");
+        assert_eq!(
+            st.duplicates, 0,
+            "the other instance's same time stamps are not duplicates"
+        );
     }
 
     #[test]
     fn reencode_round_trips_and_keeps_ids() {
         let mut b = BytesMut::new();
-        encode_v2(7, 42, 200, MSG_HIGHRES_IMU, &highres_payload(&sample(1), 2), &mut b);
+        encode_v2(
+            7,
+            42,
+            200,
+            MSG_HIGHRES_IMU,
+            &highres_payload(&sample(1), 2),
+            &mut b,
+        );
         let mut s = sample(1);
         s.gyro[2] = 1.25;
         let mut out = BytesMut::new();

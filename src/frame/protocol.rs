@@ -17,7 +17,6 @@ use super::{DecoderStats, Descriptor, Message};
 use crate::sample::{Sample, flags};
 use bytes::{Bytes, BytesMut};
 
-
 /// The wire formats imuprep reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -72,7 +71,9 @@ pub struct Carrier {
     pub offsets: [u16; 4],
 }
 
-/// One item out of a decoder, in input order.
+/// One item out of a decoder, in input order. The sample is kept inline (not boxed): it is
+/// the hot path, and a box would allocate per sample.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum Decoded {
     Descriptor(Descriptor),

@@ -306,8 +306,8 @@ impl UbxDecoder {
             ..Sample::default()
         };
         let mut partial = false;
-        for c in 0..6 {
-            let v = vals[c].unwrap_or_else(|| {
+        for (c, val) in vals.iter().take(6).enumerate() {
+            let v = val.unwrap_or_else(|| {
                 partial = true;
                 f64::NAN
             });
@@ -318,17 +318,17 @@ impl UbxDecoder {
             self.stats.partial_samples += 1;
         }
         self.tracker.track(&mut s, &mut self.stats);
-        if !self.described {
-            if let Some(r) = self.tracker.rate_hz() {
-                self.described = true;
-                let d = Descriptor {
-                    sample_rate_hz: r,
-                    ..Descriptor::default()
-                };
-                self.descriptor = Some(d);
-                self.stats.descriptors += 1;
-                self.ready.push_back(Decoded::Descriptor(d));
-            }
+        if !self.described
+            && let Some(r) = self.tracker.rate_hz()
+        {
+            self.described = true;
+            let d = Descriptor {
+                sample_rate_hz: r,
+                ..Descriptor::default()
+            };
+            self.descriptor = Some(d);
+            self.stats.descriptors += 1;
+            self.ready.push_back(Decoded::Descriptor(d));
         }
         flag_values(&mut s, self.descriptor.as_ref(), &mut self.stats);
         self.stats.samples += 1;
@@ -348,7 +348,7 @@ impl UbxDecoder {
     /// ESF-RAW: blocks grouped by time tag, one sample per group.
     fn esf_raw(&mut self, frame: Bytes) {
         let p = &frame[6..frame.len() - 2];
-        if p.len() < 4 || (p.len() - 4) % 8 != 0 {
+        if p.len() < 4 || !(p.len() - 4).is_multiple_of(8) {
             self.stats.bad_payload += 1;
             self.other(frame);
             return;
@@ -411,9 +411,9 @@ impl UbxDecoder {
         self.stats.frames_ok += 1;
         match self.meas_pending.take() {
             Some(mut prev) if prev.tag == tag && prev.carrier.frame2.is_none() => {
-                for k in 0..7 {
-                    if vals[k].is_some() {
-                        prev.vals[k] = vals[k];
+                for (k, v) in vals.iter().enumerate() {
+                    if v.is_some() {
+                        prev.vals[k] = *v;
                     }
                 }
                 prev.carrier.frame2 = Some(frame);
@@ -693,7 +693,7 @@ pub fn patch(frame: &mut [u8], slot: u16, s: &Sample) {
         }
     };
     match frame[3] {
-        ID_ESF_RAW if plen >= 4 && (plen - 4) % 8 == 0 => {
+        ID_ESF_RAW if plen >= 4 && (plen - 4).is_multiple_of(8) => {
             let groups = raw_groups(&frame[6..6 + plen]);
             if let Some((_, r)) = groups.get(slot as usize) {
                 for b in r.clone() {
@@ -793,7 +793,10 @@ mod tests {
         assert_eq!(value24(0x107F_FFFF), 8_388_607);
         // 10091 counts of accel = 9.8545 m/s² (a real ZED-F9R z-axis reading at rest).
         assert!((physical(TYPE_ACCEL_Z, 10091).unwrap() - 10091.0 / 1024.0).abs() < 1e-12);
-        assert_eq!(raw_of(TYPE_GYRO_X, physical(TYPE_GYRO_X, -5).unwrap()), Some(-5));
+        assert_eq!(
+            raw_of(TYPE_GYRO_X, physical(TYPE_GYRO_X, -5).unwrap()),
+            Some(-5)
+        );
     }
 
     #[test]
@@ -836,7 +839,11 @@ mod tests {
                 _ => None,
             })
             .collect();
-        assert_eq!(t[1] - t[0], 10_000_000, "256 counts of 39.0625 µs after the wrap");
+        assert_eq!(
+            t[1] - t[0],
+            10_000_000,
+            "256 counts of 39.0625 µs after the wrap"
+        );
         assert_eq!(st.time_backwards, 0);
     }
 

@@ -119,6 +119,9 @@ enum Role {
     Accel,
 }
 
+/// Field name → (byte offset, type, array length).
+type FieldOffsets = HashMap<String, (usize, String, usize)>;
+
 /// Decoder for a ULog stream (a file read front to back).
 pub struct UlogDecoder {
     opts: UlogOptions,
@@ -192,7 +195,7 @@ impl UlogDecoder {
     }
 
     /// Byte offset of each named field of `topic`.
-    fn offsets(&self, topic: &str) -> Option<(HashMap<String, (usize, String, usize)>, usize)> {
+    fn offsets(&self, topic: &str) -> Option<(FieldOffsets, usize)> {
         let fields = self.formats.get(topic)?;
         let mut o = 0;
         let mut m = HashMap::new();
@@ -211,7 +214,8 @@ impl UlogDecoder {
                 .filter(|(_, t, k)| t == ty && *k >= n)
                 .map(|(o, _, _)| *o)
         };
-        let time = at("timestamp_sample", "uint64_t", 1).or_else(|| at("timestamp", "uint64_t", 1))?;
+        let time =
+            at("timestamp_sample", "uint64_t", 1).or_else(|| at("timestamp", "uint64_t", 1))?;
         let (xyz, accel) = match role {
             Role::Combined => (
                 at("gyro_rad", "float", 3)?,
@@ -226,10 +230,15 @@ impl UlogDecoder {
             }
         };
         let temp = at("temperature", "float", 1);
-        let need = [time + 8, xyz + 12, accel.map_or(0, |a| a + 12), temp.map_or(0, |t| t + 4)]
-            .into_iter()
-            .max()
-            .unwrap_or(0);
+        let need = [
+            time + 8,
+            xyz + 12,
+            accel.map_or(0, |a| a + 12),
+            temp.map_or(0, |t| t + 4),
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0);
         Some(Layout {
             time,
             xyz,
@@ -289,7 +298,13 @@ impl UlogDecoder {
         }
     }
 
-    fn sample_from(&mut self, t_us: u64, ch: [f64; 6], temp: Option<f64>, carrier: Carrier) -> Decoded {
+    fn sample_from(
+        &mut self,
+        t_us: u64,
+        ch: [f64; 6],
+        temp: Option<f64>,
+        carrier: Carrier,
+    ) -> Decoded {
         let mut s = Sample {
             t_ns: t_us.saturating_mul(1000),
             temp_c: temp,
@@ -297,17 +312,17 @@ impl UlogDecoder {
         };
         s.set_channels(&ch);
         self.tracker.track(&mut s, &mut self.stats);
-        if self.descriptor.is_none() {
-            if let Some(r) = self.tracker.rate_hz() {
-                let d = Descriptor {
-                    sample_rate_hz: r,
-                    axes: super::AxisConvention::Frd,
-                    ..Descriptor::default()
-                };
-                self.descriptor = Some(d);
-                self.stats.descriptors += 1;
-                self.pending = Some(Decoded::Descriptor(d));
-            }
+        if self.descriptor.is_none()
+            && let Some(r) = self.tracker.rate_hz()
+        {
+            let d = Descriptor {
+                sample_rate_hz: r,
+                axes: super::AxisConvention::Frd,
+                ..Descriptor::default()
+            };
+            self.descriptor = Some(d);
+            self.stats.descriptors += 1;
+            self.pending = Some(Decoded::Descriptor(d));
         }
         flag_values(&mut s, self.descriptor.as_ref(), &mut self.stats);
         self.stats.samples += 1;
@@ -327,12 +342,20 @@ impl UlogDecoder {
         }
         let t = u64::from_le_bytes(f[l.time..l.time + 8].try_into().expect("8 bytes"));
         let xyz = |o: usize| [0, 4, 8].map(|k| f32_at(f, o + k) as f64);
-        let temp = l.temp.map(|o| f32_at(f, o) as f64).filter(|t| t.is_finite());
+        let temp = l
+            .temp
+            .map(|o| f32_at(f, o) as f64)
+            .filter(|t| t.is_finite());
         match role {
             Role::Combined => {
                 let g = xyz(l.xyz);
                 let a = xyz(l.accel.expect("combined layout has accel"));
-                let off = [(DATA_FIELDS + l.xyz) as u16, (DATA_FIELDS + l.accel.unwrap_or(0)) as u16, u16::MAX, 0];
+                let off = [
+                    (DATA_FIELDS + l.xyz) as u16,
+                    (DATA_FIELDS + l.accel.unwrap_or(0)) as u16,
+                    u16::MAX,
+                    0,
+                ];
                 let c = Carrier {
                     frame: msg,
                     frame2: None,
@@ -576,8 +599,8 @@ pub fn patch(frame: &mut [u8], frame2: Option<&mut [u8]>, off: [u16; 4], s: &Sam
             f[o..o + 4].copy_from_slice(&(v as f32).to_le_bytes());
         }
     };
-    for k in 0..3 {
-        put(frame, off[0] as usize + 4 * k, ch[k]);
+    for (k, v) in ch.iter().take(3).enumerate() {
+        put(frame, off[0] as usize + 4 * k, *v);
     }
     if off[3] == 1 {
         if let Some(f2) = frame2 {
@@ -590,10 +613,10 @@ pub fn patch(frame: &mut [u8], frame2: Option<&mut [u8]>, off: [u16; 4], s: &Sam
             put(frame, off[1] as usize + 4 * k, ch[3 + k]);
         }
     }
-    if off[2] != u16::MAX {
-        if let Some(t) = s.temp_c {
-            put(frame, off[2] as usize, t);
-        }
+    if off[2] != u16::MAX
+        && let Some(t) = s.temp_c
+    {
+        put(frame, off[2] as usize, t);
     }
 }
 

@@ -3,11 +3,11 @@
 
 use crate::frame::detect::{DETECT_BYTES, ProtocolConfig};
 use crate::frame::{
-    Carrier, Codec, DecoderStats, Decoded, Descriptor, FrameDecoder, LOG_HEADER_LEN, LOG_MAGIC,
+    Carrier, Codec, Decoded, DecoderStats, Descriptor, FrameDecoder, LOG_HEADER_LEN, LOG_MAGIC,
     Protocol, ProtocolDecoder, check_log_header,
 };
-use bytes::Bytes;
 use crate::sample::Sample;
+use bytes::Bytes;
 use futures_util::StreamExt;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -116,7 +116,10 @@ async fn pump<R: AsyncRead + Unpin>(
         () => {{
             let stats = framed.decoder().0.stats();
             let ok = (extra.is_empty()
-                || tx.send(SourceEvent::Side(std::mem::take(&mut extra))).await.is_ok())
+                || tx
+                    .send(SourceEvent::Side(std::mem::take(&mut extra)))
+                    .await
+                    .is_ok())
                 && (batch.is_empty()
                     || tx
                         .send(SourceEvent::Samples(
@@ -180,9 +183,13 @@ async fn pump<R: AsyncRead + Unpin>(
         }
     }
     let stats = framed.decoder().0.stats();
-    let mut alive =
-        extra.is_empty() || tx.send(SourceEvent::Side(std::mem::take(&mut extra))).await.is_ok();
-    alive = alive && (batch.is_empty() || tx.send(SourceEvent::Samples(batch, stats)).await.is_ok());
+    let mut alive = extra.is_empty()
+        || tx
+            .send(SourceEvent::Side(std::mem::take(&mut extra)))
+            .await
+            .is_ok();
+    alive =
+        alive && (batch.is_empty() || tx.send(SourceEvent::Samples(batch, stats)).await.is_ok());
     let found = framed.decoder().0.found();
     if alive && !found.is_empty() {
         alive = tx.send(SourceEvent::Found(found)).await.is_ok();
@@ -242,7 +249,9 @@ pub async fn open_replay(
         drop(f);
         return Ok((open_log(path).await?, c.decoder(p)));
     }
-    f.seek(std::io::SeekFrom::Start(0)).await.map_err(open_err)?;
+    f.seek(std::io::SeekFrom::Start(0))
+        .await
+        .map_err(open_err)?;
     Ok((f, c.decoder(p)))
 }
 
@@ -287,19 +296,17 @@ pub async fn stdin_with(c: ProtocolConfig, side: bool, tx: mpsc::Sender<SourceEv
         }
     }
     let protocol = c.resolve(&head);
-    let prefix = if protocol == Protocol::Native
-        && head.len() >= LOG_HEADER_LEN
-        && head[..8] == LOG_MAGIC
-    {
-        if let Err(e) = check_log_header(&head) {
-            tracing::error!("stdin: {e}");
-            let _ = tx.send(SourceEvent::End(DecoderStats::default())).await;
-            return;
-        }
-        head[LOG_HEADER_LEN..].to_vec()
-    } else {
-        head
-    };
+    let prefix =
+        if protocol == Protocol::Native && head.len() >= LOG_HEADER_LEN && head[..8] == LOG_MAGIC {
+            if let Err(e) = check_log_header(&head) {
+                tracing::error!("stdin: {e}");
+                let _ = tx.send(SourceEvent::End(DecoderStats::default())).await;
+                return;
+            }
+            head[LOG_HEADER_LEN..].to_vec()
+        } else {
+            head
+        };
     let reader = std::io::Cursor::new(prefix).chain(input);
     let (dec, err, alive) = pump(reader, Codec(c.decoder(protocol)), &tx, None, side).await;
     if let Some(e) = err {
