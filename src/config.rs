@@ -154,6 +154,13 @@ pub enum SinkConfig {
         #[serde(default)]
         format: Format,
     },
+    /// Cleaned samples re-encoded in the input's own protocol, other messages passed through
+    /// unchanged and in order: to a serial device or file at `path`, or (no path) to a new
+    /// pseudo-terminal whose path is printed.
+    Inline {
+        #[serde(default)]
+        path: Option<PathBuf>,
+    },
 }
 
 fn csv() -> Format {
@@ -204,6 +211,10 @@ pub enum Sink {
         targets: Vec<SocketAddr>,
         format: Format,
     },
+    /// Inline output (see [`SinkConfig::Inline`]); `None` = a new pseudo-terminal.
+    Inline {
+        path: Option<PathBuf>,
+    },
 }
 
 /// A validated configuration: it can only exist if every check passed.
@@ -213,6 +224,8 @@ pub struct Config {
     pub sinks: Vec<Sink>,
     pub health: HealthConfig,
     pub stages: crate::stage::build::StagesConfig,
+    /// `[source] protocol` and the per-protocol option tables (`[source.ubx]`, …).
+    pub protocol: crate::frame::detect::ProtocolConfig,
 }
 
 impl Config {
@@ -251,6 +264,31 @@ impl Config {
                 );
             }
         }
+        // The protocol keys of [source] are read on their own (the source kinds' tables deny
+        // unknown keys).
+        let mut table = table;
+        let mut proto_table = toml::Table::new();
+        if let Some(src) = table.get_mut("source").and_then(|v| v.as_table_mut()) {
+            for k in crate::frame::detect::SOURCE_KEYS {
+                if let Some(v) = src.remove(k) {
+                    proto_table.insert(k.to_string(), v);
+                }
+            }
+        }
+        let protocol = match toml::Value::Table(proto_table)
+            .try_into::<crate::frame::detect::ProtocolConfig>()
+        {
+            Ok(p) => {
+                for (k, m) in p.validate() {
+                    errs.push(k, m);
+                }
+                p
+            }
+            Err(e) => {
+                errs.push("source", clean_serde(&e.to_string()));
+                Default::default()
+            }
+        };
         let source: Option<SourceConfig> = section(&table, "source", &mut errs);
         let source = match source {
             Some(s) => Some(s),
@@ -295,6 +333,7 @@ impl Config {
                 sinks,
                 health,
                 stages: stages.expect("no errors means the stages parsed"),
+                protocol,
             })
         } else {
             Err(ConfigErrors(errs.into_vec()))
@@ -382,6 +421,9 @@ fn validate_sink(s: &SinkConfig, base: &Path, path: &str, errs: &mut Errors) -> 
                 queue: *queue,
             })
         }
+        SinkConfig::Inline { path: p } => Some(Sink::Inline {
+            path: p.as_ref().map(|p| resolve(base, p)),
+        }),
         SinkConfig::Udp { targets, format } => {
             let mut out = Vec::new();
             for (i, t) in targets.iter().enumerate() {

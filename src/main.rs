@@ -76,10 +76,15 @@ enum Cmd {
         speed: f64,
         #[arg(long)]
         summary_json: Option<PathBuf>,
+        #[command(flatten)]
+        proto: imuprep::frame::detect::ProtocolArgs,
     },
-    /// Convert a CSV recording (canonical or vendor layout, optionally .gz) into a replay log.
+    /// Convert a recording into a replay log: CSV (canonical or vendor layout, optionally .gz),
+    /// or UBX / MAVLink / ULog (with --protocol, or any file that is not .csv: detected).
     Import {
         input: PathBuf,
+        #[command(flatten)]
+        proto: imuprep::frame::detect::ProtocolArgs,
         #[arg(short, long)]
         output: PathBuf,
         /// Column mapping, repeatable: --col gx=gyro_x_dps (keys: t gx gy gz ax ay az temp).
@@ -259,11 +264,17 @@ enum Cmd {
         #[arg(long)]
         json: Option<PathBuf>,
     },
-    /// Write a log's samples as canonical CSV plus seq and flags.
+    /// Write a recording's samples as canonical CSV plus seq and flags, or (--to) as a native
+    /// log, UBX ESF-RAW, MAVLink HIGHRES_IMU or ULog sensor_combined stream.
     Export {
         log: PathBuf,
         #[arg(short, long)]
         output: PathBuf,
+        /// Output format.
+        #[arg(long, value_enum, default_value = "csv")]
+        to: imuprep::io::convert::ExportFormat,
+        #[command(flatten)]
+        proto: imuprep::frame::detect::ProtocolArgs,
     },
 }
 
@@ -319,8 +330,12 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             out,
             speed,
             summary_json,
+            proto,
         } => {
             let mut cfg = load_config(&config)?;
+            proto.apply(&mut cfg.protocol);
+            let errs = cfg.protocol.validate();
+            anyhow::ensure!(errs.is_empty(), "{errs:?}");
             anyhow::ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
             // The log declares its rate: the stages use it rather than the config's nominal one.
             if let Ok(Some(d)) = imuprep::io::csv::read_descriptor(&log) {
@@ -332,6 +347,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
         }
         Cmd::Import {
             input,
+            proto,
             output,
             cols,
             gyro_unit,
@@ -367,7 +383,22 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                     })?;
                 o.columns[i] = Some(v.to_string());
             }
-            let (d, samples) = csvio::read_csv(&input, &o)?;
+            let is_csv = {
+                let n = input.to_string_lossy().to_ascii_lowercase();
+                n.ends_with(".csv") || n.ends_with(".csv.gz")
+            };
+            let (d, samples) = if is_csv && proto.protocol.is_none() {
+                csvio::read_csv(&input, &o)?
+            } else {
+                let mut pc = imuprep::frame::detect::ProtocolConfig::auto();
+                proto.apply(&mut pc);
+                let f = imuprep::io::convert::read_any(&input, &pc)?;
+                eprintln!("{} input: {}", f.protocol, f.found);
+                let mut d = f.descriptor.unwrap_or_default();
+                d.gyro_range_rad_s = o.gyro_range_rad_s;
+                d.accel_range_m_s2 = o.accel_range_m_s2;
+                (d, f.samples)
+            };
             csvio::write_log(&output, &d, &samples)?;
             eprintln!(
                 "imported {} samples ({:.1} s at {:.2} Hz) from {} into {}",
@@ -465,9 +496,24 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             out_dir,
             json,
         } => allan(&log, &channels, skip_s, &out_dir, json),
-        Cmd::Export { log, output } => {
-            let (_, samples, stats) = csvio::read_log(&log)?;
-            csvio::write_csv(&output, &samples)?;
+        Cmd::Export {
+            log,
+            output,
+            to,
+            proto,
+        } => {
+            let mut pc = imuprep::frame::detect::ProtocolConfig::auto();
+            proto.apply(&mut pc);
+            let f = imuprep::io::convert::read_any(&log, &pc)?;
+            let (samples, stats) = (f.samples, f.stats);
+            if to == imuprep::io::convert::ExportFormat::Csv {
+                csvio::write_csv(&output, &samples)?;
+            } else {
+                let d = f.descriptor.unwrap_or_default();
+                let b = imuprep::io::convert::encode_stream(to, &d, &samples);
+                std::fs::write(&output, &b)
+                    .with_context(|| format!("writing {}", output.display()))?;
+            }
             eprintln!(
                 "exported {} samples to {} ({} CRC errors, {} resyncs in the log)",
                 samples.len(),

@@ -37,6 +37,8 @@ pub struct Health {
     pub sinks: Vec<SinkReport>,
     /// Why the run ended: "end of input", "signal", ...
     pub ended_by: String,
+    /// What the source's decoder found (protocol, streams, topics).
+    pub source_found: String,
 }
 
 impl Health {
@@ -110,6 +112,16 @@ impl Health {
             self.flagged_warming_up,
             self.flagged_bias_removed
         );
+        if !self.source_found.is_empty() {
+            let _ = writeln!(o, "  found      : {}", self.source_found);
+        }
+        if d.other_messages + d.partial_samples + d.time_backwards + d.unverified > 0 {
+            let _ = writeln!(
+                o,
+                "  protocol   : {} other messages ({} bytes) passed by, {} partial samples, {} time steps backwards, {} unverified",
+                d.other_messages, d.other_bytes, d.partial_samples, d.time_backwards, d.unverified
+            );
+        }
         if self.source_outages > 0 {
             let _ = writeln!(o, "  source     : {} outages", self.source_outages);
         }
@@ -175,22 +187,27 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
         sinks.push(sink::start(s).await?);
     }
     let (tx, mut rx) = mpsc::channel::<SourceEvent>(16);
+    // Carriers and pass-through messages flow only when an inline sink wants them.
+    let side = sinks.iter().any(|k| k.wants_side);
+    let proto = cfg.protocol.clone();
     let src = match &cfg.source {
         SourceConfig::Replay { path, speed } => {
-            let f = source::open_log(path).await?;
-            tokio::spawn(source::replay(f, *speed, tx))
+            let (f, dec) = source::open_replay(path, &proto).await?;
+            tokio::spawn(source::replay_with(f, dec, *speed, side, tx))
         }
-        SourceConfig::Stdin => tokio::spawn(source::stdin(tx)),
+        SourceConfig::Stdin => tokio::spawn(source::stdin_with(proto, side, tx)),
         SourceConfig::Serial {
             port,
             baud,
             retry_initial_ms,
             retry_max_ms,
-        } => tokio::spawn(source::serial(
+        } => tokio::spawn(source::serial_with(
             port.clone(),
             *baud,
             Duration::from_millis(*retry_initial_ms),
             Duration::from_millis(*retry_max_ms),
+            proto,
+            side,
             tx,
         )),
     };
@@ -223,6 +240,13 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
                         k.offer(SinkItem::Descriptor(d)).await;
                     }
                 }
+                Some(SourceEvent::Side(items)) => {
+                    let items = Arc::new(items);
+                    for k in sinks.iter().filter(|k| k.wants_side) {
+                        k.offer(SinkItem::Side(items.clone())).await;
+                    }
+                }
+                Some(SourceEvent::Found(f)) => health.source_found = f,
                 Some(SourceEvent::Outage { reason, outages }) => {
                     health.source_outages = outages;
                     tracing::warn!("source outage #{outages}: {reason}");
@@ -351,8 +375,16 @@ pub fn parse_out_spec(spec: &str) -> Result<Sink, String> {
             ],
             format: Format::Native,
         }),
+        "inline" => Ok(Sink::Inline {
+            path: if rest.is_empty() || rest == "pty" {
+                None
+            } else {
+                Some(rest.into())
+            },
+        }),
+        "pty" => Ok(Sink::Inline { path: None }),
         _ => Err(format!(
-            "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR"
+            "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR, inline:PATH (the input's own protocol, to a serial device or file), pty: (the same on a new pseudo-terminal, its path printed)"
         )),
     }
 }

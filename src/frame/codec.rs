@@ -45,6 +45,19 @@ pub struct DecoderStats {
     /// Samples with a NaN/Inf channel, and samples with a saturated axis.
     pub non_finite: u64,
     pub saturated: u64,
+    /// Samples whose time stamp went backwards (protocols that carry time but no counter).
+    pub time_backwards: u64,
+    /// Good messages that are not IMU data of the selected stream (NMEA, GNSS, heartbeats, other
+    /// topics, other IMU instances): skipped by the sample path, passed through by inline sinks.
+    pub other_messages: u64,
+    /// Bytes of those messages.
+    pub other_bytes: u64,
+    /// Samples assembled with a channel missing (e.g. a UBX time tag without all six axes);
+    /// the missing channel is NaN and flagged non-finite.
+    pub partial_samples: u64,
+    /// Messages passed through whose checksum could not be verified (MAVLink message ids
+    /// without a known CRC-extra).
+    pub unverified: u64,
 }
 
 /// Backward sequence jumps up to this many frames are late duplicates; larger ones a restart.

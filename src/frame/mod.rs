@@ -17,12 +17,20 @@
 //! reserved field, then exactly the frames a serial port carries (starting with a descriptor).
 
 pub mod codec;
+pub mod detect;
+pub mod inline;
+pub mod mavlink;
+mod mavlink_crc;
+pub mod protocol;
+pub mod ubx;
+pub mod ulog;
 
 use crate::sample::{Sample, flags};
 use bytes::{BufMut, BytesMut};
 use crc::{CRC_16_IBM_3740, Crc, Table};
 
 pub use codec::{DecoderStats, FrameDecoder, FrameEncoder};
+pub use protocol::{Carrier, Codec, Decoded, Protocol, ProtocolDecoder, TimeTracker};
 
 /// Two sync bytes that open every frame.
 pub const SYNC: [u8; 2] = [0xA5, 0x5A];

@@ -1,6 +1,7 @@
 //! The async edges: sources that turn bytes into samples, sinks that publish them, and the
 //! CSV import/export that lets other tools and recordings meet imuprep.
 
+pub mod convert;
 pub mod csv;
 pub mod format;
 pub mod sink;

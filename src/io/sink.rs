@@ -1,4 +1,5 @@
-//! Sinks: stdout, file, TCP server, UDP. Each runs as its own task behind a bounded queue.
+//! Sinks: stdout, file, TCP server, UDP, inline (the input's own protocol to a serial device,
+//! file or pseudo-terminal). Each runs as its own task behind a bounded queue.
 //!
 //! The runtime hands every sink the same `Arc` batch. Lossless sinks (stdout, file: local, and
 //! wanted complete) are awaited; network sinks are offered the batch with `try_send`, and a full
@@ -22,6 +23,8 @@ use tokio::task::JoinHandle;
 pub enum SinkItem {
     Descriptor(Descriptor),
     Samples(Arc<Vec<Sample>>),
+    /// Carriers and pass-through messages, ahead of their samples (inline sinks only).
+    Side(Arc<Vec<crate::io::source::SideItem>>),
 }
 
 /// One TCP client's view.
@@ -64,6 +67,8 @@ pub struct SinkHandle {
     pub tx: mpsc::Sender<SinkItem>,
     /// Awaited by the runtime (never drops) when true.
     pub lossless: bool,
+    /// Wants the side stream ([`SinkItem::Side`]): inline sinks.
+    pub wants_side: bool,
     pub stats: Arc<SinkStats>,
     pub task: JoinHandle<()>,
 }
@@ -145,11 +150,23 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
                 tokio::spawn(udp_sender(sock, targets, format, rx, st)),
             )
         }
+        Sink::Inline { path } => {
+            let (name, task) = start_inline(path, rx, st).await?;
+            return Ok(SinkHandle {
+                name,
+                tx,
+                lossless: true,
+                wants_side: true,
+                stats,
+                task,
+            });
+        }
     };
     Ok(SinkHandle {
         name,
         tx,
         lossless,
+        wants_side: false,
         stats,
         task,
     })
@@ -171,6 +188,7 @@ async fn write_stream<W: tokio::io::AsyncWrite + Unpin>(
         match &item {
             SinkItem::Descriptor(d) if !started => enc.preamble(d, as_file, &mut buf),
             SinkItem::Descriptor(d) => enc.descriptor(d, &mut buf),
+            SinkItem::Side(_) => continue,
             SinkItem::Samples(b) => {
                 if !started {
                     enc.preamble(&Descriptor::default(), as_file, &mut buf);
@@ -236,6 +254,7 @@ async fn tcp_server(
                 let n = match &item {
                     SinkItem::Descriptor(d) => { descriptor = *d; enc.descriptor(d, &mut buf); 0 }
                     SinkItem::Samples(b) => { for s in b.iter() { enc.sample(s, &mut buf); } b.len() as u64 }
+                    SinkItem::Side(_) => 0,
                 };
                 if buf.is_empty() { continue; }
                 let bytes = buf.split().freeze();
@@ -288,5 +307,155 @@ async fn udp_sender(
             }
         }
         stats.samples_out.fetch_add(b.len() as u64, Relaxed);
+    }
+}
+
+/// Open the inline target: a path (serial device, pseudo-terminal or file; created if absent,
+/// written at the device's current line settings), or a new pseudo-terminal whose path is
+/// printed on stderr and logged.
+async fn start_inline(
+    path: Option<std::path::PathBuf>,
+    rx: mpsc::Receiver<SinkItem>,
+    stats: Arc<SinkStats>,
+) -> std::io::Result<(String, JoinHandle<()>)> {
+    match path {
+        Some(p) => {
+            let f = tokio::fs::OpenOptions::new()
+                .write(true)
+                .create(true)
+                .truncate(!is_char_device(&p))
+                .open(&p)
+                .await
+                .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", p.display())))?;
+            Ok((
+                format!("inline:{}", p.display()),
+                tokio::spawn(inline_writer(f, None::<()>, rx, stats)),
+            ))
+        }
+        None => {
+            #[cfg(unix)]
+            {
+                use tokio_serial::SerialPort;
+                let (master, slave) = tokio_serial::SerialStream::pair()
+                    .map_err(|e| std::io::Error::other(format!("pty: {e}")))?;
+                let name = slave.name().unwrap_or_else(|| "?".into());
+                eprintln!("imuprep: inline output on pseudo-terminal {name}");
+                tracing::info!(pty = %name, "inline output on a pseudo-terminal");
+                // The slave end stays open while we write, so the master never sees a hang-up
+                // before a reader attaches.
+                Ok((
+                    format!("pty:{name}"),
+                    tokio::spawn(inline_writer(master, Some(slave), rx, stats)),
+                ))
+            }
+            #[cfg(not(unix))]
+            {
+                Err(std::io::Error::other("pty: needs a Unix system"))
+            }
+        }
+    }
+}
+
+fn is_char_device(p: &std::path::Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        std::fs::metadata(p).is_ok_and(|m| m.file_type().is_char_device())
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = p;
+        false
+    }
+}
+
+/// Inline output: each cleaned sample goes back into its carrier, messages that are not IMU data
+/// are written unchanged, all in input order. The side stream arrives ahead of the samples (the
+/// pipeline may hold samples for its look-ahead); a pass-through message is written as soon as
+/// every sample before it has been.
+async fn inline_writer<W: tokio::io::AsyncWrite + Unpin, K: Send + 'static>(
+    mut w: W,
+    _keep: Option<K>,
+    mut rx: mpsc::Receiver<SinkItem>,
+    stats: Arc<SinkStats>,
+) {
+    use crate::frame::inline::InlineEncoder;
+    use crate::io::source::SideItem;
+    use std::collections::VecDeque;
+    let mut enc: Option<InlineEncoder> = None;
+    let mut queue: VecDeque<SideItem> = VecDeque::new();
+    let mut buf = BytesMut::with_capacity(1 << 16);
+    let mut unmatched = 0u64;
+    while let Some(item) = rx.recv().await {
+        buf.clear();
+        match item {
+            SinkItem::Descriptor(_) => continue,
+            SinkItem::Side(items) => queue.extend(items.iter().cloned()),
+            SinkItem::Samples(b) => {
+                for s in b.iter() {
+                    drain_others(&mut queue, &mut enc, &mut buf);
+                    match queue.pop_front() {
+                        Some(SideItem::Sample(c)) => {
+                            let e = enc.get_or_insert_with(|| {
+                                InlineEncoder::new(crate::frame::Protocol::Native, 0.0, 0.0)
+                            });
+                            e.sample(c.as_ref(), s, &mut buf);
+                        }
+                        _ => unmatched += 1,
+                    }
+                }
+                stats.samples_out.fetch_add(b.len() as u64, Relaxed);
+            }
+        }
+        drain_others(&mut queue, &mut enc, &mut buf);
+        if !buf.is_empty() && (w.write_all(&buf).await.is_err() || w.flush().await.is_err()) {
+            stats.errors.fetch_add(1, Relaxed);
+            break;
+        }
+    }
+    // End of stream: what is left (messages after the last sample, a half-filled frame).
+    buf.clear();
+    while let Some(it) = queue.pop_front() {
+        if let SideItem::Other(b) = it {
+            enc.get_or_insert_with(|| InlineEncoder::new(crate::frame::Protocol::Native, 0.0, 0.0))
+                .other(&b, &mut buf);
+        }
+    }
+    if let Some(e) = enc.as_mut() {
+        e.flush(&mut buf);
+    }
+    if unmatched > 0 {
+        stats.errors.fetch_add(unmatched, Relaxed);
+        tracing::warn!(unmatched, "inline sink: samples without a carrier");
+    }
+    let _ = w.write_all(&buf).await;
+    let _ = w.flush().await;
+}
+
+/// Write the pass-through messages at the front of the queue (no sample precedes them).
+fn drain_others(
+    queue: &mut std::collections::VecDeque<crate::io::source::SideItem>,
+    enc: &mut Option<crate::frame::inline::InlineEncoder>,
+    buf: &mut BytesMut,
+) {
+    use crate::frame::inline::InlineEncoder;
+    use crate::io::source::SideItem;
+    while let Some(front) = queue.front() {
+        match front {
+            SideItem::Protocol(p) => {
+                // The mavlink RAW_IMU scales are not known here; RAW_IMU values re-encode with
+                // the scales below only if the config's are passed (see docs/protocols.md).
+                *enc = Some(InlineEncoder::new(*p, 0.0, 0.0));
+                queue.pop_front();
+            }
+            SideItem::Other(b) => {
+                enc.get_or_insert_with(|| {
+                    InlineEncoder::new(crate::frame::Protocol::Native, 0.0, 0.0)
+                })
+                .other(b, buf);
+                queue.pop_front();
+            }
+            SideItem::Sample(_) => break,
+        }
     }
 }

@@ -1,14 +1,17 @@
 //! Sources: a recorded log, standard input, or a serial port — all through the same
 //! [`FrameDecoder`]. Each runs as a tokio task and sends [`SourceEvent`]s to the runtime.
 
+use crate::frame::detect::{DETECT_BYTES, ProtocolConfig};
 use crate::frame::{
-    DecoderStats, Descriptor, FrameDecoder, LOG_HEADER_LEN, LOG_MAGIC, Message, check_log_header,
+    Carrier, Codec, Decoded, DecoderStats, Descriptor, FrameDecoder, LOG_HEADER_LEN, LOG_MAGIC,
+    Protocol, ProtocolDecoder, check_log_header,
 };
 use crate::sample::Sample;
+use bytes::Bytes;
 use futures_util::StreamExt;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
-use tokio::io::{AsyncRead, AsyncReadExt};
+use tokio::io::{AsyncRead, AsyncReadExt, AsyncSeekExt};
 use tokio::sync::mpsc;
 use tokio_util::codec::FramedRead;
 
@@ -30,8 +33,24 @@ pub enum SourceEvent {
     Connected {
         name: String,
     },
+    /// What inline sinks need, in input order, sent before the samples it belongs to: the
+    /// protocol, each sample's carrier and the messages that are not IMU data.
+    Side(Vec<SideItem>),
+    /// What the decoder found (protocol, streams), sent before `End`.
+    Found(String),
     /// No more data: end of file or stream.
     End(DecoderStats),
+}
+
+/// One entry of the side stream (see [`SourceEvent::Side`]).
+#[derive(Debug, Clone)]
+pub enum SideItem {
+    /// The protocol of what follows (first item of a stream).
+    Protocol(Protocol),
+    /// The carrier of the next sample, in order.
+    Sample(Option<Carrier>),
+    /// A message that is not IMU data, to pass through unchanged.
+    Other(Bytes),
 }
 
 /// Why a source could not start.
@@ -75,64 +94,84 @@ pub async fn open_log(path: &Path) -> Result<tokio::fs::File, SourceError> {
 
 /// Pump one byte stream through the decoder to the runtime. Returns the decoder (so a serial
 /// source can carry its sequence tracking across a reconnect), the error that ended the stream if
-/// any, and whether the runtime is still listening.
+/// any, and whether the runtime is still listening. With `side`, each sample's carrier and the
+/// pass-through messages are sent ahead of the samples (for inline sinks).
 async fn pump<R: AsyncRead + Unpin>(
     reader: R,
-    decoder: FrameDecoder,
+    decoder: Codec,
     tx: &mpsc::Sender<SourceEvent>,
     pace: Option<f64>,
-) -> (FrameDecoder, Option<std::io::Error>, bool) {
+    side: bool,
+) -> (Codec, Option<std::io::Error>, bool) {
     let mut framed = FramedRead::new(reader, decoder);
     let mut batch = Vec::with_capacity(BATCH);
+    let mut extra: Vec<SideItem> = Vec::new();
     let mut pacer = pace.map(Pacer::new);
     let mut failure = None;
+    if side {
+        extra.push(SideItem::Protocol(framed.decoder().0.protocol()));
+    }
+    // Hand over what is held: the side items first, then the samples.
+    macro_rules! send {
+        () => {{
+            let stats = framed.decoder().0.stats();
+            let ok = (extra.is_empty()
+                || tx
+                    .send(SourceEvent::Side(std::mem::take(&mut extra)))
+                    .await
+                    .is_ok())
+                && (batch.is_empty()
+                    || tx
+                        .send(SourceEvent::Samples(
+                            std::mem::replace(&mut batch, Vec::with_capacity(BATCH)),
+                            stats,
+                        ))
+                        .await
+                        .is_ok());
+            if !ok {
+                return (framed.into_parts().codec, None, false);
+            }
+        }};
+    }
     loop {
         // Pull what is ready, up to a batch, without waiting once we hold something.
-        let item = if batch.is_empty() {
+        let item = if batch.is_empty() && extra.is_empty() {
             framed.next().await
         } else {
             match futures_util::FutureExt::now_or_never(framed.next()) {
                 Some(i) => i,
                 None => {
-                    let stats = framed.decoder().stats();
-                    let b = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
-                    if tx.send(SourceEvent::Samples(b, stats)).await.is_err() {
-                        return (framed.into_parts().codec, None, false);
-                    }
+                    send!();
                     continue;
                 }
             }
         };
         match item {
-            Some(Ok(Message::Sample(s))) => {
+            Some(Ok(Decoded::Sample(s, carrier))) => {
                 if let Some(wait) = pacer.as_mut().and_then(|p| p.wait_for(s.t_ns)) {
-                    {
-                        // Hand over what we hold before sleeping, so pacing is visible downstream.
-                        if !batch.is_empty() {
-                            let stats = framed.decoder().stats();
-                            let b = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
-                            if tx.send(SourceEvent::Samples(b, stats)).await.is_err() {
-                                return (framed.into_parts().codec, None, false);
-                            }
-                        }
-                        tokio::time::sleep(wait).await;
-                    }
+                    // Hand over what we hold before sleeping, so pacing is visible downstream.
+                    send!();
+                    tokio::time::sleep(wait).await;
+                }
+                if side {
+                    extra.push(SideItem::Sample(carrier));
                 }
                 batch.push(s);
                 if batch.len() == BATCH {
-                    let stats = framed.decoder().stats();
-                    let b = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
-                    if tx.send(SourceEvent::Samples(b, stats)).await.is_err() {
-                        return (framed.into_parts().codec, None, false);
+                    send!();
+                }
+            }
+            Some(Ok(Decoded::Other(b))) => {
+                if side {
+                    extra.push(SideItem::Other(b));
+                    if extra.len() >= BATCH * 2 {
+                        send!();
                     }
                 }
             }
-            Some(Ok(Message::Descriptor(d))) => {
-                let stats = framed.decoder().stats();
-                let b = std::mem::take(&mut batch);
-                if (!b.is_empty() && tx.send(SourceEvent::Samples(b, stats)).await.is_err())
-                    || tx.send(SourceEvent::Descriptor(d)).await.is_err()
-                {
+            Some(Ok(Decoded::Descriptor(d))) => {
+                send!();
+                if tx.send(SourceEvent::Descriptor(d)).await.is_err() {
                     return (framed.into_parts().codec, None, false);
                 }
             }
@@ -143,8 +182,18 @@ async fn pump<R: AsyncRead + Unpin>(
             None => break,
         }
     }
-    let stats = framed.decoder().stats();
-    let alive = batch.is_empty() || tx.send(SourceEvent::Samples(batch, stats)).await.is_ok();
+    let stats = framed.decoder().0.stats();
+    let mut alive = extra.is_empty()
+        || tx
+            .send(SourceEvent::Side(std::mem::take(&mut extra)))
+            .await
+            .is_ok();
+    alive =
+        alive && (batch.is_empty() || tx.send(SourceEvent::Samples(batch, stats)).await.is_ok());
+    let found = framed.decoder().0.found();
+    if alive && !found.is_empty() {
+        alive = tx.send(SourceEvent::Found(found)).await.is_ok();
+    }
     (framed.into_parts().codec, failure, alive)
 }
 
@@ -170,44 +219,101 @@ impl Pacer {
 
 /// Replay a recorded log (already opened by [`open_log`]). `speed` 0 = as fast as possible.
 pub async fn replay(file: tokio::fs::File, speed: f64, tx: mpsc::Sender<SourceEvent>) {
+    replay_with(file, Box::new(FrameDecoder::new()), speed, false, tx).await
+}
+
+/// Open a recording in any protocol: the configured one, or detected from its first bytes when
+/// `auto`. A native log's file header is checked and skipped; other files are read from the
+/// start.
+pub async fn open_replay(
+    path: &Path,
+    c: &ProtocolConfig,
+) -> Result<(tokio::fs::File, Box<dyn ProtocolDecoder>), SourceError> {
+    let open_err = |err| SourceError::Open {
+        path: path.into(),
+        err,
+    };
+    let mut f = tokio::fs::File::open(path).await.map_err(open_err)?;
+    let mut head = vec![0u8; DETECT_BYTES];
+    let mut n = 0;
+    while n < head.len() {
+        let k = f.read(&mut head[n..]).await.map_err(open_err)?;
+        if k == 0 {
+            break;
+        }
+        n += k;
+    }
+    head.truncate(n);
+    let p = c.resolve(&head);
+    if p == Protocol::Native {
+        drop(f);
+        return Ok((open_log(path).await?, c.decoder(p)));
+    }
+    f.seek(std::io::SeekFrom::Start(0))
+        .await
+        .map_err(open_err)?;
+    Ok((f, c.decoder(p)))
+}
+
+/// Replay a recording through `decoder`; `side` sends carriers and pass-through messages for
+/// inline sinks.
+pub async fn replay_with(
+    file: tokio::fs::File,
+    decoder: Box<dyn ProtocolDecoder>,
+    speed: f64,
+    side: bool,
+    tx: mpsc::Sender<SourceEvent>,
+) {
     let pace = (speed > 0.0).then_some(speed);
-    let (dec, err, alive) = pump(file, FrameDecoder::new(), &tx, pace).await;
+    let (dec, err, alive) = pump(file, Codec(decoder), &tx, pace, side).await;
     if let Some(e) = err {
         tracing::error!("replay read failed: {e}");
     }
     if alive {
-        let _ = tx.send(SourceEvent::End(dec.stats())).await;
+        let _ = tx.send(SourceEvent::End(dec.0.stats())).await;
     }
 }
 
 /// Frames on standard input; a log file header at the start is recognised and skipped.
 pub async fn stdin(tx: mpsc::Sender<SourceEvent>) {
+    stdin_with(ProtocolConfig::default(), false, tx).await
+}
+
+/// Standard input in the configured protocol (detected from the first bytes when `auto`).
+pub async fn stdin_with(c: ProtocolConfig, side: bool, tx: mpsc::Sender<SourceEvent>) {
     let mut input = tokio::io::stdin();
-    let mut head = Vec::with_capacity(LOG_HEADER_LEN);
-    let mut buf = [0u8; LOG_HEADER_LEN];
-    while head.len() < LOG_HEADER_LEN {
-        match input.read(&mut buf[..LOG_HEADER_LEN - head.len()]).await {
+    let want = if c.protocol == crate::frame::detect::ProtocolChoice::Auto {
+        DETECT_BYTES
+    } else {
+        LOG_HEADER_LEN
+    };
+    let mut head = Vec::with_capacity(want);
+    let mut buf = vec![0u8; want];
+    while head.len() < want {
+        match input.read(&mut buf[..want - head.len()]).await {
             Ok(0) | Err(_) => break,
             Ok(k) => head.extend_from_slice(&buf[..k]),
         }
     }
-    let prefix = if head.len() == LOG_HEADER_LEN && head[..8] == LOG_MAGIC {
-        if let Err(e) = check_log_header(&head) {
-            tracing::error!("stdin: {e}");
-            let _ = tx.send(SourceEvent::End(DecoderStats::default())).await;
-            return;
-        }
-        Vec::new()
-    } else {
-        head
-    };
+    let protocol = c.resolve(&head);
+    let prefix =
+        if protocol == Protocol::Native && head.len() >= LOG_HEADER_LEN && head[..8] == LOG_MAGIC {
+            if let Err(e) = check_log_header(&head) {
+                tracing::error!("stdin: {e}");
+                let _ = tx.send(SourceEvent::End(DecoderStats::default())).await;
+                return;
+            }
+            head[LOG_HEADER_LEN..].to_vec()
+        } else {
+            head
+        };
     let reader = std::io::Cursor::new(prefix).chain(input);
-    let (dec, err, alive) = pump(reader, FrameDecoder::new(), &tx, None).await;
+    let (dec, err, alive) = pump(reader, Codec(c.decoder(protocol)), &tx, None, side).await;
     if let Some(e) = err {
         tracing::error!("stdin read failed: {e}");
     }
     if alive {
-        let _ = tx.send(SourceEvent::End(dec.stats())).await;
+        let _ = tx.send(SourceEvent::End(dec.0.stats())).await;
     }
 }
 
@@ -220,13 +326,36 @@ pub async fn serial(
     retry_max: Duration,
     tx: mpsc::Sender<SourceEvent>,
 ) {
+    serial_with(
+        port,
+        baud,
+        retry_initial,
+        retry_max,
+        ProtocolConfig::default(),
+        false,
+        tx,
+    )
+    .await
+}
+
+/// A serial port in the configured protocol (`auto` detects it from the first bytes after the
+/// first open, up to [`DETECT_BYTES`] or 2 s).
+pub async fn serial_with(
+    port: String,
+    baud: u32,
+    retry_initial: Duration,
+    retry_max: Duration,
+    c: ProtocolConfig,
+    side: bool,
+    tx: mpsc::Sender<SourceEvent>,
+) {
     use tokio_serial::SerialPortBuilderExt;
-    let mut decoder = FrameDecoder::new();
+    let mut decoder: Option<Codec> = None;
     let mut outages = 0u64;
     let mut delay = retry_initial;
     loop {
         match tokio_serial::new(&port, baud).open_native_async() {
-            Ok(stream) => {
+            Ok(mut stream) => {
                 tracing::info!(port = %port, baud, "serial port open");
                 if tx
                     .send(SourceEvent::Connected { name: port.clone() })
@@ -236,8 +365,26 @@ pub async fn serial(
                     return;
                 }
                 delay = retry_initial;
-                let (dec, err, alive) = pump(stream, decoder, &tx, None).await;
-                decoder = dec;
+                let mut head = Vec::new();
+                let codec = match decoder.take() {
+                    Some(d) => d,
+                    None => {
+                        if c.protocol == crate::frame::detect::ProtocolChoice::Auto {
+                            let deadline = tokio::time::Instant::now() + Duration::from_secs(2);
+                            let mut b = vec![0u8; DETECT_BYTES];
+                            while head.len() < DETECT_BYTES {
+                                match tokio::time::timeout_at(deadline, stream.read(&mut b)).await {
+                                    Ok(Ok(k)) if k > 0 => head.extend_from_slice(&b[..k]),
+                                    _ => break,
+                                }
+                            }
+                        }
+                        Codec(c.decoder(c.resolve(&head)))
+                    }
+                };
+                let reader = std::io::Cursor::new(head).chain(stream);
+                let (dec, err, alive) = pump(reader, codec, &tx, None, side).await;
+                decoder = Some(dec);
                 if !alive {
                     return;
                 }

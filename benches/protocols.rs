@@ -1,0 +1,100 @@
+//! Decoder throughput per protocol beside the native decoder, same run, one core.
+//!
+//! `cargo bench --bench protocols` — criterion prints the median time per 100 000 IMU samples
+//! and the throughput in samples/s (elements/s). Frames/s: native, MAVLink and ULog carry one
+//! sample per frame; the UBX stream packs 4 sets per ESF-RAW message (as receivers batch them),
+//! so its frames/s is a quarter of its samples/s.
+
+use bytes::BytesMut;
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use imuprep::frame::mavlink::{self, MavlinkDecoder};
+use imuprep::frame::ubx::{self, UbxDecoder};
+use imuprep::frame::ulog::{self, UlogDecoder};
+use imuprep::frame::{Decoded, FrameDecoder, ProtocolDecoder, encode_sample};
+use imuprep::rng::Rng;
+use imuprep::sample::Sample;
+use std::hint::black_box;
+
+const N: usize = 100_000;
+
+fn samples() -> Vec<Sample> {
+    let mut r = Rng::new(1);
+    (0..N)
+        .map(|i| {
+            let mut s = Sample {
+                seq: i as u32,
+                t_ns: 1_000_000_000 + i as u64 * 5_000_000,
+                temp_c: Some(25.0),
+                ..Sample::default()
+            };
+            s.set_channels(&[
+                0.1 * r.normal(),
+                0.1 * r.normal(),
+                0.1 * r.normal(),
+                r.normal(),
+                r.normal(),
+                9.8 + r.normal(),
+            ]);
+            s
+        })
+        .collect()
+}
+
+fn count(mut d: Box<dyn ProtocolDecoder>, bytes: &[u8]) -> u64 {
+    let mut buf = BytesMut::from(bytes);
+    let mut n = 0u64;
+    while let Some(x) = d.decode_item(&mut buf) {
+        if let Decoded::Sample(s, _) = x {
+            n += s.seq as u64;
+        }
+    }
+    n
+}
+
+fn bench(c: &mut Criterion) {
+    let ss = samples();
+    let mut native = BytesMut::new();
+    let mut ubx_b = BytesMut::new();
+    let mut mav = BytesMut::new();
+    let mut ulg = BytesMut::new();
+    for s in &ss {
+        encode_sample(s, &mut native);
+    }
+    for (k, chunk) in ss.chunks(4).enumerate() {
+        let sets: Vec<(u32, Sample)> = chunk
+            .iter()
+            .enumerate()
+            .map(|(j, s)| ((((4 * k + j) as u32) * 128) & 0xFF_FFFF, *s))
+            .collect();
+        ubx::encode_esf_raw(&sets, &mut ubx_b);
+    }
+    for (i, s) in ss.iter().enumerate() {
+        mavlink::encode_v2(
+            i as u8,
+            1,
+            1,
+            mavlink::MSG_HIGHRES_IMU,
+            &mavlink::highres_payload(s, 0),
+            &mut mav,
+        );
+    }
+    ulog::encode_sensor_combined_log(&ss, &mut ulg);
+    let mut g = c.benchmark_group("decode_100k_samples");
+    g.throughput(Throughput::Elements(N as u64));
+    g.bench_function("native", |b| {
+        b.iter(|| black_box(count(Box::new(FrameDecoder::new()), &native)))
+    });
+    g.bench_function("ubx_esf_raw", |b| {
+        b.iter(|| black_box(count(Box::new(UbxDecoder::default()), &ubx_b)))
+    });
+    g.bench_function("mavlink_highres_imu", |b| {
+        b.iter(|| black_box(count(Box::new(MavlinkDecoder::default()), &mav)))
+    });
+    g.bench_function("ulog_sensor_combined", |b| {
+        b.iter(|| black_box(count(Box::new(UlogDecoder::default()), &ulg)))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

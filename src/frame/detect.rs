@@ -1,0 +1,265 @@
+//! Choosing a decoder: `[source] protocol = "native" | "ubx" | "mavlink" | "ulog" | "auto"` and
+//! the per-protocol options (`[source.ubx]`, `[source.mavlink]`, `[source.ulog]`), the same
+//! settings as command-line flags, and detection of the protocol from the first bytes.
+//!
+//! Detection feeds the first bytes (up to [`DETECT_BYTES`]) to every decoder and takes the one
+//! that finds the most good frames (IMU samples counting double); a file magic (native log,
+//! ULog) decides at once.
+
+use super::mavlink::{MavlinkDecoder, MavlinkOptions};
+use super::protocol::{Decoded, Protocol, ProtocolDecoder};
+use super::ubx::{UbxDecoder, UbxOptions};
+use super::ulog::{UlogDecoder, UlogOptions};
+use super::{DecoderStats, Descriptor, FrameDecoder, LOG_HEADER_LEN, LOG_MAGIC};
+use crate::sample::Sample;
+use bytes::BytesMut;
+
+/// Bytes looked at to detect the protocol.
+pub const DETECT_BYTES: usize = 4096;
+
+/// `protocol` as configured: one of the protocols, or detect it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum ProtocolChoice {
+    #[default]
+    Native,
+    Ubx,
+    Mavlink,
+    Ulog,
+    Auto,
+}
+
+/// The source's protocol and the options of each protocol.
+#[derive(Clone, Debug, PartialEq, Default, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ProtocolConfig {
+    pub protocol: ProtocolChoice,
+    pub ubx: UbxOptions,
+    pub mavlink: MavlinkOptions,
+    pub ulog: UlogOptions,
+}
+
+/// Keys of `[source]` that belong to [`ProtocolConfig`].
+pub const SOURCE_KEYS: [&str; 4] = ["protocol", "ubx", "mavlink", "ulog"];
+
+impl ProtocolConfig {
+    /// Default options, protocol detected from the first bytes.
+    pub fn auto() -> Self {
+        ProtocolConfig {
+            protocol: ProtocolChoice::Auto,
+            ..Default::default()
+        }
+    }
+
+    /// A decoder for `p` with these options.
+    pub fn decoder(&self, p: Protocol) -> Box<dyn ProtocolDecoder> {
+        match p {
+            Protocol::Native => Box::new(FrameDecoder::new()),
+            Protocol::Ubx => Box::new(UbxDecoder::new(self.ubx)),
+            Protocol::Mavlink => Box::new(MavlinkDecoder::new(self.mavlink.clone())),
+            Protocol::Ulog => Box::new(UlogDecoder::new(self.ulog.clone())),
+        }
+    }
+
+    /// The configured protocol, or the one detected from `head` when `auto`.
+    pub fn resolve(&self, head: &[u8]) -> Protocol {
+        match self.protocol {
+            ProtocolChoice::Native => Protocol::Native,
+            ProtocolChoice::Ubx => Protocol::Ubx,
+            ProtocolChoice::Mavlink => Protocol::Mavlink,
+            ProtocolChoice::Ulog => Protocol::Ulog,
+            ProtocolChoice::Auto => detect(head, self),
+        }
+    }
+
+    /// Check option values; errors as (key path, message).
+    pub fn validate(&self) -> Vec<(String, String)> {
+        let mut e = Vec::new();
+        let mut check = |ok: bool, k: &str, m: &str| {
+            if !ok {
+                e.push((format!("source.{k}"), m.to_string()));
+            }
+        };
+        let u = &self.ubx;
+        check(
+            u.raw_tick_us.is_finite() && u.raw_tick_us > 0.0,
+            "ubx.raw_tick_us",
+            "must be > 0 µs",
+        );
+        check(
+            u.meas_tick_us.is_finite() && u.meas_tick_us > 0.0,
+            "ubx.meas_tick_us",
+            "must be > 0 µs",
+        );
+        check(
+            (1..=32).contains(&u.raw_tag_bits),
+            "ubx.raw_tag_bits",
+            "must be 1..32",
+        );
+        check(
+            (1..=32).contains(&u.meas_tag_bits),
+            "ubx.meas_tag_bits",
+            "must be 1..32",
+        );
+        let m = &self.mavlink;
+        check(
+            m.message
+                .as_deref()
+                .is_none_or(|n| super::mavlink::message_id(n).is_some()),
+            "mavlink.message",
+            "must be highres_imu, scaled_imu, scaled_imu2, scaled_imu3 or raw_imu",
+        );
+        check(
+            m.gyro_scale_rad_s >= 0.0 && m.accel_scale_m_s2 >= 0.0,
+            "mavlink.gyro_scale_rad_s",
+            "RAW_IMU scales must be ≥ 0",
+        );
+        check(
+            m.message.as_deref() != Some("raw_imu")
+                || (m.gyro_scale_rad_s > 0.0 && m.accel_scale_m_s2 > 0.0),
+            "mavlink.message",
+            "raw_imu needs gyro_scale_rad_s and accel_scale_m_s2 (raw counts have no unit)",
+        );
+        check(
+            ["sensor_combined", "sensor_gyro"].contains(&self.ulog.topic.as_str()),
+            "ulog.topic",
+            "must be sensor_combined or sensor_gyro (paired with sensor_accel)",
+        );
+        for r in [u.rate_hz, m.rate_hz, self.ulog.rate_hz] {
+            check(
+                r.is_finite() && r >= 0.0,
+                "rate_hz",
+                "must be ≥ 0 Hz (0 = learn from time stamps)",
+            );
+        }
+        e
+    }
+}
+
+/// Command-line flags that set the protocol and its options (they override the config).
+#[derive(Clone, Debug, Default, clap::Args)]
+pub struct ProtocolArgs {
+    /// Input protocol: native, ubx (u-blox ESF-RAW/ESF-MEAS), mavlink (HIGHRES_IMU, SCALED_IMU*,
+    /// RAW_IMU), ulog (PX4 sensor_combined), or auto (detect from the first bytes).
+    #[arg(long, value_enum)]
+    pub protocol: Option<ProtocolChoice>,
+    /// ULog topic: sensor_combined, or sensor_gyro (paired with sensor_accel, with temperature).
+    #[arg(long)]
+    pub topic: Option<String>,
+    /// IMU instance: ULog multi-instance id, MAVLink instance (SCALED_IMU2 = 1, HIGHRES_IMU id).
+    #[arg(long)]
+    pub instance: Option<u8>,
+    /// MAVLink system id of the IMU to read (default: the first IMU stream seen).
+    #[arg(long)]
+    pub sysid: Option<u8>,
+    /// MAVLink component id of the IMU to read.
+    #[arg(long)]
+    pub compid: Option<u8>,
+    /// MAVLink message: highres_imu, scaled_imu, scaled_imu2, scaled_imu3, raw_imu.
+    #[arg(long = "mavlink-message")]
+    pub mavlink_message: Option<String>,
+    /// RAW_IMU gyro scale, rad/s per count.
+    #[arg(long = "raw-gyro-scale")]
+    pub raw_gyro_scale: Option<f64>,
+    /// RAW_IMU accel scale, m/s² per count.
+    #[arg(long = "raw-accel-scale")]
+    pub raw_accel_scale: Option<f64>,
+    /// UBX ESF-RAW sensor time tag resolution, µs per count (default 39.0625).
+    #[arg(long = "ubx-raw-tick-us")]
+    pub ubx_raw_tick_us: Option<f64>,
+}
+
+impl ProtocolArgs {
+    /// Apply the flags given on top of `c`.
+    pub fn apply(&self, c: &mut ProtocolConfig) {
+        if let Some(p) = self.protocol {
+            c.protocol = p;
+        }
+        if let Some(t) = &self.topic {
+            c.ulog.topic = t.clone();
+        }
+        if let Some(i) = self.instance {
+            c.ulog.instance = i;
+            c.mavlink.instance = Some(i);
+        }
+        if self.sysid.is_some() {
+            c.mavlink.sysid = self.sysid;
+        }
+        if self.compid.is_some() {
+            c.mavlink.compid = self.compid;
+        }
+        if self.mavlink_message.is_some() {
+            c.mavlink.message = self.mavlink_message.clone();
+        }
+        if let Some(v) = self.raw_gyro_scale {
+            c.mavlink.gyro_scale_rad_s = v;
+        }
+        if let Some(v) = self.raw_accel_scale {
+            c.mavlink.accel_scale_m_s2 = v;
+        }
+        if let Some(v) = self.ubx_raw_tick_us {
+            c.ubx.raw_tick_us = v;
+        }
+    }
+}
+
+/// The protocol whose decoder finds the most in `head`.
+pub fn detect(head: &[u8], c: &ProtocolConfig) -> Protocol {
+    if head.starts_with(&LOG_MAGIC) {
+        return Protocol::Native;
+    }
+    if head.starts_with(&super::ulog::MAGIC) {
+        return Protocol::Ulog;
+    }
+    let mut best = (Protocol::Native, 0u64);
+    for p in [Protocol::Native, Protocol::Ubx, Protocol::Mavlink] {
+        let mut d = c.decoder(p);
+        let mut buf = BytesMut::from(head);
+        while d.decode_item(&mut buf).is_some() {}
+        let st = d.stats();
+        let score = st.frames_ok + st.samples;
+        if score > best.1 {
+            best = (p, score);
+        }
+    }
+    best.0
+}
+
+/// Everything decoded from a whole byte string (a file): descriptor, samples, decoder counters,
+/// the protocol used and what the decoder reports it found.
+pub struct DecodedFile {
+    pub protocol: Protocol,
+    pub descriptor: Option<Descriptor>,
+    pub samples: Vec<Sample>,
+    pub stats: DecoderStats,
+    pub found: String,
+}
+
+/// Decode a whole file's bytes (a native log's file header is skipped).
+pub fn decode_bytes(bytes: &[u8], c: &ProtocolConfig) -> DecodedFile {
+    let head = &bytes[..bytes.len().min(DETECT_BYTES)];
+    let protocol = c.resolve(head);
+    let body = if protocol == Protocol::Native && bytes.starts_with(&LOG_MAGIC) {
+        &bytes[LOG_HEADER_LEN.min(bytes.len())..]
+    } else {
+        bytes
+    };
+    let mut d = c.decoder(protocol);
+    let mut buf = BytesMut::from(body);
+    let mut samples = Vec::new();
+    let mut descriptor = None;
+    while let Some(item) = d.decode_item_eof(&mut buf) {
+        match item {
+            Decoded::Sample(s, _) => samples.push(s),
+            Decoded::Descriptor(x) => descriptor = descriptor.or(Some(x)),
+            Decoded::Other(_) => {}
+        }
+    }
+    DecodedFile {
+        protocol,
+        descriptor: descriptor.or(d.descriptor()),
+        samples,
+        stats: d.stats(),
+        found: d.found(),
+    }
+}

@@ -1,0 +1,99 @@
+//! Inline re-encoding: cleaned samples written back into the input's own protocol, every other
+//! message passed through unchanged and in order.
+//!
+//! The decoder hands each sample's [`Carrier`] (the original message bytes) to the side stream;
+//! the pipeline hands back the cleaned [`Sample`]s in the same order. For each one the encoder
+//! copies the carrier, writes the cleaned values at the protocol's resolution (a non-finite
+//! cleaned value keeps the original field), fixes the checksum and appends the message. A
+//! message that carries several samples (UBX ESF-RAW) is written once its last sample is done.
+
+use super::protocol::{Carrier, Protocol};
+use super::{mavlink, ubx, ulog};
+use crate::sample::Sample;
+use bytes::{Bytes, BytesMut};
+
+/// Re-encodes cleaned samples into their carriers.
+pub struct InlineEncoder {
+    protocol: Protocol,
+    /// RAW_IMU scales (rad/s and m/s² per count) for MAVLink.
+    raw_gyro_scale: f64,
+    raw_accel_scale: f64,
+    /// A multi-sample frame being patched: original, patched copy.
+    cur: Option<(Bytes, Vec<u8>)>,
+}
+
+impl InlineEncoder {
+    pub fn new(protocol: Protocol, raw_gyro_scale: f64, raw_accel_scale: f64) -> Self {
+        InlineEncoder {
+            protocol,
+            raw_gyro_scale,
+            raw_accel_scale,
+            cur: None,
+        }
+    }
+
+    /// A message that is not IMU data: written unchanged (after any frame still being filled).
+    pub fn other(&mut self, b: &[u8], out: &mut BytesMut) {
+        self.flush(out);
+        out.extend_from_slice(b);
+    }
+
+    /// Write what is held (a multi-sample frame whose later samples never came).
+    pub fn flush(&mut self, out: &mut BytesMut) {
+        if let Some((_, mut f)) = self.cur.take() {
+            if self.protocol == Protocol::Ubx {
+                ubx::finish(&mut f);
+            }
+            out.extend_from_slice(&f);
+        }
+    }
+
+    /// One cleaned sample and the carrier of its raw original.
+    pub fn sample(&mut self, c: Option<&Carrier>, s: &Sample, out: &mut BytesMut) {
+        let Some(c) = c else {
+            if self.protocol == Protocol::Native {
+                super::encode_sample(s, out);
+            }
+            return;
+        };
+        match self.protocol {
+            Protocol::Native => super::encode_sample(s, out),
+            Protocol::Mavlink => {
+                self.flush(out);
+                mavlink::reencode(&c.frame, s, self.raw_gyro_scale, self.raw_accel_scale, out)
+            }
+            Protocol::Ubx => {
+                let same = matches!(&self.cur, Some((o, _)) if o.as_ptr() == c.frame.as_ptr() && o.len() == c.frame.len());
+                if !same {
+                    self.flush(out);
+                    self.cur = Some((c.frame.clone(), c.frame.to_vec()));
+                }
+                if let Some((_, f)) = self.cur.as_mut() {
+                    ubx::patch(f, c.slot, s);
+                }
+                if c.slot + 1 >= c.slots {
+                    self.flush(out);
+                    if let Some(b) = &c.between {
+                        out.extend_from_slice(b);
+                    }
+                    if let Some(f2) = &c.frame2 {
+                        let mut f2 = f2.to_vec();
+                        ubx::patch(&mut f2, 0, s);
+                        ubx::finish(&mut f2);
+                        out.extend_from_slice(&f2);
+                    }
+                }
+            }
+            Protocol::Ulog => {
+                self.flush(out);
+                let mut f = c.frame.to_vec();
+                let mut f2 = c.frame2.as_ref().map(|b| b.to_vec());
+                ulog::patch(&mut f, f2.as_deref_mut(), c.offsets, s);
+                out.extend_from_slice(&f);
+                if let Some(f2) = f2 {
+                    out.extend_from_slice(&f2);
+                }
+            }
+        }
+    }
+}
