@@ -141,7 +141,7 @@ impl AuditReport {
     }
 }
 
-/// Recordings under `dir`: `.log` (native), `.csv`, `.csv.gz`, sorted by path.
+/// Recordings under `dir`: `.log` (native), `.csv`, `.csv.gz`, `.ulg` (PX4), sorted by path.
 pub fn find_recordings(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -152,7 +152,10 @@ pub fn find_recordings(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
                 stack.push(p);
             } else {
                 let n = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
-                if n.ends_with(".log") || n.ends_with(".csv") || n.ends_with(".csv.gz") {
+                if [".log", ".csv", ".csv.gz", ".ulg"]
+                    .iter()
+                    .any(|e| n.ends_with(e))
+                {
                     out.push(p);
                 }
             }
@@ -168,6 +171,13 @@ pub fn load_recording(path: &Path) -> Result<(Descriptor, Vec<Sample>), String> 
     if name.ends_with(".log") {
         let (d, s, _) = read_log(path).map_err(|e| e.to_string())?;
         Ok((d.unwrap_or_default(), s))
+    } else if name.ends_with(".ulg") {
+        let pc = crate::frame::detect::ProtocolConfig::auto();
+        let f = crate::io::convert::read_any(path, &pc).map_err(|e| e.to_string())?;
+        if f.samples.is_empty() {
+            return Err("no IMU samples decoded".into());
+        }
+        Ok((f.descriptor.unwrap_or_default(), f.samples))
     } else {
         read_csv(path, &ImportOptions::default()).map_err(|e| e.to_string())
     }
