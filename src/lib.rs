@@ -23,5 +23,6 @@ pub mod runtime;
 pub mod sample;
 pub mod sim;
 pub mod stage;
+pub mod stats;
 
 pub use sample::{Sample, flags};

@@ -3,10 +3,9 @@
 //! σ = 0.02, N = 2000). Values printed by `tests/reference/arima_statsmodels.py`
 //! (numpy 2.4.6, scipy 1.17.1, statsmodels 0.15.0).
 
-use imuprep::analysis::hypothesis::{
-    AdfLag, acf, adf, ljung_box, mackinnon_crit, mackinnon_p, pacf,
-};
 use imuprep::model::arima::{CssOptions, difference, fit_arima, fit_css};
+use imuprep::stats::acf::{acf, ljung_box, pacf};
+use imuprep::stats::adf::{AdfLag, adf, mackinnon_crit, mackinnon_p};
 
 fn fixture() -> Vec<f64> {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/arma11.csv");

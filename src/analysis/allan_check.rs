@@ -14,8 +14,8 @@
 //! For a rate random walk, K² = 3 σ²_ex(τ)/τ is averaged over the excess region.
 
 use super::allan::oadev_octaves;
-use super::ljung_box::chi2_sf;
 use super::{AnalysisError, check_finite};
+use crate::stats::special::chi2_sf;
 use serde::Serialize;
 
 /// What the Allan deviation of the residual shows.

@@ -79,8 +79,7 @@ fn timing(samples: &[Sample], rate_hz: f64) -> Timing {
     let median_dt_s = if dts.is_empty() {
         0.0
     } else {
-        let k = dts.len() / 2;
-        *dts.select_nth_unstable_by(k, f64::total_cmp).1
+        crate::stats::robust::upper_median(&mut dts)
     };
     let span_s = match (samples.first(), samples.last()) {
         (Some(a), Some(b)) => (b.t_ns as f64 - a.t_ns as f64) * 1e-9,

@@ -112,7 +112,7 @@ pub fn compare_detectors(
     }
     let mut stage = GrossErrorStage::new(settings.clone(), model).map_err(|e| e.to_string())?;
     let online: Vec<Sample> = crate::stage::run_through(&mut stage, samples);
-    type Offline = fn(&[f64]) -> Result<Detection, detectors::DetectorError>;
+    type Offline = fn(&[f64]) -> Result<Detection, crate::stats::NumError>;
     let offline: [(&str, Offline); 5] = [
         ("global 3-sigma", detectors::three_sigma),
         ("Grubbs (alpha 0.05)", |x| detectors::grubbs(x, 0.05)),

@@ -12,10 +12,9 @@
 //!   more extreme end's gap-to-range ratio `Q = gap / range` is compared with Rorabacher's (1991)
 //!   two-sided 95 % critical value for that n (tabulated for n = 3..10; the table is checked by
 //!   simulation in the tests). At most one sample per window is flagged.
-//! * **Hampel** (moving median/MAD): for each i, over the window `i−h..=i+h` (truncated at the
-//!   ends) median m_i and `S_i = 1.4826 · median |x_j − m_i|`; flag `|x_i − m_i| > k S_i` (never when
-//!   `S_i = 0`, a flat window); baseline parameters h = 10 (a 21-sample window: the median stays
-//!   uncontaminated by runs of up to 10) and k = 3.
+//! * **Hampel** (moving median/MAD, [`crate::stats::robust::hampel`], re-exported here); baseline
+//!   parameters h = 10 (a 21-sample window: the median stays uncontaminated by runs of up to 10)
+//!   and k = 3.
 //!
 //! Corrections: Hampel replaces a flagged sample by its window median (its own definition); the
 //! other four replace flagged samples by linear interpolation between the nearest unflagged
@@ -31,40 +30,10 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::analysis::special::{normal_sf, student_t_quantile};
+use crate::stats::special::{normal_sf, student_t_quantile};
+use crate::stats::{NumError, check_series};
 
-/// Why a detector could not run.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum DetectorError {
-    #[error("series too short: need at least {needed} samples, got {got}")]
-    TooShort { needed: usize, got: usize },
-    #[error("non-finite value at index {index}")]
-    NonFinite { index: usize },
-    #[error("length mismatch: {0}")]
-    LengthMismatch(String),
-    #[error("bad parameter: {0}")]
-    BadParameter(String),
-}
-
-/// A detector's output: which samples it flags and the corrected series.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Detection {
-    pub mask: Vec<bool>,
-    pub corrected: Vec<f64>,
-}
-
-fn check(x: &[f64], min: usize) -> Result<(), DetectorError> {
-    if x.len() < min {
-        return Err(DetectorError::TooShort {
-            needed: min,
-            got: x.len(),
-        });
-    }
-    match x.iter().position(|v| !v.is_finite()) {
-        Some(index) => Err(DetectorError::NonFinite { index }),
-        None => Ok(()),
-    }
-}
+pub use crate::stats::robust::{Detection, hampel};
 
 fn mean_sd(x: &[f64]) -> (f64, f64) {
     let n = x.len() as f64;
@@ -110,8 +79,8 @@ fn detection(x: &[f64], mask: Vec<bool>) -> Detection {
 }
 
 /// Global 3σ rule.
-pub fn three_sigma(x: &[f64]) -> Result<Detection, DetectorError> {
-    check(x, 3)?;
+pub fn three_sigma(x: &[f64]) -> Result<Detection, NumError> {
+    check_series(x, 3)?;
     let (m, s) = mean_sd(x);
     let mask = x.iter().map(|v| (v - m).abs() > 3.0 * s).collect();
     Ok(detection(x, mask))
@@ -125,10 +94,10 @@ pub fn grubbs_critical(n: usize, alpha: f64) -> f64 {
 }
 
 /// Iterative two-sided Grubbs test at level `alpha` (the paper's baseline uses 0.05).
-pub fn grubbs(x: &[f64], alpha: f64) -> Result<Detection, DetectorError> {
-    check(x, 3)?;
+pub fn grubbs(x: &[f64], alpha: f64) -> Result<Detection, NumError> {
+    check_series(x, 3)?;
     if !(alpha > 0.0 && alpha < 1.0) {
-        return Err(DetectorError::BadParameter(format!("alpha = {alpha}")));
+        return Err(NumError::BadSetting(format!("alpha = {alpha}")));
     }
     let mut idx: Vec<usize> = (0..x.len()).collect();
     idx.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
@@ -170,8 +139,8 @@ pub fn grubbs(x: &[f64], alpha: f64) -> Result<Detection, DetectorError> {
 }
 
 /// Chauvenet's criterion (single pass).
-pub fn chauvenet(x: &[f64]) -> Result<Detection, DetectorError> {
-    check(x, 3)?;
+pub fn chauvenet(x: &[f64]) -> Result<Detection, NumError> {
+    check_series(x, 3)?;
     let (m, s) = mean_sd(x);
     let n = x.len() as f64;
     let mask = x
@@ -185,13 +154,13 @@ pub fn chauvenet(x: &[f64]) -> Result<Detection, DetectorError> {
 pub const DIXON_Q95: [f64; 8] = [0.970, 0.829, 0.710, 0.625, 0.568, 0.526, 0.493, 0.466];
 
 /// Window-wise Dixon's Q test (window 3..=10 samples).
-pub fn dixon_q(x: &[f64], window: usize) -> Result<Detection, DetectorError> {
+pub fn dixon_q(x: &[f64], window: usize) -> Result<Detection, NumError> {
     if !(3..=10).contains(&window) {
-        return Err(DetectorError::BadParameter(format!(
+        return Err(NumError::BadSetting(format!(
             "Dixon window {window} outside the tabulated 3..=10"
         )));
     }
-    check(x, 3)?;
+    check_series(x, 3)?;
     let mut mask = vec![false; x.len()];
     let mut idx = Vec::with_capacity(window);
     for start in (0..x.len()).step_by(window) {
@@ -221,43 +190,6 @@ pub fn dixon_q(x: &[f64], window: usize) -> Result<Detection, DetectorError> {
     Ok(detection(x, mask))
 }
 
-/// Hampel filter with half-width `half_width` and threshold `k` (MAD-scaled).
-pub fn hampel(x: &[f64], half_width: usize, k: f64) -> Result<Detection, DetectorError> {
-    check(x, 1)?;
-    if !(k > 0.0) {
-        return Err(DetectorError::BadParameter(format!("k = {k}")));
-    }
-    let n = x.len();
-    let mut mask = vec![false; n];
-    let mut corrected = x.to_vec();
-    let mut win = Vec::with_capacity(2 * half_width + 1);
-    let mut dev = Vec::with_capacity(2 * half_width + 1);
-    let med = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        let m = v.len();
-        if m % 2 == 1 {
-            v[m / 2]
-        } else {
-            0.5 * (v[m / 2 - 1] + v[m / 2])
-        }
-    };
-    for i in 0..n {
-        let lo = i.saturating_sub(half_width);
-        let hi = (i + half_width + 1).min(n);
-        win.clear();
-        win.extend_from_slice(&x[lo..hi]);
-        let m = med(&mut win);
-        dev.clear();
-        dev.extend(x[lo..hi].iter().map(|v| (v - m).abs()));
-        let s = 1.482_602_218_505_602 * med(&mut dev);
-        if s > 0.0 && (x[i] - m).abs() > k * s {
-            mask[i] = true;
-            corrected[i] = m;
-        }
-    }
-    Ok(Detection { mask, corrected })
-}
-
 /// Detection quality against the truth.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -281,18 +213,18 @@ pub fn score(
     mask_true: &[bool],
     corrected: &[f64],
     truth_clean: &[f64],
-) -> Result<DetectorScore, DetectorError> {
+) -> Result<DetectorScore, NumError> {
     let n = mask_true.len();
     if mask_pred.len() != n || corrected.len() != n || truth_clean.len() != n {
-        return Err(DetectorError::LengthMismatch(format!(
-            "pred {}, true {n}, corrected {}, truth {}",
+        return Err(NumError::bad(format!(
+            "lengths differ: pred {}, true {n}, corrected {}, truth {}",
             mask_pred.len(),
             corrected.len(),
             truth_clean.len()
         )));
     }
     if n == 0 {
-        return Err(DetectorError::TooShort { needed: 1, got: 0 });
+        return Err(NumError::TooShort { needed: 1, got: 0 });
     }
     let (mut tp, mut fp, mut fneg) = (0u64, 0u64, 0u64);
     for (&p, &t) in mask_pred.iter().zip(mask_true) {
@@ -431,25 +363,6 @@ mod tests {
     }
 
     #[test]
-    fn hampel_catches_a_run_of_ten_and_replaces_by_median() {
-        let mut x: Vec<f64> = noise(300, 5).iter().map(|v| 0.1 * v).collect();
-        for v in x.iter_mut().skip(100).take(10) {
-            *v += 5.0;
-        }
-        let d = hampel(&x, 10, 3.0).unwrap();
-        assert!((100..110).all(|i| d.mask[i]));
-        // Window of 21 with 10 outliers: the median is still a clean sample (< 0.5 from 0).
-        assert!((100..110).all(|i| d.corrected[i].abs() < 0.5));
-    }
-
-    #[test]
-    fn hampel_leaves_flat_windows_alone() {
-        let x = vec![1.0; 50];
-        let d = hampel(&x, 3, 3.0).unwrap();
-        assert!(d.mask.iter().all(|m| !m));
-    }
-
-    #[test]
     fn score_counts_and_rmse_are_exact() {
         let pred = [true, true, false, false, false];
         let truth = [true, false, true, false, false];
@@ -473,7 +386,7 @@ mod tests {
         let x = [1.0, f64::NAN, 2.0, 3.0];
         assert!(matches!(
             three_sigma(&x),
-            Err(DetectorError::NonFinite { index: 1 })
+            Err(NumError::NonFinite { index: 1 })
         ));
         assert!(grubbs(&x, 0.05).is_err());
         assert!(chauvenet(&x).is_err());

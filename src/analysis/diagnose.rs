@@ -47,13 +47,14 @@ use super::exogenous::{
     Exogenous, ExogenousReport, analyse as exo_analyse, lagged_polynomial_scan,
 };
 use super::joint_model::{JointFit, LevelSpec, fit as joint_fit, mse};
-use super::ljung_box::{LjungBox, chi2_sf, ljung_box};
 use super::quantisation::{Quantisation, Saturation, quantisation, saturation};
 use super::spectrum::{
     PeakSettings, Psd, SpectralPeak, find_peaks, periodogram, refine_line, welch,
 };
 use super::{AnalysisError, check_finite};
 use crate::model::bias_model::Effect;
+use crate::stats::acf::{Whiteness, whiteness};
+use crate::stats::special::chi2_sf;
 use serde::Serialize;
 use std::f64::consts::PI;
 use std::ops::Range;
@@ -349,7 +350,7 @@ pub struct TestMetrics {
     /// Open-loop MSE on test: mean of (y − c − Xβ)², units².
     pub mse_open_loop: f64,
     /// Ljung–Box of the test innovations.
-    pub ljung_box: Option<LjungBox>,
+    pub ljung_box: Option<Whiteness>,
 }
 
 /// One added effect.
@@ -381,7 +382,7 @@ pub struct Iteration {
 #[derive(Clone, Debug, Serialize)]
 pub struct Findings {
     /// Whiteness of the innovations.
-    pub ljung_box: Option<LjungBox>,
+    pub ljung_box: Option<Whiteness>,
     /// Significant lines in the open-loop residual.
     pub spectral_peaks: Vec<SpectralPeak>,
     /// Steps in the open-loop residual.
@@ -591,7 +592,7 @@ fn test_metrics(
         ar_order: p,
         mse_one_step: mse(&r.innovation, split.test.clone()),
         mse_open_loop: mse(&r.open_loop, split.test.clone()),
-        ljung_box: ljung_box(&r.innovation[split.test.clone()], lb_lags, p).ok(),
+        ljung_box: whiteness(&r.innovation[split.test.clone()], lb_lags, p).ok(),
     };
     Ok((m, f, cols))
 }
@@ -608,7 +609,7 @@ fn findings(
     let d = &r.open_loop[t.clone()];
     let e = &r.innovation[t.clone()];
     Findings {
-        ljung_box: ljung_box(e, s.ljung_box_lags, f.ar.coeffs.len()).ok(),
+        ljung_box: whiteness(e, s.ljung_box_lags, f.ar.coeffs.len()).ok(),
         spectral_peaks: periodogram(d, ctx.rate_hz)
             .map(|p| find_peaks(&p, &s.peaks))
             .unwrap_or_default(),

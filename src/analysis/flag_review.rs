@@ -18,13 +18,13 @@
 //! - **other** — none of these.
 
 use crate::sample::{N_CHANNELS, Sample, flags};
+use crate::stats::robust::{sigma_from_abs_dev, upper_median};
 use serde::Serialize;
 
 /// Half-width of the neighbourhood searched for an oscillation, samples.
 pub const BURST_HALF_WIDTH: usize = 10;
 /// Half-width of the window of the local median and robust σ, samples.
 const LOCAL_HALF_WIDTH: usize = 100;
-const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
 
 /// Class of one flagged event.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -49,23 +49,6 @@ pub struct FlaggedEvent {
     pub size_sigma: f64,
 }
 
-/// Robust σ from absolute deviations `v` (reordered): the MAD, or — when more than half are 0,
-/// as on a quantised channel whose noise is about one LSB — the mean absolute deviation
-/// (× √(π/2), unbiased for Gaussian data).
-fn median_abs_sigma(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    let mid = v.len() / 2;
-    let (_, m, _) = v.select_nth_unstable_by(mid, f64::total_cmp);
-    let mad = *m * MAD_TO_SIGMA;
-    if mad > 0.0 {
-        mad
-    } else {
-        v.iter().sum::<f64>() / v.len() as f64 * (std::f64::consts::PI / 2.0).sqrt()
-    }
-}
-
 /// Independent impulse test (module docs): true at lone samples > `k` σ₂ from their neighbours'
 /// mean while the neighbours agree within 2 σ₂.
 pub fn isolated_impulses(x: &[f64], k: f64) -> Vec<bool> {
@@ -78,7 +61,7 @@ pub fn isolated_impulses(x: &[f64], k: f64) -> Vec<bool> {
         .map(|i| x[i] - 0.5 * (x[i - 1] + x[i + 1]))
         .collect();
     let mut a: Vec<f64> = dev.iter().map(|d| d.abs()).collect();
-    let s = median_abs_sigma(&mut a);
+    let s = sigma_from_abs_dev(&mut a);
     for i in 1..n - 1 {
         m[i] = dev[i - 1].abs() > k * s && (x[i + 1] - x[i - 1]).abs() < 2.0 * s;
     }
@@ -94,12 +77,11 @@ fn local_scale(x: &[f64], i: usize, buf: &mut Vec<f64>) -> (f64, f64) {
     if buf.is_empty() {
         return (0.0, 0.0);
     }
-    let mid = buf.len() / 2;
-    let med = *buf.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let med = upper_median(buf);
     for v in buf.iter_mut() {
         *v = (*v - med).abs();
     }
-    (med, median_abs_sigma(buf))
+    (med, sigma_from_abs_dev(buf))
 }
 
 /// Classify every flagged event of the stage output `out` against the raw input `raw` (same

@@ -17,12 +17,9 @@ pub mod exogenous;
 pub mod flag_review;
 pub mod gate_sweep;
 pub mod gauss_markov;
-pub mod hypothesis;
 pub mod joint_model;
-pub mod ljung_box;
 pub mod pipeline_eval;
 pub mod quantisation;
-pub mod special;
 pub mod spectrum;
 pub mod svg;
 #[cfg(test)]

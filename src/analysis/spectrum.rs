@@ -154,12 +154,6 @@ pub struct SpectralPeak {
     pub power: f64,
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    let m = v.len() / 2;
-    v.select_nth_unstable_by(m, |a, b| a.total_cmp(b));
-    v[m]
-}
-
 /// Local noise floor Ŝ(f_k) for every bin (running median / ln 2, guard bins excluded).
 pub fn noise_floor(psd: &Psd, s: &PeakSettings) -> Vec<f64> {
     let n = psd.density.len();
@@ -177,7 +171,7 @@ pub fn noise_floor(psd: &Psd, s: &PeakSettings) -> Vec<f64> {
             if buf.is_empty() {
                 psd.density[k]
             } else {
-                median(&mut buf) / std::f64::consts::LN_2
+                crate::stats::robust::upper_median(&mut buf) / std::f64::consts::LN_2
             }
         })
         .collect()

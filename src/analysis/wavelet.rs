@@ -188,19 +188,13 @@ pub fn denoise(x: &[f64], levels: usize) -> Result<Denoised, WaveletError> {
     })
 }
 
-/// Median of |v| (mean of the two middle values for an even count, as numpy's median).
+/// Median of |v| (as numpy's median); 0 for an empty slice.
 fn median_abs(v: &[f64]) -> f64 {
     if v.is_empty() {
         return 0.0;
     }
     let mut a: Vec<f64> = v.iter().map(|x| x.abs()).collect();
-    a.sort_by(f64::total_cmp);
-    let n = a.len();
-    if n % 2 == 1 {
-        a[n / 2]
-    } else {
-        0.5 * (a[n / 2 - 1] + a[n / 2])
-    }
+    crate::stats::robust::median(&mut a)
 }
 
 #[cfg(test)]

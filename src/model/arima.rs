@@ -46,9 +46,9 @@
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-use crate::analysis::hypothesis::{
-    AdfLag, AdfResult, LjungBox, acf, acf_bound_95, adf, ljung_box, pacf_from_acf,
-};
+use crate::stats::NumError;
+use crate::stats::acf::{LjungBox, acf, acf_bound_95, ljung_box, pacf_from_acf};
+use crate::stats::adf::{AdfLag, AdfResult, adf};
 
 /// Largest AR order the online predictor holds.
 pub const MAX_P: usize = 3;
@@ -1543,8 +1543,6 @@ mod tests {
     }
 }
 
-use crate::analysis::hypothesis::HypothesisError;
-
 /// Why an ARIMA model could not be identified, fitted, loaded or used.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ArimaError {
@@ -1569,9 +1567,9 @@ pub enum ArimaError {
     /// Settings that failed validation (all problems listed).
     #[error("invalid settings: {}", .0.join("; "))]
     InvalidSettings(Vec<String>),
-    /// A hypothesis test used during identification failed.
+    /// A statistic used during identification failed.
     #[error(transparent)]
-    Test(#[from] HypothesisError),
+    Test(#[from] NumError),
     /// A model file that does not parse or serialise.
     #[error("model file: {0}")]
     Toml(String),

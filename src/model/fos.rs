@@ -47,6 +47,7 @@
 //! terms (fewer than ~5 significant digits would be left in its g_m).
 
 use super::{ModelError, check_finite};
+use crate::stats::special::normal_quantile;
 
 /// Family-wise false-alarm level of the noise-level test (probability that pure white noise
 /// adds a term at a given step).
@@ -335,59 +336,10 @@ pub fn noise_threshold(n_samples: usize, m_selected: usize, k_remaining: usize, 
     // 1 - (1-alpha)^(1/K) computed without cancellation
     let a_k = -((1.0 - alpha).ln() / k_rem).exp_m1();
     // chi2_1 upper quantile = z^2 with z the (1 - a_K/2) normal quantile
-    let z = inverse_normal_cdf(1.0 - 0.5 * a_k);
+    // (clamped below 1 so that a vanishing a_K gives a large finite threshold, not ∞)
+    let z = normal_quantile((1.0 - 0.5 * a_k).min(1.0 - 1e-16));
     let dof = n_samples.saturating_sub(m_selected).max(1) as f64;
     z * z / dof
-}
-
-/// Inverse of the standard normal CDF (Acklam's rational approximation, relative error
-/// < 1.2e-9, ample for a test threshold). `p` is clamped into (0, 1).
-pub fn inverse_normal_cdf(p: f64) -> f64 {
-    const A: [f64; 6] = [
-        -3.969_683_028_665_376e1,
-        2.209_460_984_245_205e2,
-        -2.759_285_104_469_687e2,
-        1.383_577_518_672_69e2,
-        -3.066_479_806_614_716e1,
-        2.506_628_277_459_239,
-    ];
-    const B: [f64; 5] = [
-        -5.447_609_879_822_406e1,
-        1.615_858_368_580_409e2,
-        -1.556_989_798_598_866e2,
-        6.680_131_188_771_972e1,
-        -1.328_068_155_288_572e1,
-    ];
-    const C: [f64; 6] = [
-        -7.784_894_002_430_293e-3,
-        -3.223_964_580_411_365e-1,
-        -2.400_758_277_161_838,
-        -2.549_732_539_343_734,
-        4.374_664_141_464_968,
-        2.938_163_982_698_783,
-    ];
-    const D: [f64; 4] = [
-        7.784_695_709_041_462e-3,
-        3.224_671_290_700_398e-1,
-        2.445_134_137_142_996,
-        3.754_408_661_907_416,
-    ];
-    let p = p.clamp(1e-300, 1.0 - 1e-16);
-    let p_low = 0.02425;
-    if p < p_low {
-        let q = (-2.0 * p.ln()).sqrt();
-        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
-            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
-    } else if p <= 1.0 - p_low {
-        let q = p - 0.5;
-        let r = q * q;
-        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
-            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
-    } else {
-        let q = (-2.0 * (1.0 - p).ln()).sqrt();
-        -(((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
-            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
-    }
 }
 
 #[cfg(test)]
@@ -415,14 +367,6 @@ mod tests {
             );
         }
         c
-    }
-
-    #[test]
-    fn inverse_normal_cdf_matches_known_quantiles() {
-        // Tabulated quantiles (to 1e-9, the approximation's accuracy is ~1e-9 relative).
-        assert!((inverse_normal_cdf(0.975) - 1.959_963_985).abs() < 1e-8);
-        assert!((inverse_normal_cdf(0.5)).abs() < 1e-12);
-        assert!((inverse_normal_cdf(0.001) + 3.090_232_306).abs() < 1e-8);
     }
 
     #[test]

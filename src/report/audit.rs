@@ -45,8 +45,8 @@ use crate::frame::Descriptor;
 use crate::io::csv::{ImportOptions, read_csv, read_log};
 use crate::rng::Rng;
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
+use crate::stats::robust::robust_sigma;
 
-const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
 /// Samples skipped before scoring injections (the gross-error stage's default warm-up).
 const SCORE_FROM: usize = 2000;
 /// Least spacing of injected spikes and runs, samples (any channel).
@@ -231,23 +231,6 @@ pub fn classify(samples: &[Sample], rate_hz: f64) -> Class {
         Class::Static
     } else {
         Class::Moving
-    }
-}
-
-/// Robust σ (MAD) of a slice of finite values.
-fn robust_sigma(v: &[f64]) -> f64 {
-    let mut a: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if a.is_empty() {
-        return 0.0;
-    }
-    let med = percentile(&mut a, 0.5);
-    let mut d: Vec<f64> = a.iter().map(|x| (x - med).abs()).collect();
-    let mad = percentile(&mut d, 0.5) * MAD_TO_SIGMA;
-    if mad > 0.0 {
-        mad
-    } else {
-        // Quantised to about one LSB: the mean absolute deviation (× √(π/2)).
-        d.iter().sum::<f64>() / d.len() as f64 * (std::f64::consts::PI / 2.0).sqrt()
     }
 }
 

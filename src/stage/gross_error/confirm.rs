@@ -303,14 +303,7 @@ pub fn confirm(
         }
     }
     let z = &mut z[..n];
-    let mid = n / 2;
-    let z_median = if n % 2 == 1 {
-        *z.select_nth_unstable_by(mid, f64::total_cmp).1
-    } else {
-        let hi = *z.select_nth_unstable_by(mid, f64::total_cmp).1;
-        let lo = z[..mid].iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        0.5 * (lo + hi)
-    };
+    let z_median = crate::stats::robust::median(z);
     let edge = |e: f64| {
         if e.is_finite() {
             (e / (sigma * 6f64.sqrt())).abs()

@@ -45,11 +45,11 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::settings::{GrossErrorSettings, MAX_MEDIAN_WINDOW, Replacement};
-use crate::analysis::detectors::hampel;
-use crate::analysis::special::{normal_cdf, normal_pdf};
 use crate::model::arima::{
     ArimaChannelModel, ArimaError, ArimaPredictor, MAX_D, MAX_P, identify, psi_weights,
 };
+use crate::stats::robust::{hampel, median_small, upper_median_and_mad_sigma};
+use crate::stats::special::{normal_cdf, normal_pdf};
 
 /// Huber clip of the scale trackers, in units of the current scale.
 const SCALE_CLIP: f64 = 2.5;
@@ -61,8 +61,6 @@ const PSI_N: usize = 32;
 const GAUSS_TAIL3: f64 = 0.002_699_796;
 /// Tail adaptation: no widening until the tracked share beyond 3σ is this many times Gaussian.
 const TAIL_DEAD_ZONE: f64 = 2.0;
-/// 1/Φ⁻¹(¾): MAD → σ for Gaussian data.
-const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
 
 /// Constants of the gate derived once from the settings.
 #[derive(Debug, Clone, Copy)]
@@ -255,38 +253,6 @@ fn holt_step(level: f64, slope: f64, x: f64, alpha: f64, beta: f64) -> (f64, f64
     (l_new, slope + beta * (l_new - level - slope))
 }
 
-/// Median of `v` (≤ 5 values, copied).
-pub fn median_small(v: &[f64]) -> f64 {
-    let mut a = [0.0f64; MAX_MEDIAN_WINDOW];
-    let n = v.len().min(MAX_MEDIAN_WINDOW);
-    a[..n].copy_from_slice(&v[..n]);
-    for i in 1..n {
-        let mut j = i;
-        while j > 0 && a[j - 1] > a[j] {
-            a.swap(j - 1, j);
-            j -= 1;
-        }
-    }
-    if n % 2 == 1 {
-        a[n / 2]
-    } else {
-        0.5 * (a[n / 2 - 1] + a[n / 2])
-    }
-}
-
-/// Median and MAD-based σ of a slice (allocates; warm-up only).
-fn median_and_robust_sigma(v: &[f64]) -> (f64, f64) {
-    let mut a: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if a.is_empty() {
-        return (0.0, 0.0);
-    }
-    a.sort_by(f64::total_cmp);
-    let med = a[a.len() / 2];
-    let mut dev: Vec<f64> = a.iter().map(|x| (x - med).abs()).collect();
-    dev.sort_by(f64::total_cmp);
-    (med, MAD_TO_SIGMA * dev[dev.len() / 2])
-}
-
 impl ChannelGate {
     /// A gate with scale floor `min_sigma`, enabled or not; it warms up until it gets a model.
     pub fn new(enabled: bool, min_sigma: f64) -> Self {
@@ -369,8 +335,8 @@ impl ChannelGate {
                 // Initial scales from the most recent part of the window (conditions may have
                 // changed during the warm-up).
                 let recent = (p.scale_window.round() as usize).max(50).min(innov.len());
-                let (_, s_e) = median_and_robust_sigma(&innov[innov.len() - recent..]);
-                let (_, s_d) = median_and_robust_sigma(&jumps[jumps.len() - recent..]);
+                let (_, s_e) = upper_median_and_mad_sigma(&innov[innov.len() - recent..]);
+                let (_, s_d) = upper_median_and_mad_sigma(&jumps[jumps.len() - recent..]);
                 self.sig2 = (s_e * s_e).max(self.min_var);
                 self.jump2 = (s_d * s_d).max(self.min_var);
                 self.x_acc = level;
@@ -415,7 +381,7 @@ impl ChannelGate {
             .map(|r| r.corrected)
             .unwrap_or_else(|_| raw.clone());
         let white = |cleaned: &[f64], min_var: f64| {
-            let (med, sd) = median_and_robust_sigma(cleaned);
+            let (med, sd) = upper_median_and_mad_sigma(cleaned);
             ArimaChannelModel {
                 channel: name.to_string(),
                 p: 0,
@@ -616,7 +582,7 @@ impl ChannelGate {
             }
         }
         let r = if p.keep_preds && self.n_preds > 0 {
-            median_small(&self.preds[..self.n_preds.min(p.median_window)])
+            median_small::<MAX_MEDIAN_WINDOW>(&self.preds[..self.n_preds.min(p.median_window)])
         } else {
             xh
         };
@@ -671,12 +637,5 @@ mod tests {
         assert!((huber_beta(40.0) - 1.0).abs() < 1e-14);
         assert!(huber_beta(0.0).abs() < 1e-15);
         assert!((huber_beta(2.5) - 0.9775599834528068).abs() < 1e-12);
-    }
-
-    #[test]
-    fn median_of_small_windows() {
-        assert_eq!(median_small(&[3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median_small(&[5.0, -1.0, 4.0, 0.0, 2.0]), 2.0);
-        assert_eq!(median_small(&[1.0, 3.0]), 2.0);
     }
 }

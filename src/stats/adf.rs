@@ -1,16 +1,8 @@
-//! Time-series hypothesis tests used to identify ARIMA models (Chen, Li & Zhang 2013, §2.1–2.4):
-//! sample ACF / PACF with their white-noise bounds, the Ljung–Box portmanteau test and the augmented
-//! Dickey–Fuller unit-root test with MacKinnon's critical values and p-value.
+//! The augmented Dickey–Fuller unit-root test (Dickey & Fuller 1979; Said & Dickey 1984) with
+//! MacKinnon's critical values and p-value, as the ARIMA identification uses it (Chen, Li & Zhang
+//! 2013, §2.2).
 //!
-//! * ACF (biased, as Box–Jenkins and statsmodels' `acf(adjusted=False)`):
-//!   `r_k = c_k / c_0`, `c_k = (1/N) Σ_{t=0}^{N−1−k} (x_t − x̄)(x_{t+k} − x̄)`; 95 % white-noise bound
-//!   `± z_{0.975} / √N` (= ±1.96/√N).
-//! * PACF: Durbin–Levinson recursion on `r_k` (statsmodels `pacf(method="ldb")`):
-//!   `φ_kk = (r_k − Σ_{j<k} φ_{k−1,j} r_{k−j}) / v_{k−1}`, `φ_kj = φ_{k−1,j} − φ_kk φ_{k−1,k−j}`,
-//!   `v_k = v_{k−1}(1 − φ_kk²)`.
-//! * Ljung–Box (1978): `Q = N(N+2) Σ_{k=1}^{h} r_k² / (N−k)` ~ χ²(h − m) for the residuals of a model
-//!   with m fitted ARMA parameters.
-//! * ADF (Dickey & Fuller 1979; Said & Dickey 1984) with a constant:
+//! * Regression with a constant:
 //!   `Δx_t = α + γ x_{t−1} + Σ_{j=1}^{l} β_j Δx_{t−j} + ε_t`, statistic `τ = γ̂ / se(γ̂)` (OLS).
 //!   Lag choice (as statsmodels `adfuller(regression="c", autolag="AIC")`): `l_max =
 //!   ⌈12 (N/100)^{1/4}⌉` (Schwert 1989) capped at `N/2 − 2`; every `l ∈ 0..=l_max` is fitted on the
@@ -30,151 +22,8 @@
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-use crate::analysis::special::{chi2_sf, normal_cdf, normal_quantile};
-
-/// Why a test could not be computed.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum HypothesisError {
-    /// Fewer samples than the test needs.
-    #[error("series too short: need at least {needed} samples, got {got}")]
-    TooShort { needed: usize, got: usize },
-    /// NaN or ±Inf in the input.
-    #[error("non-finite value at index {index}")]
-    NonFinite { index: usize },
-    /// Zero variance: correlations and t statistics are undefined.
-    #[error("series is constant")]
-    Constant,
-    /// The regression's normal equations are singular (collinear regressors).
-    #[error("singular regression in {0}")]
-    Singular(&'static str),
-    /// A lag count that the sample cannot support or that leaves no degrees of freedom.
-    #[error("invalid lag: {0}")]
-    BadLag(String),
-}
-
-fn check_finite(x: &[f64]) -> Result<(), HypothesisError> {
-    match x.iter().position(|v| !v.is_finite()) {
-        Some(index) => Err(HypothesisError::NonFinite { index }),
-        None => Ok(()),
-    }
-}
-
-/// 95 % two-sided white-noise bound of a sample autocorrelation: `z_{0.975}/√N`.
-pub fn acf_bound_95(n: usize) -> f64 {
-    normal_quantile(0.975) / (n as f64).sqrt()
-}
-
-/// Sample autocorrelations `r_0..=r_nlags` (`r_0 = 1`), biased (divisor N) as in Box–Jenkins.
-pub fn acf(x: &[f64], nlags: usize) -> Result<Vec<f64>, HypothesisError> {
-    check_finite(x)?;
-    let n = x.len();
-    if n < 2 || nlags >= n {
-        return Err(HypothesisError::TooShort {
-            needed: (nlags + 1).max(2),
-            got: n,
-        });
-    }
-    let mean = x.iter().sum::<f64>() / n as f64;
-    let xc: Vec<f64> = x.iter().map(|v| v - mean).collect();
-    let c0 = xc.iter().map(|v| v * v).sum::<f64>();
-    if !(c0 > 0.0) {
-        return Err(HypothesisError::Constant);
-    }
-    let mut r = Vec::with_capacity(nlags + 1);
-    r.push(1.0);
-    for k in 1..=nlags {
-        let ck: f64 = xc[..n - k].iter().zip(&xc[k..]).map(|(a, b)| a * b).sum();
-        r.push(ck / c0);
-    }
-    Ok(r)
-}
-
-/// Partial autocorrelations `φ_00..=φ_hh` (`φ_00 = 1`) from autocorrelations `r_0..=r_h` by
-/// Durbin–Levinson. Stops early (remaining entries 0) if the recursion's prediction variance
-/// reaches zero (a perfectly predictable series).
-pub fn pacf_from_acf(r: &[f64]) -> Vec<f64> {
-    let h = r.len().saturating_sub(1);
-    let mut out = vec![0.0; h + 1];
-    if r.is_empty() {
-        return out;
-    }
-    out[0] = 1.0;
-    let mut phi = vec![0.0; h + 1]; // φ_{k,1..k} in phi[1..=k]
-    let mut prev = vec![0.0; h + 1];
-    let mut v = r[0];
-    for k in 1..=h {
-        if !(v > 0.0) {
-            break;
-        }
-        let mut num = r[k];
-        for j in 1..k {
-            num -= prev[j] * r[k - j];
-        }
-        let kappa = num / v;
-        for j in 1..k {
-            phi[j] = prev[j] - kappa * prev[k - j];
-        }
-        phi[k] = kappa;
-        v *= 1.0 - kappa * kappa;
-        out[k] = kappa;
-        prev[..=k].copy_from_slice(&phi[..=k]);
-    }
-    out
-}
-
-/// Sample partial autocorrelations `0..=nlags` (Durbin–Levinson on the biased ACF).
-pub fn pacf(x: &[f64], nlags: usize) -> Result<Vec<f64>, HypothesisError> {
-    Ok(pacf_from_acf(&acf(x, nlags)?))
-}
-
-/// Result of a Ljung–Box test.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LjungBox {
-    /// The statistic Q.
-    pub q: f64,
-    /// Number of autocorrelations summed, h.
-    pub lags: usize,
-    /// Degrees of freedom h − m (m = fitted ARMA parameters).
-    pub dof: usize,
-    /// `P(χ²_dof > Q)`: small values reject "the residuals are white".
-    pub p_value: f64,
-}
-
-/// The Ljung–Box statistic `Q = N (N + 2) Σ_{k=1}^{h} r_k² / (N − k)` from the autocorrelations
-/// `r_1..r_h` (`r1[k − 1] = r_k`) of a series of `n` samples.
-pub fn ljung_box_statistic(r1: &[f64], n: usize) -> f64 {
-    let nf = n as f64;
-    let s: f64 = r1
-        .iter()
-        .enumerate()
-        .map(|(i, rk)| rk * rk / (nf - (i + 1) as f64))
-        .sum();
-    nf * (nf + 2.0) * s
-}
-
-/// Ljung–Box test on `resid` over `lags` autocorrelations, for a model with `fitted_params` ARMA
-/// coefficients (p + q; the constant is not counted, as in Box–Jenkins and statsmodels' `model_df`).
-pub fn ljung_box(
-    resid: &[f64],
-    lags: usize,
-    fitted_params: usize,
-) -> Result<LjungBox, HypothesisError> {
-    if lags <= fitted_params {
-        return Err(HypothesisError::BadLag(format!(
-            "Ljung-Box needs more lags ({lags}) than fitted parameters ({fitted_params})"
-        )));
-    }
-    let r = acf(resid, lags)?;
-    let q = ljung_box_statistic(&r[1..], resid.len());
-    let dof = lags - fitted_params;
-    Ok(LjungBox {
-        q,
-        lags,
-        dof,
-        p_value: chi2_sf(q, dof as f64),
-    })
-}
+use super::special::normal_cdf;
+use super::{NumError, check_finite};
 
 /// How the ADF regression's number of lagged differences is chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -317,13 +166,13 @@ fn adf_moments(x: &[f64], dx: &[f64], k: usize, first: usize) -> AdfMoments {
 
 /// Augmented Dickey–Fuller test with a constant (see the module header for the regression and the
 /// lag rule).
-pub fn adf(x: &[f64], lag: AdfLag) -> Result<AdfResult, HypothesisError> {
+pub fn adf(x: &[f64], lag: AdfLag) -> Result<AdfResult, NumError> {
     check_finite(x)?;
     let n = x.len();
     // Smallest sample for which the default lag rule leaves a regression with ≥ 1 residual dof.
     const MIN_N: usize = 8;
     if n < MIN_N {
-        return Err(HypothesisError::TooShort {
+        return Err(NumError::TooShort {
             needed: MIN_N,
             got: n,
         });
@@ -334,7 +183,7 @@ pub fn adf(x: &[f64], lag: AdfLag) -> Result<AdfResult, HypothesisError> {
             (a.min(v), b.max(v))
         });
     if lo == hi {
-        return Err(HypothesisError::Constant);
+        return Err(NumError::Constant);
     }
     // statsmodels: maxlag ≤ nobs/2 − ntrend − 1 with ntrend = 1.
     let cap = n / 2 - 2;
@@ -345,7 +194,7 @@ pub fn adf(x: &[f64], lag: AdfLag) -> Result<AdfResult, HypothesisError> {
         AdfLag::Fixed { lags } => (lags, false),
     };
     if max_lag > cap {
-        return Err(HypothesisError::BadLag(format!(
+        return Err(NumError::bad(format!(
             "ADF lag {max_lag} exceeds N/2 - 2 = {cap}"
         )));
     }
@@ -359,20 +208,18 @@ pub fn adf(x: &[f64], lag: AdfLag) -> Result<AdfResult, HypothesisError> {
         let m = adf_moments(x, &dx, max_lag, max_lag);
         let d = m.szz.diagonal().map(|v| v.sqrt());
         if d.iter().any(|v| !(*v > 0.0)) {
-            return Err(HypothesisError::Singular("ADF lag search"));
+            return Err(NumError::singular("ADF lag search"));
         }
         // Jacobi scaling to unit diagonal before Cholesky (level and differences differ in scale).
         let a = DMatrix::from_fn(max_lag + 1, max_lag + 1, |i, j| {
             m.szz[(i, j)] / (d[i] * d[j])
         });
-        let chol = a
-            .cholesky()
-            .ok_or(HypothesisError::Singular("ADF lag search"))?;
+        let chol = a.cholesky().ok_or(NumError::singular("ADF lag search"))?;
         let b = DVector::from_fn(max_lag + 1, |i, _| m.szy[i] / d[i]);
         let u = chol
             .l()
             .solve_lower_triangular(&b)
-            .ok_or(HypothesisError::Singular("ADF lag search"))?;
+            .ok_or(NumError::singular("ADF lag search"))?;
         let nf = m.n as f64;
         let mut ssr = m.syy - u[0] * u[0];
         let mut best = (f64::INFINITY, 0usize);
@@ -401,19 +248,17 @@ pub fn adf(x: &[f64], lag: AdfLag) -> Result<AdfResult, HypothesisError> {
     let kz = used_lag + 1;
     let dof = m.n as f64 - (kz + 1) as f64;
     if dof < 1.0 {
-        return Err(HypothesisError::TooShort {
+        return Err(NumError::TooShort {
             needed: n + 1,
             got: n,
         });
     }
     let d = m.szz.diagonal().map(|v| v.sqrt());
     if d.iter().any(|v| !(*v > 0.0)) {
-        return Err(HypothesisError::Singular("ADF regression"));
+        return Err(NumError::singular("ADF regression"));
     }
     let a = DMatrix::from_fn(kz, kz, |i, j| m.szz[(i, j)] / (d[i] * d[j]));
-    let chol = a
-        .cholesky()
-        .ok_or(HypothesisError::Singular("ADF regression"))?;
+    let chol = a.cholesky().ok_or(NumError::singular("ADF regression"))?;
     let bs = chol.solve(&DVector::from_fn(kz, |i, _| m.szy[i] / d[i]));
     let beta = DVector::from_fn(kz, |i, _| bs[i] / d[i]);
     // (A⁻¹)_00 via one solve; var(γ̂) = s² (S_zz⁻¹)_00 = s² (A⁻¹)_00 / d_0².
@@ -444,7 +289,7 @@ pub fn adf(x: &[f64], lag: AdfLag) -> Result<AdfResult, HypothesisError> {
     let s2 = ssr / dof;
     let stat = beta[0] / (s2 * inv00).sqrt();
     if !stat.is_finite() {
-        return Err(HypothesisError::Singular("ADF regression"));
+        return Err(NumError::singular("ADF regression"));
     }
     Ok(AdfResult {
         stat,
@@ -461,75 +306,6 @@ pub fn adf(x: &[f64], lag: AdfLag) -> Result<AdfResult, HypothesisError> {
 mod tests {
     use super::*;
     use crate::rng::Rng;
-
-    #[test]
-    fn acf_of_alternating_series_is_closed_form() {
-        // x = +1, −1, +1, … (N even): mean 0, c_k = (N−k)/N·(−1)^k ⇒ r_k = (−1)^k (N−k)/N.
-        let n = 10;
-        let x: Vec<f64> = (0..n)
-            .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
-            .collect();
-        let r = acf(&x, 3).unwrap();
-        for (k, rk) in r.iter().enumerate() {
-            let want = (-1f64).powi(k as i32) * (n - k) as f64 / n as f64;
-            assert!((rk - want).abs() < 1e-15, "r_{k} = {rk}");
-        }
-    }
-
-    #[test]
-    fn pacf_of_ar1_acf_cuts_off_after_lag_one() {
-        // Theoretical AR(1) autocorrelations r_k = φ^k: PACF is φ at lag 1 and exactly 0 after
-        // (up to rounding of the recursion, ~1e-16 per step).
-        let phi: f64 = 0.7;
-        let r: Vec<f64> = (0..8).map(|k| phi.powi(k)).collect();
-        let p = pacf_from_acf(&r);
-        assert!((p[1] - phi).abs() < 1e-15);
-        for (k, v) in p.iter().enumerate().skip(2) {
-            assert!(v.abs() < 1e-14, "pacf[{k}] = {v}");
-        }
-    }
-
-    #[test]
-    fn pacf_of_ar2_acf_recovers_phi2() {
-        // AR(2) φ = (0.5, 0.3): r1 = φ1/(1−φ2), r2 = φ1 r1 + φ2, r_k = φ1 r_{k−1} + φ2 r_{k−2};
-        // PACF at lag 2 equals φ2 exactly.
-        let (p1, p2) = (0.5, 0.3);
-        let mut r = vec![1.0, p1 / (1.0 - p2)];
-        for k in 2..6 {
-            r.push(p1 * r[k - 1] + p2 * r[k - 2]);
-        }
-        let p = pacf_from_acf(&r);
-        assert!((p[2] - p2).abs() < 1e-14);
-        assert!(p[3].abs() < 1e-14 && p[4].abs() < 1e-14);
-    }
-
-    #[test]
-    fn ljung_box_is_closed_form_for_known_acf() {
-        // Alternating series of N = 10: r_1 = −0.9, r_2 = 0.8 ⇒ Q = 10·12·(0.81/9 + 0.64/8).
-        let x: Vec<f64> = (0..10)
-            .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
-            .collect();
-        let lb = ljung_box(&x, 2, 0).unwrap();
-        let want = 120.0 * (0.81 / 9.0 + 0.64 / 8.0);
-        assert!((lb.q - want).abs() < 1e-12, "Q = {}", lb.q);
-        assert!((lb.p_value - chi2_sf(want, 2.0)).abs() < 1e-15);
-        assert!(ljung_box(&x, 2, 2).is_err(), "no dof left must be an error");
-    }
-
-    #[test]
-    fn ljung_box_on_white_noise_is_roughly_uniform() {
-        // Under H0 the p-value is ~U(0,1): over 200 independent series of 500 samples the
-        // rejection rate at 5 % is Binomial(200, 0.05): mean 10, sd 3.1; accept 1..=22 (4 sd).
-        let mut rng = Rng::new(11);
-        let mut rejections = 0;
-        for _ in 0..200 {
-            let x: Vec<f64> = (0..500).map(|_| rng.normal()).collect();
-            if ljung_box(&x, 10, 0).unwrap().p_value < 0.05 {
-                rejections += 1;
-            }
-        }
-        assert!((1..=22).contains(&rejections), "rejections {rejections}");
-    }
 
     #[test]
     fn mackinnon_crit_is_the_asymptotic_value_for_large_n() {
@@ -616,19 +392,19 @@ mod tests {
     fn adf_bad_input_is_an_error() {
         assert!(matches!(
             adf(&[1.0; 50], AdfLag::default()),
-            Err(HypothesisError::Constant)
+            Err(NumError::Constant)
         ));
         assert!(matches!(
             adf(
                 &[1.0, f64::NAN, 2.0, 3.0, 1.0, 2.0, 3.0, 4.0],
                 AdfLag::default()
             ),
-            Err(HypothesisError::NonFinite { index: 1 })
+            Err(NumError::NonFinite { index: 1 })
         ));
         let x: Vec<f64> = (0..20).map(|i| (i as f64).sin()).collect();
         assert!(matches!(
             adf(&x, AdfLag::Fixed { lags: 15 }),
-            Err(HypothesisError::BadLag(_))
+            Err(NumError::BadSetting(_))
         ));
         assert!(adf(&[1.0, 2.0], AdfLag::default()).is_err());
     }
