@@ -4,11 +4,11 @@
 //! sampling distribution (3–4σ) or from a truncation-error bound.
 
 use imuprep::sample::{CHANNEL_NAMES, N_CHANNELS, flags};
-use imuprep::sim::processes::ar_autocovariance;
 use imuprep::sim::{
     Effect, Emission, N_EFFECTS, Scenario, SimError, SimRecord, Simulator, Trajectory, TruthWriter,
     write_truth_file,
 };
+use imuprep::stats::ar_poly::ar_autocovariance;
 use nalgebra::{Rotation3, Vector3};
 
 const STATIC_BENCH: &str = include_str!("../replay/static_bench.toml");

@@ -15,6 +15,7 @@
 //! (statsmodels `yule_walker(method="mle")` uses the same estimate).
 
 use super::{ModelError, check_ar_input, mean};
+use crate::stats::ar_poly::levinson;
 
 /// A fitted AR(p) model.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -80,73 +81,19 @@ pub fn autocovariance_biased(x: &[f64], max_lag: usize) -> (Vec<f64>, f64) {
     (r, mu)
 }
 
-/// Levinson-Durbin recursion on an autocovariance sequence `r[0..=p]`.
-///
-/// Returns (phi_1..phi_p, prediction-error variance E_p, reflection coefficients k_1..k_p).
-/// Errors if `r[0] <= 0` or a step's error energy collapses to <= 0 (perfectly predictable or
-/// non positive-definite input).
-pub fn levinson_durbin(r: &[f64], p: usize) -> Result<(Vec<f64>, f64, Vec<f64>), ModelError> {
-    if r.len() < p + 1 {
-        return Err(ModelError::TooShort {
-            needed: p + 1,
-            got: r.len(),
-        });
-    }
-    if r[0].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-        return Err(ModelError::ZeroVariance);
-    }
-    let mut phi = vec![0.0; p];
-    let mut prev = vec![0.0; p];
-    let mut refl = Vec::with_capacity(p);
-    let mut e = r[0];
-    for m in 1..=p {
-        // k_m = (R(m) - sum_{i=1}^{m-1} phi_{i,m-1} R(m-i)) / E_{m-1}
-        let mut num = r[m];
-        for i in 1..m {
-            num -= prev[i - 1] * r[m - i];
-        }
-        let k = num / e;
-        phi[m - 1] = k;
-        for i in 1..m {
-            phi[i - 1] = prev[i - 1] - k * prev[m - i - 1];
-        }
-        e *= 1.0 - k * k;
-        if e.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-            return Err(ModelError::Singular(format!(
-                "Levinson-Durbin error energy reached {e} at order {m}"
-            )));
-        }
-        refl.push(k);
-        prev[..m].copy_from_slice(&phi[..m]);
-    }
-    Ok((phi, e, refl))
-}
-
-/// Convert reflection (partial autocorrelation) coefficients k_1..k_p into AR coefficients by
-/// the Levinson step `phi_{i,m} = phi_{i,m-1} - k_m phi_{m-i,m-1}` (paper eq 9e, phi sign).
-pub fn reflection_to_ar(refl: &[f64]) -> Vec<f64> {
-    let p = refl.len();
-    let mut phi = vec![0.0; p];
-    let mut prev = vec![0.0; p];
-    for (m0, &k) in refl.iter().enumerate() {
-        let m = m0 + 1;
-        phi[m - 1] = k;
-        for i in 1..m {
-            phi[i - 1] = prev[i - 1] - k * prev[m - i - 1];
-        }
-        prev[..m].copy_from_slice(&phi[..m]);
-    }
-    phi
-}
-
 /// Fit AR(p) by the Yule-Walker method (biased autocovariance, Levinson-Durbin).
 pub fn yule_walker(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
     check_ar_input(x, p)?;
     let (r, mu) = autocovariance_biased(x, p);
-    let (coeffs, noise_var, _) = levinson_durbin(&r, p)?;
+    if !(r[0] > 0.0) {
+        return Err(ModelError::ZeroVariance);
+    }
+    let l = levinson(&r, p).ok_or_else(|| {
+        ModelError::Singular("Levinson-Durbin error energy reached zero".to_string())
+    })?;
     Ok(ArFit {
-        coeffs,
-        noise_var,
+        coeffs: l.phi,
+        noise_var: l.var,
         mean: mu,
     })
 }
@@ -183,7 +130,8 @@ mod tests {
         let x = ar1(0.5, 2000, 3);
         let p = 6;
         let (r, _) = autocovariance_biased(&x, p);
-        let (phi, e, _) = levinson_durbin(&r, p).unwrap();
+        let l = levinson(&r, p).unwrap();
+        let (phi, e) = (l.phi, l.var);
         let m = nalgebra::DMatrix::from_fn(p, p, |i, j| r[i.abs_diff(j)]);
         let rhs = nalgebra::DVector::from_fn(p, |i, _| r[i + 1]);
         let sol = m.lu().solve(&rhs).unwrap();
@@ -193,17 +141,6 @@ mod tests {
         }
         let e_direct = r[0] - (0..p).map(|i| phi[i] * r[i + 1]).sum::<f64>();
         assert!((e - e_direct).abs() < 1e-12);
-    }
-
-    #[test]
-    fn reflection_to_ar_inverts_levinson() {
-        let x = ar1(0.9, 3000, 5);
-        let (r, _) = autocovariance_biased(&x, 5);
-        let (phi, _, refl) = levinson_durbin(&r, 5).unwrap();
-        let back = reflection_to_ar(&refl);
-        for (a, b) in phi.iter().zip(&back) {
-            assert!((a - b).abs() < 1e-14);
-        }
     }
 
     #[test]

@@ -358,7 +358,7 @@ impl ChannelBiasModel {
                 self.ar.len()
             ));
         } else if self.ar.iter().all(|v| v.is_finite()) {
-            if !crate::model::bias_state_space::ar_is_stationary(&self.ar) {
+            if !crate::stats::ar_poly::ar_is_stationary(&self.ar) {
                 errors.push(format!("{key}.ar: the AR polynomial is not stationary (a root on or outside the unit circle)"));
             }
         } else {

@@ -48,6 +48,7 @@
 //! algebraic Riccati equation, iterated here in [`riccati_innovation_var`]) must equal it.
 
 use crate::model::bias_model::{ArOf, ChannelBiasModel};
+use crate::stats::ar_poly::{self, ar_is_stationary, levinson};
 
 /// Largest bias AR order the online filter carries (state dimension = this + 1 with the
 /// random-constant state).
@@ -90,37 +91,8 @@ pub struct BiasStateSpace {
     pub sample_rate_hz: f64,
 }
 
-/// Reflection coefficients k_1..k_p of `phi` by the step-down recursion
-/// `phi^(m-1)_i = (phi^(m)_i + k_m phi^(m)_{m-i}) / (1 - k_m^2)`, `k_m = phi^(m)_m`.
-/// `None` if some |k_m| >= 1 (not stationary) or an input is not finite.
-pub fn reflection_coefficients(phi: &[f64]) -> Option<Vec<f64>> {
-    if phi.iter().any(|v| !v.is_finite()) {
-        return None;
-    }
-    let p = phi.len();
-    let mut a = phi.to_vec();
-    let mut k = vec![0.0; p];
-    for m in (1..=p).rev() {
-        let km = a[m - 1];
-        if km.abs() >= 1.0 {
-            return None;
-        }
-        k[m - 1] = km;
-        let d = 1.0 - km * km;
-        let prev: Vec<f64> = (0..m - 1).map(|i| (a[i] + km * a[m - 2 - i]) / d).collect();
-        a.truncate(m - 1);
-        a.copy_from_slice(&prev);
-    }
-    Some(k)
-}
-
-/// True if the AR polynomial `1 - sum phi_i z^-i` has all roots strictly inside the unit circle.
-pub fn ar_is_stationary(phi: &[f64]) -> bool {
-    reflection_coefficients(phi).is_some()
-}
-
 /// Autocovariances gamma(0..=max_lag) of the stationary AR(p) `x[n] = sum phi_i x[n-i] + e[n]`,
-/// `var(e) = sigma2` (step-down to reflection coefficients, then step-up; see module docs).
+/// `var(e) = sigma2` ([`crate::stats::ar_poly::ar_autocovariance`] with this module's errors).
 pub fn ar_autocovariance(
     phi: &[f64],
     sigma2: f64,
@@ -132,53 +104,7 @@ pub fn ar_autocovariance(
             value: sigma2,
         });
     }
-    let k = reflection_coefficients(phi).ok_or(StateSpaceError::NotStationary)?;
-    let p = phi.len();
-    let mut gamma = vec![0.0; max_lag.max(p) + 1];
-    gamma[0] = sigma2 / k.iter().map(|km| 1.0 - km * km).product::<f64>();
-    // Step up: order-m predictor coefficients give gamma(m).
-    let mut a: Vec<f64> = Vec::with_capacity(p);
-    for m in 1..=p {
-        let km = k[m - 1];
-        let prev = a.clone();
-        for i in 0..m - 1 {
-            a[i] = prev[i] - km * prev[m - 2 - i];
-        }
-        a.push(km);
-        gamma[m] = (1..=m).map(|i| a[i - 1] * gamma[m - i]).sum();
-    }
-    for lag in (p + 1)..gamma.len() {
-        gamma[lag] = (1..=p).map(|i| phi[i - 1] * gamma[lag - i]).sum();
-    }
-    gamma.truncate(max_lag + 1);
-    Ok(gamma)
-}
-
-/// Levinson–Durbin: AR(p) coefficients and prediction-error variance from autocovariances
-/// gamma(0..=p). Fails if the Toeplitz matrix is not positive definite.
-pub fn levinson(gamma: &[f64], p: usize) -> Result<(Vec<f64>, f64), StateSpaceError> {
-    if gamma.len() < p + 1 || !(gamma[0].is_finite() && gamma[0] > 0.0) {
-        return Err(StateSpaceError::NotPositiveDefinite { order: 0 });
-    }
-    let mut a: Vec<f64> = Vec::with_capacity(p);
-    let mut e = gamma[0];
-    for m in 1..=p {
-        let acc: f64 = gamma[m] - (1..m).map(|i| a[i - 1] * gamma[m - i]).sum::<f64>();
-        let km = acc / e;
-        if !km.is_finite() || km.abs() >= 1.0 {
-            return Err(StateSpaceError::NotPositiveDefinite { order: m });
-        }
-        let prev = a.clone();
-        for i in 0..m - 1 {
-            a[i] = prev[i] - km * prev[m - 2 - i];
-        }
-        a.push(km);
-        e *= 1.0 - km * km;
-        if e <= 0.0 {
-            return Err(StateSpaceError::NotPositiveDefinite { order: m });
-        }
-    }
-    Ok((a, e))
+    ar_poly::ar_autocovariance(phi, sigma2, max_lag).ok_or(StateSpaceError::NotStationary)
 }
 
 /// `|A(e^{iw})|^2` for `A(z) = 1 - sum phi_i z^-i`.
@@ -480,8 +406,8 @@ pub fn state_space_from_model(m: &ChannelBiasModel) -> Result<BiasStateSpace, St
     let mut gamma_b = gamma_y[..=MAX_AR_ORDER].to_vec();
     gamma_b[0] = gamma_b0;
     for p in 1..=order_max {
-        if let Ok((phi, q)) = levinson(&gamma_b, p) {
-            consider(phi, q);
+        if let Some(l) = levinson(&gamma_b, p) {
+            consider(l.phi, l.var);
         }
         if gamma_b0 > 0.0
             && let Some(phi) = long_lag_ar(&gamma_y[..=k_end], p)
@@ -501,16 +427,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn ar1_autocovariance_is_closed_form() {
-        // gamma(k) = s2 phi^k / (1 - phi^2) exactly.
-        let g = ar_autocovariance(&[0.9], 2.0, 5).unwrap();
-        for (k, v) in g.iter().enumerate() {
-            let want = 2.0 * 0.9f64.powi(k as i32) / (1.0 - 0.81);
-            assert!((v - want).abs() < 1e-12 * want, "lag {k}: {v} vs {want}");
-        }
-    }
-
-    #[test]
     fn ar2_autocovariance_satisfies_yule_walker_and_levinson_inverts_it() {
         let phi = [1.2, -0.35];
         let g = ar_autocovariance(&phi, 0.5, 6).unwrap();
@@ -521,23 +437,23 @@ mod tests {
         for k in 2..=6 {
             assert!((g[k] - (phi[0] * g[k - 1] + phi[1] * g[k - 2])).abs() < 1e-12 * g[0]);
         }
-        let (a, e) = levinson(&g, 2).unwrap();
+        let l = levinson(&g, 2).unwrap();
+        let (a, e) = (l.phi, l.var);
         assert!(
             (a[0] - 1.2).abs() < 1e-12 && (a[1] + 0.35).abs() < 1e-12,
             "{a:?}"
         );
         assert!((e - 0.5).abs() < 1e-12);
         // Asking for a higher order of a true AR(2) gives zero extra coefficients.
-        let (a4, e4) = levinson(&g, 4).unwrap();
+        let l4 = levinson(&g, 4).unwrap();
+        let (a4, e4) = (l4.phi, l4.var);
         assert!(a4[2].abs() < 1e-12 && a4[3].abs() < 1e-12 && (e4 - 0.5).abs() < 1e-12);
     }
 
     #[test]
-    fn non_stationary_polynomials_are_detected() {
-        assert!(ar_is_stationary(&[0.5, 0.3]));
-        assert!(!ar_is_stationary(&[1.0]));
-        assert!(!ar_is_stationary(&[0.5, 0.6])); // root 1.06
+    fn non_stationary_models_and_bad_variances_are_errors() {
         assert!(ar_autocovariance(&[1.01], 1.0, 2).is_err());
+        assert!(ar_autocovariance(&[0.5], 0.0, 2).is_err());
     }
 
     #[test]
@@ -553,7 +469,8 @@ mod tests {
         let gb = ar_autocovariance(&phi, q, 64).unwrap();
         let mut gy = gb.clone();
         gy[0] += r;
-        let (a_sig, e_sig) = levinson(&gy, 64).unwrap();
+        let l = levinson(&gy, 64).unwrap();
+        let (a_sig, e_sig) = (l.phi, l.var);
         let m = ChannelBiasModel {
             channel: "gz".into(),
             method: "yule_walker".into(),
@@ -671,31 +588,4 @@ mod tests {
     const SCIPY_CASE0: f64 = 1.0019166867792348;
     const SCIPY_CASE1: f64 = 5.29894780635939e-06;
     const SCIPY_CASE2: f64 = 3.6343599545867885e-06;
-
-    proptest::proptest! {
-        #[test]
-        fn autocovariance_and_levinson_are_inverse(k in proptest::collection::vec(-0.95f64..0.95, 1..6), s2 in 1e-6f64..10.0) {
-            // Any reflection coefficients in (-1, 1) give a stationary AR; its autocovariances fed
-            // back to Levinson must return the same coefficients and variance (1e-8: round-off
-            // grows with 1/prod(1-k²) <= 1e3 here).
-            let mut phi: Vec<f64> = Vec::new();
-            for (m, km) in k.iter().enumerate() {
-                let prev = phi.clone();
-                for i in 0..m {
-                    phi[i] = prev[i] - km * prev[m - 1 - i];
-                }
-                phi.push(*km);
-            }
-            let g = ar_autocovariance(&phi, s2, phi.len()).unwrap();
-            let (a, e) = levinson(&g, phi.len()).unwrap();
-            for (x, y) in a.iter().zip(phi.iter()) {
-                proptest::prop_assert!((x - y).abs() < 1e-8, "{a:?} vs {phi:?}");
-            }
-            proptest::prop_assert!((e / s2 - 1.0).abs() < 1e-8);
-            let back = reflection_coefficients(&phi).unwrap();
-            for (x, y) in back.iter().zip(k.iter()) {
-                proptest::prop_assert!((x - y).abs() < 1e-9);
-            }
-        }
-    }
 }

@@ -11,8 +11,9 @@
 //! final forward and backward error energies, `sum_{n=p}^{N-1} (f_p^2 + b_p^2) / (2 (N - p))`,
 //! which is the `sigma2` of statsmodels `burg` (its `(1-k_p^2) d_p / (2 (N-p))`).
 
-use super::ar::{ArFit, reflection_to_ar};
+use super::ar::ArFit;
 use super::{ModelError, check_ar_input, mean};
+use crate::stats::ar_poly::reflection_to_ar;
 
 /// Fit AR(p) by Burg's method.
 pub fn burg(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
@@ -79,22 +80,6 @@ mod tests {
         assert!((f.noise_var - 0.25).abs() < 0.0056, "{}", f.noise_var);
     }
 
-    /// Step-down (inverse Levinson) recursion: AR coefficients back to reflection coefficients.
-    fn step_down(phi: &[f64]) -> Vec<f64> {
-        let mut a = phi.to_vec();
-        let mut k = vec![0.0; a.len()];
-        for m in (1..=a.len()).rev() {
-            let km = a[m - 1];
-            k[m - 1] = km;
-            let prev: Vec<f64> = (1..m)
-                .map(|i| (a[i - 1] + km * a[m - i - 1]) / (1.0 - km * km))
-                .collect();
-            a.truncate(m - 1);
-            a.copy_from_slice(&prev);
-        }
-        k
-    }
-
     #[test]
     fn burg_model_is_stable_even_near_a_unit_root() {
         // A random walk (unit root): Burg's reflection coefficients, recovered from the AR
@@ -108,7 +93,7 @@ mod tests {
             })
             .collect();
         let f = burg(&x, 6).unwrap();
-        let k = step_down(&f.coeffs);
+        let k = crate::stats::ar_poly::reflection_coefficients(&f.coeffs, 0.0).expect("stable");
         assert!(k.iter().all(|k| k.abs() < 1.0), "{k:?}");
         // the first reflection coefficient of a random walk is close to 1
         assert!(k[0] > 0.99, "{k:?}");

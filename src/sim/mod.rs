@@ -37,9 +37,10 @@ pub use truth::{Effect, N_EFFECTS, TruthPrecision, TruthRow, TruthWriter, truth_
 
 use crate::rng::Rng;
 use crate::sample::{N_CHANNELS, Sample, channel_index, flags};
+use crate::stats::ar_poly::ar_is_stationary;
 use gross::Gross6;
 use nalgebra::{Matrix3, Vector3};
-use processes::{ArBias6, GaussMarkov6, MAX_AR_ORDER, RandomWalk6, ar_is_stationary};
+use processes::{ArBias6, GaussMarkov6, MAX_AR_ORDER, RandomWalk6};
 use scenario::{Checker, MotionConfig, TemperatureProfile, VibrationMode};
 use std::path::Path;
 use temperature::{TemperatureBias6, TemperatureModel};

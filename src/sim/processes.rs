@@ -15,6 +15,7 @@
 
 use crate::rng::Rng;
 use crate::sample::N_CHANNELS;
+use crate::stats::ar_poly::ar_autocovariance;
 use nalgebra::{DMatrix, DVector};
 
 /// Largest AR order supported (fixed-size per-sample state).
@@ -56,56 +57,6 @@ impl GaussMarkov6 {
         }
         out
     }
-}
-
-/// True iff the AR polynomial 1 − Σ φᵢ zⁱ has all roots outside the unit circle, tested by the
-/// step-down recursion: k_m = φ_m, φ'_i = (φ_i + k_m φ_{m−i}) / (1 − k_m²).
-pub fn ar_is_stationary(coeffs: &[f64]) -> bool {
-    if coeffs.iter().any(|c| !c.is_finite()) {
-        return false;
-    }
-    let mut a: Vec<f64> = coeffs.to_vec();
-    while let Some(&k) = a.last() {
-        if k.abs() >= 1.0 {
-            return false;
-        }
-        let m = a.len();
-        let d = 1.0 - k * k;
-        let prev: Vec<f64> = (0..m - 1).map(|i| (a[i] + k * a[m - 2 - i]) / d).collect();
-        a = prev;
-    }
-    true
-}
-
-/// Autocovariances γ₀…γ_max_lag of a stationary AR(p) with innovation variance `innov_var`.
-/// Returns `None` if the Yule-Walker system is singular (non-stationary input).
-pub fn ar_autocovariance(coeffs: &[f64], innov_var: f64, max_lag: usize) -> Option<Vec<f64>> {
-    let p = coeffs.len();
-    // Unknowns γ₀…γ_p; row k: γ_k − Σᵢ φᵢ γ_|k−i| = s² δ_k.
-    let mut a = DMatrix::<f64>::zeros(p + 1, p + 1);
-    let mut b = DVector::<f64>::zeros(p + 1);
-    b[0] = innov_var;
-    for k in 0..=p {
-        a[(k, k)] += 1.0;
-        for (i, phi) in coeffs.iter().enumerate() {
-            let lag = (k as isize - (i as isize + 1)).unsigned_abs();
-            a[(k, lag)] -= phi;
-        }
-    }
-    let g = a.lu().solve(&b)?;
-    let mut gamma: Vec<f64> = g.iter().copied().collect();
-    // Beyond p the autocovariance follows the AR recursion itself.
-    while gamma.len() <= max_lag {
-        let k = gamma.len();
-        let v = coeffs
-            .iter()
-            .enumerate()
-            .map(|(i, phi)| phi * gamma[k - i - 1])
-            .sum();
-        gamma.push(v);
-    }
-    gamma.truncate(max_lag + 1);
-    Some(gamma)
 }
 
 /// Six AR(p) processes; coefficients shared per sensor (gyro channels 0–2, accel 3–5).
@@ -202,46 +153,5 @@ impl RandomWalk6 {
             self.state[c] += self.step_sd[c] * rng.normal();
         }
         out
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ar1_autocovariance_matches_closed_form() {
-        // AR(1): γ₀ = s²/(1−φ²), γ_k = φ^k γ₀.
-        let g = ar_autocovariance(&[0.9], 2.0, 3).unwrap();
-        let g0 = 2.0 / (1.0 - 0.81);
-        for (k, gk) in g.iter().enumerate() {
-            assert!(
-                (gk - g0 * 0.9f64.powi(k as i32)).abs() < 1e-12 * g0,
-                "lag {k}"
-            );
-        }
-    }
-
-    #[test]
-    fn ar2_autocovariance_matches_closed_form() {
-        // AR(2): γ₀ = s² (1−φ₂) / ((1+φ₂)((1−φ₂)² − φ₁²)), ρ₁ = φ₁/(1−φ₂).
-        let (p1, p2) = (1.5, -0.56);
-        let g = ar_autocovariance(&[p1, p2], 1.0, 1).unwrap();
-        let g0 = (1.0 - p2) / ((1.0 + p2) * ((1.0 - p2).powi(2) - p1 * p1));
-        assert!((g[0] - g0).abs() < 1e-12 * g0);
-        assert!((g[1] - g0 * p1 / (1.0 - p2)).abs() < 1e-12 * g0);
-    }
-
-    #[test]
-    fn stationarity_test_accepts_inside_and_rejects_unit_roots() {
-        // Roots of 1 − φ₁z − φ₂z²: poles 0.8 and 0.7 → φ = (1.5, −0.56): stationary.
-        assert!(ar_is_stationary(&[1.5, -0.56]));
-        // Poles 1.0 and 0.5 → φ = (1.5, −0.5): unit root.
-        assert!(!ar_is_stationary(&[1.5, -0.5]));
-        assert!(!ar_is_stationary(&[1.01]));
-        assert!(ar_is_stationary(&[]));
-        // Complex poles of modulus 0.99: φ₂ = −0.9801 → stationary; modulus 1.01 → not.
-        assert!(ar_is_stationary(&[1.881, -0.9801]));
-        assert!(!ar_is_stationary(&[1.0, -1.0201]));
     }
 }

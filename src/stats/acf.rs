@@ -18,6 +18,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::ar_poly::levinson_partial;
 use super::special::{chi2_sf, normal_quantile};
 use super::{NumError, check_finite, check_series};
 
@@ -61,26 +62,8 @@ pub fn pacf_from_acf(r: &[f64]) -> Vec<f64> {
         return out;
     }
     out[0] = 1.0;
-    let mut phi = vec![0.0; h + 1]; // φ_{k,1..k} in phi[1..=k]
-    let mut prev = vec![0.0; h + 1];
-    let mut v = r[0];
-    for k in 1..=h {
-        if !(v > 0.0) {
-            break;
-        }
-        let mut num = r[k];
-        for j in 1..k {
-            num -= prev[j] * r[k - j];
-        }
-        let kappa = num / v;
-        for j in 1..k {
-            phi[j] = prev[j] - kappa * prev[k - j];
-        }
-        phi[k] = kappa;
-        v *= 1.0 - kappa * kappa;
-        out[k] = kappa;
-        prev[..=k].copy_from_slice(&phi[..=k]);
-    }
+    let k = levinson_partial(r, h).refl;
+    out[1..=k.len()].copy_from_slice(&k);
     out
 }
 

@@ -5,6 +5,9 @@
 //! * [`acf`]: sample ACF and PACF with their white-noise bounds, the Ljung–Box test.
 //! * [`adf`]: the augmented Dickey–Fuller unit-root test with MacKinnon's p-values.
 //! * [`robust`]: median, MAD-based σ, the Hampel filter.
+//! * [`ar_poly`]: the AR polynomial — stability (Schur–Cohn step-down), Durbin–Levinson and its
+//!   inverse, exact AR autocovariances. It sits here rather than in `model/` because the PACF
+//!   above is a Durbin–Levinson recursion, and every model and the simulator use it.
 //!
 //! [`NumError`] is the one error vocabulary of the numerical code (stats, models, analyses): a
 //! series too short, a non-finite value, a constant series, a singular system, lengths that do
@@ -12,6 +15,7 @@
 
 pub mod acf;
 pub mod adf;
+pub mod ar_poly;
 pub mod robust;
 pub mod special;
 pub mod student_t;
