@@ -146,6 +146,10 @@ def prepare_log(args, tool, imp, log, work):
                           w / "fit.txt")
     fitted_cfg = imuprep_io.fitted_config(base, arima, bias, w / "fitted.toml")
     cleaned("fitted", fitted_cfg)
+    gyro = {v: imuprep_io.read_imuprep_csv(w / (v + ".csv"))[2] for v in summaries}
+    for v in summaries:
+        # What imuprep took off the gyros, in the IMU's own axes: mean of (output - input), deg/s.
+        summaries[v]["gyro_change_dps"] = np.rad2deg((gyro[v] - gyro["passthrough"]).mean(axis=0))
     imu_t0 = imuprep_io.read_shared_csv(shared)[0][0] / 1e9
     fit_span = (imu_t0 + log.fit_skip_s, imu_t0 + log.fit_skip_s + log.fit_train_s)
     return folders, summaries, fit_span
@@ -274,8 +278,12 @@ def consistency_checks(tasks, scheme_i):
     return lines
 
 
+BIAS_TIMELINE_STEP_S = 25.0
+
+
 def filter_diagnostics(tasks):
-    """Per variant (scheme (i) run): ZUPT count, the filter's gyro-bias estimate (deg/s)."""
+    """Per variant (scheme (i) run): ZUPT count, the filter's gyro-bias estimate (deg/s), and its
+    z (yaw) component every BIAS_TIMELINE_STEP_S seconds after the first GNSS epoch."""
     out = {}
     for t in tasks:
         if t.purpose != "scheme_i":
@@ -283,10 +291,12 @@ def filter_diagnostics(tasks):
         b = t.result["bias_est"]
         b = b[b[:, 0] > 0]
         gyro = np.rad2deg(b[:, 4:7])
+        t_rel = b[:, 0] - t.result["in_gnss"][0, 0]
+        grid = np.arange(BIAS_TIMELINE_STEP_S, t_rel[-1], BIAS_TIMELINE_STEP_S)
         out[t.variant] = {
             "zupts": len(t.result["zupt_gyro_bias_change"]),
             "gyro_bias_median_dps": np.median(gyro, axis=0),
-            "gyro_bias_end_dps": gyro[-1],
+            "timeline": (grid, gyro[np.searchsorted(t_rel, grid, side="right") - 1, 2]),
         }
     return out
 

@@ -133,18 +133,32 @@ def starts_text(s2):
 
 
 def diagnostics_table(summaries, diag):
-    out = ["| variant | imuprep: replaced | bias removed | warming up | filter: ZUPT updates | "
-           "filter gyro bias, median over run (x, y, z) °/s |",
-           "|---|---:|---:|---:|---:|---|"]
+    out = ["| variant | imuprep: replaced | bias removed | warming up | imuprep: mean (out − in) "
+           "gyro x, y, z °/s, IMU axes | filter: ZUPT updates | filter gyro bias, median over "
+           "run (x, y, z) °/s, body axes |",
+           "|---|---:|---:|---:|---|---:|---|"]
     for v in ("raw", "passthrough", "default", "fitted"):
         if v not in diag:
             continue
         s = summaries.get(v, {})
         d = diag[v]
-        out.append("| %s | %s | %s | %s | %d | %s |" % (
+        change = s.get("gyro_change_dps")
+        out.append("| %s | %s | %s | %s | %s | %d | %s |" % (
             LABEL[v], s.get("replaced", "—"), s.get("bias removed", "—"),
-            s.get("warming up", "—"), d["zupts"],
+            s.get("warming up", "—"),
+            "—" if change is None else ", ".join("%+.3f" % x for x in change), d["zupts"],
             ", ".join("%+.3f" % x for x in d["gyro_bias_median_dps"])))
+    return out
+
+
+def bias_timeline_table(diag):
+    variants = [v for v in ("raw", "default", "fitted") if v in diag]
+    grid = diag["raw"]["timeline"][0]
+    out = ["| s after first GNSS epoch | " + " | ".join(LABEL[v] for v in variants) + " |",
+           "|---:|" + "---:|" * len(variants)]
+    for i, t in enumerate(grid):
+        out.append("| %g | %s |" % (t, " | ".join("%+.3f" % diag[v]["timeline"][1][i]
+                                                 for v in variants)))
     return out
 
 
@@ -184,6 +198,11 @@ def log_section(log, rtk, fit_span, s1, s2, summaries, diag, checks):
     out.append("### What imuprep changed, and how the filter reacted (scheme (i) runs)")
     out.append("")
     out += diagnostics_table(summaries, diag)
+    out.append("")
+    out.append("The filter's z (yaw) gyro-bias estimate, °/s, body axes (last GNSS epoch at or "
+               "before each time):")
+    out.append("")
+    out += bias_timeline_table(diag)
     out.append("")
     if checks:
         out.append("Checks: " + "; ".join(checks) + ".")
