@@ -88,6 +88,13 @@ def fitted_config(base_config, arima, bias, out_path):
     return out_path
 
 
+def bias_model_means_dps(bias_toml):
+    """The `mean` of each gyro channel of a fitted bias model (rad/s in the file), deg/s."""
+    with open(bias_toml, "rb") as f:
+        chans = {c["channel"]: c for c in tomllib.load(f)["channels"]}
+    return np.rad2deg([chans[c]["mean"] for c in ("gx", "gy", "gz")])
+
+
 def seconds_to_ns(text):
     return int(Decimal(text) * 1_000_000_000)
 

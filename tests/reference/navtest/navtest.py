@@ -146,6 +146,7 @@ def prepare_log(args, tool, imp, log, work):
                           w / "fit.txt")
     fitted_cfg = imuprep_io.fitted_config(base, arima, bias, w / "fitted.toml")
     cleaned("fitted", fitted_cfg)
+    summaries["fitted"]["model_gyro_mean_dps"] = imuprep_io.bias_model_means_dps(bias)
     gyro = {v: imuprep_io.read_imuprep_csv(w / (v + ".csv"))[2] for v in summaries}
     for v in summaries:
         # What imuprep took off the gyros, in the IMU's own axes: mean of (output - input), deg/s.
@@ -260,13 +261,13 @@ def consistency_checks(tasks, scheme_i):
     lines = []
     by = {(t.variant, t.purpose): t for t in tasks}
     pt, raw = scheme_i.get("passthrough"), scheme_i["raw"]
+    lines.append("pass-through through imuprep: filter input byte-identical to raw")
     if pt is not None:
         same = pt["on"] == raw["on"] and pt["off"] == raw["off"]
         if not same:
             raise RuntimeError("pass-through errors differ from raw: %s vs %s" % (pt, raw))
-        lines.append("pass-through through imuprep: filter input byte-identical to raw, "
-                     "outage errors identical (%d outages, velocity matching on and off)"
-                     % len(raw["on"]))
+        lines.append("pass-through run: outage errors identical to raw (%d outages, velocity "
+                     "matching on and off)" % len(raw["on"]))
     chk = by.get(("raw", "vm_off_check"))
     if chk is not None:
         a = by[("raw", "scheme_i")].result["outp_unmatched"]

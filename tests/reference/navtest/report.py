@@ -199,6 +199,11 @@ def log_section(log, rtk, fit_span, s1, s2, summaries, diag, checks):
     out.append("")
     out += diagnostics_table(summaries, diag)
     out.append("")
+    means = summaries.get("fitted", {}).get("model_gyro_mean_dps")
+    if means is not None:
+        out.append("(c)'s bias model (`imuprep fit`, %s): `mean` of gx, gy, gz = %s °/s." % (
+            fit_text.split(":")[0], ", ".join("%+.3f" % x for x in means)))
+        out.append("")
     out.append("The filter's z (yaw) gyro-bias estimate, °/s, body axes (last GNSS epoch at or "
                "before each time):")
     out.append("")
