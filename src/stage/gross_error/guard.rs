@@ -21,6 +21,8 @@ pub struct JumpGuard {
     sq: [f64; GUARD_N],
     head: usize,
     n: usize,
+    /// Running sum of `sq` (recomputed exactly at every wrap of `head`, against round-off).
+    sum: f64,
     last: f64,
     run: u32,
     /// Floor of the mean squared increment (2 × the gate's σ floor²).
@@ -33,6 +35,7 @@ impl JumpGuard {
             sq: [0.0; GUARD_N],
             head: 0,
             n: 0,
+            sum: 0.0,
             last: f64::NAN,
             run: 0,
             floor2: 2.0 * min_sigma * min_sigma,
@@ -46,7 +49,7 @@ impl JumpGuard {
         if !self.last.is_finite() || self.n < GUARD_MIN || self.run >= max_run {
             return false;
         }
-        let mean = (self.sq[..self.n].iter().sum::<f64>() / self.n as f64).max(self.floor2);
+        let mean = (self.sum / self.n as f64).max(self.floor2);
         let d = v - self.last;
         d * d > k * k * mean
     }
@@ -60,9 +63,14 @@ impl JumpGuard {
         }
         if self.last.is_finite() {
             let d = v - self.last;
+            let old = if self.n == GUARD_N { self.sq[self.head] } else { 0.0 };
             self.sq[self.head] = d * d;
+            self.sum += d * d - old;
             self.head = (self.head + 1) % GUARD_N;
             self.n = (self.n + 1).min(GUARD_N);
+            if self.head == 0 {
+                self.sum = self.sq[..self.n].iter().sum();
+            }
         }
         self.last = v;
         self.run = 0;
