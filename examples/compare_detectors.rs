@@ -8,7 +8,7 @@
 use imuprep::analysis::detectors::{
     DetectorScore, chauvenet, dixon_q, grubbs, hampel, score, three_sigma,
 };
-use imuprep::analysis::gate_sweep::{SyntheticSpec, run_stage, score_run, synthetic_stream};
+use imuprep::report::gate_sweep::{SyntheticSpec, run_stage, score_run, synthetic_stream};
 use imuprep::stage::gross_error::GrossErrorSettings;
 
 fn row(name: &str, s: &DetectorScore) {

@@ -1,14 +1,14 @@
 //! What the gross-error stage flags on a recording without labels (issue 4's real drives):
 //! every flagged event classified by tests independent of the stage's forecast
-//! (`analysis::flag_review`: impulse, level change, burst, excursion, other), with counts, rates and the
+//! (`report::flag_review`: impulse, level change, burst, excursion, other), with counts, rates and the
 //! largest events of each class.
 //!
 //! Run: cargo run --release --example flag_review -- LOG [K [KEY=VALUE ...]] [--list]
 //! (LOG from `imuprep import`; K = the gate, default 4.5; the stage's other settings are the
 //! defaults, with its model identified at warm-up as the embedded config does.)
 
-use imuprep::analysis::flag_review::{EventClass, review};
 use imuprep::io::csv::read_log;
+use imuprep::report::flag_review::{EventClass, review};
 use imuprep::sample::{CHANNEL_NAMES, flags};
 use imuprep::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
 

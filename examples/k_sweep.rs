@@ -1,12 +1,12 @@
 //! The measured k-sweep behind `GrossErrorSettings`' defaults.
 //!
 //! Runs the gross-error stage on long seeded synthetic gyro channels (static and drive, see
-//! `analysis::gate_sweep`) for k = 3.0..=6.0 step 0.25, with and without the jump confirmation,
+//! `report::gate_sweep`) for k = 3.0..=6.0 step 0.25, with and without the jump confirmation,
 //! and prints false alarms per clean sample, precision, recall, F1 and RMSE.
 //!
 //! Run: cargo run --release --example k_sweep [-- N_SAMPLES]   (default 2 000 000 per scenario)
 
-use imuprep::analysis::gate_sweep::{SyntheticSpec, default_k_grid, sweep_k, synthetic_stream};
+use imuprep::report::gate_sweep::{SyntheticSpec, default_k_grid, sweep_k, synthetic_stream};
 use imuprep::stage::gross_error::GrossErrorSettings;
 
 fn main() {

@@ -6,8 +6,8 @@
 
 mod common;
 
-use imuprep::analysis::flag_review::isolated_impulses;
 use imuprep::io::csv::{ImportOptions, read_csv};
+use imuprep::report::flag_review::isolated_impulses;
 use imuprep::rng::Rng;
 use imuprep::sample::{N_CHANNELS, Sample, flags};
 use imuprep::sim::gross::Gross6;

@@ -6,8 +6,8 @@
 
 mod common;
 
-use imuprep::analysis::gate_sweep::{SyntheticSpec, run_stage, score_run, synthetic_stream};
 use imuprep::model::arima::ArimaModelFile;
+use imuprep::report::gate_sweep::{SyntheticSpec, run_stage, score_run, synthetic_stream};
 use imuprep::rng::Rng;
 use imuprep::sample::{Sample, flags};
 use imuprep::stage::gross_error::{

@@ -15,10 +15,10 @@
 //! Everything is seeded (the scenarios' seeds), so the numbers are deterministic; the thresholds
 //! are the targets, not fitted to the measured values.
 
-use imuprep::analysis::detector_compare::{
+use imuprep::model::arima::{ArimaModelFile, IdentifySettings, identify};
+use imuprep::report::detector_compare::{
     DetectorReport, DetectorRow, compare_detectors, simulate_decoded,
 };
-use imuprep::model::arima::{ArimaModelFile, IdentifySettings, identify};
 use imuprep::sample::CHANNEL_NAMES;
 use imuprep::sim::Scenario;
 use imuprep::sim::truth::TruthRow;

@@ -85,7 +85,7 @@ pub fn autocovariance_biased(x: &[f64], max_lag: usize) -> (Vec<f64>, f64) {
 pub fn yule_walker(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
     check_ar_input(x, p)?;
     let (r, mu) = autocovariance_biased(x, p);
-    if !(r[0] > 0.0) {
+    if r[0].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(ModelError::ZeroVariance);
     }
     let l = levinson(&r, p).ok_or_else(|| {

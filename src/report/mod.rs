@@ -1,4 +1,71 @@
-//! The commands' drivers: each runs library code over recordings and returns a report type
-//! (`Display` for people, `Serialize` for machines).
+//! The commands' drivers: each runs library code over recordings (or simulations) and returns a
+//! report type (`Display` for people, `Serialize` for machines); `main.rs` only parses the
+//! command line and dispatches here. This is the application layer: like `main.rs` it reports
+//! errors with `anyhow` (context strings for people), while the floors below return typed errors.
 
+pub mod allan;
 pub mod audit;
+pub mod compare;
+pub mod convert;
+pub mod daemon;
+pub mod detector_compare;
+pub mod diagnose;
+pub mod evaluate;
+pub mod fit;
+pub mod flag_review;
+pub mod gate_sweep;
+
+use std::path::Path;
+
+use anyhow::{Context, Result, ensure};
+
+use crate::sample::Sample;
+
+/// Samples of a log after `skip_s`, with the log's sample rate.
+pub fn load_span(log: &Path, skip_s: f64) -> Result<(f64, Vec<Sample>)> {
+    let (desc, samples, _) = crate::io::csv::read_log(log)?;
+    let rate = desc.map(|d| d.sample_rate_hz).unwrap_or(0.0);
+    ensure!(
+        rate > 0.0,
+        "{}: the log does not declare its sample rate",
+        log.display()
+    );
+    let skip = (skip_s * rate).round() as usize;
+    ensure!(skip < samples.len(), "--skip-s removes the whole log");
+    Ok((rate, samples[skip..].to_vec()))
+}
+
+/// Channel names (gx gy gz ax ay az) → indices; none given = all six.
+pub fn parse_channels(channels: &[String]) -> Result<Vec<usize>> {
+    if channels.is_empty() {
+        return Ok((0..6).collect());
+    }
+    channels
+        .iter()
+        .map(|c| {
+            crate::sample::channel_index(c)
+                .with_context(|| format!("unknown channel {c:?} (gx gy gz ax ay az)"))
+        })
+        .collect()
+}
+
+/// A scenario file with `--set KEY=VALUE` overrides applied.
+pub fn read_scenario(p: &Path, sets: &[String]) -> Result<crate::sim::Scenario> {
+    let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+    let overrides = sets
+        .iter()
+        .map(|kv| {
+            kv.split_once('=')
+                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+                .with_context(|| format!("--set {kv:?}: expected KEY=VALUE"))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    crate::sim::Scenario::from_toml_str_with(&text, &overrides)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))
+}
+
+/// Write `value` as pretty JSON to `path`.
+pub fn write_json<T: serde::Serialize + ?Sized>(path: &Path, value: &T) -> Result<()> {
+    std::fs::write(path, serde_json::to_string_pretty(value)?)
+        .with_context(|| format!("writing {}", path.display()))
+}

@@ -13,6 +13,8 @@
 //! * Autocovariances: `γ(0) = σ² / Π (1 − k_m²)`, `γ(m) = Σ_{i≤m} φ^{(m)}_i γ(m−i)` by step-up,
 //!   the AR recursion beyond p.
 
+use std::cmp::Ordering;
+
 /// Reflection coefficients `k_1..k_p` of `phi` by the step-down recursion; `None` if some
 /// `|k_m| ≥ 1 − margin` or a value is not finite (NaN fails every comparison).
 pub fn reflection_coefficients(phi: &[f64], margin: f64) -> Option<Vec<f64>> {
@@ -21,7 +23,7 @@ pub fn reflection_coefficients(phi: &[f64], margin: f64) -> Option<Vec<f64>> {
     let mut k = vec![0.0; p];
     for m in (1..=p).rev() {
         let km = a[m - 1];
-        if !(km.abs() < 1.0 - margin) {
+        if km.abs().partial_cmp(&(1.0 - margin)) != Some(Ordering::Less) {
             return None;
         }
         k[m - 1] = km;
@@ -80,7 +82,7 @@ pub fn levinson_partial(r: &[f64], p: usize) -> Levinson {
     let mut refl = Vec::with_capacity(p);
     let mut e = r[0];
     for m in 1..=p {
-        if !(e > 0.0) {
+        if e.partial_cmp(&0.0) != Some(Ordering::Greater) {
             break;
         }
         let mut num = r[m];

@@ -255,4 +255,125 @@ pub fn static_position_drift(
 }
 
 /// Convenience: simulate a scenario and decode it as replay would.
-pub use crate::analysis::detector_compare::simulate_decoded as simulate;
+pub use crate::report::detector_compare::simulate_decoded as simulate;
+
+/// `imuprep evaluate`: [`evaluate`] and [`static_position_drift`] on a simulated scenario.
+#[derive(Debug, Clone, Serialize)]
+pub struct EvaluateReport {
+    pub scenario: String,
+    pub seed: u64,
+    pub channels: Vec<ChannelEval>,
+    pub static_drift: Option<StaticDrift>,
+}
+
+/// Simulate `scenario` (with `--set` overrides) and score `cfg`'s pipeline against the
+/// calibration-only baseline.
+pub fn evaluate_scenario(
+    scenario: &std::path::Path,
+    seed: Option<u64>,
+    cfg: &mut crate::config::Config,
+    sets: &[String],
+) -> anyhow::Result<EvaluateReport> {
+    use anyhow::{Context, anyhow};
+    let scn = super::read_scenario(scenario, sets)?;
+    let seed = crate::sim::log::effective_seed(&scn, seed);
+    let rate = scn.sample_rate_hz();
+    cfg.stages.set_sample_rate(rate);
+    let pipeline = cfg.stages.build().map_err(|e| anyhow!(e))?;
+    let (samples, truth) = simulate(&scn, seed)?;
+    let cal = cfg
+        .stages
+        .bias
+        .as_ref()
+        .map(|b| b.settings.clone())
+        .unwrap_or_default();
+    let gyro_cal = cal
+        .gyro
+        .build()
+        .context("gyro calibration matrix is singular")?;
+    let accel_cal = cal
+        .accel
+        .build()
+        .context("accel calibration matrix is singular")?;
+    let calibrate = move |mut s: Sample| {
+        s.gyro = gyro_cal.apply(&s.gyro);
+        s.accel = accel_cal.apply(&s.accel);
+        s
+    };
+    let channels = evaluate(&samples, &truth, rate, pipeline, calibrate);
+    let second = cfg.stages.build().map_err(|e| anyhow!(e))?;
+    let static_drift = static_position_drift(&samples, &truth, rate, second, calibrate);
+    Ok(EvaluateReport {
+        scenario: scenario.display().to_string(),
+        seed,
+        channels,
+        static_drift,
+    })
+}
+
+impl std::fmt::Display for EvaluateReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "pipeline vs calibration-only baseline on {} (seed {}), gyro channels:",
+            self.scenario, self.seed
+        )?;
+        writeln!(
+            f,
+            "{:<3} {:>14} {:>14} {:>8} {:>14} {:>14} {:>9}  manoeuvres: worst attenuation, worst |change|, worst removed by the stage",
+            "ch", "1s-mean RMS", "baseline", "ratio", "60s drift rad", "baseline", "reduced",
+        )?;
+        for r in &self.channels {
+            writeln!(
+                f,
+                "{:<3} {:>14.3e} {:>14.3e} {:>8.2} {:>14.3e} {:>14.3e} {:>8.1}%  {:.2}%, {:.2}%, {:.2}% of {}",
+                r.channel,
+                r.pipeline.rms_1s_mean_error,
+                r.baseline.rms_1s_mean_error,
+                r.improvement_1s,
+                r.pipeline.rms_60s_drift_rad,
+                r.baseline.rms_60s_drift_rad,
+                100.0 * r.drift_reduction,
+                100.0 * r.worst_attenuation,
+                100.0 * r.worst_abs_change,
+                100.0 * r.worst_stage_removed,
+                r.manoeuvres
+            )?;
+        }
+        if let Some(d) = &self.static_drift {
+            writeln!(
+                f,
+                "static 60-s position drift (plain strapdown of the errors, {} windows): RMS {:.3e} m, baseline {:.3e} m, reduced {:.1}%",
+                d.windows,
+                d.pipeline_rms_m,
+                d.baseline_rms_m,
+                100.0 * d.reduction
+            )?;
+        }
+        for r in self
+            .channels
+            .iter()
+            .filter(|r| !r.manoeuvre_list.is_empty())
+        {
+            writeln!(
+                f,
+                "{} manoeuvres: start s, duration s, true angle rad, change (+ = attenuated), removed by the stage, mean error rad/s (in the 1 s before)",
+                r.channel
+            )?;
+            for m in &r.manoeuvre_list {
+                writeln!(
+                    f,
+                    "  {:>7.1} {:>6.1} {:>9.4} {:>+8.2}% {:>+8.3}% {:>+11.3e} ({:>+10.3e})",
+                    m.start_s,
+                    m.duration_s,
+                    m.true_angle_rad,
+                    100.0 * m.change,
+                    100.0 * m.stage_removed,
+                    m.mean_error,
+                    m.mean_error_before
+                )?;
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,123 @@
+//! `imuprep compare`: gross-error detectors against the simulator's truth
+//! ([`detectors`]), or the bias models of the FOS paper on a recording ([`bias_models`]).
+
+use std::fmt;
+use std::path::Path;
+
+use anyhow::{Result, anyhow, ensure};
+use serde::Serialize;
+
+use super::detector_compare::{self as dc, DetectorReport};
+use super::{load_span, parse_channels, read_scenario};
+use crate::analysis::bias_compare::{CompareReport, CompareSettings, SensorKind, compare_channel};
+use crate::config::Config;
+use crate::sample::CHANNEL_NAMES;
+
+/// `compare --detectors`: every detector on a simulated scenario, scored on its truth. The
+/// online stage uses `cfg`'s `[gross_error.settings]` (and model).
+pub fn detectors(
+    scenario: &Path,
+    seed: Option<u64>,
+    cfg: &Config,
+    sets: &[String],
+) -> Result<DetectorReport> {
+    let scn = read_scenario(scenario, sets)?;
+    let seed = crate::sim::log::effective_seed(&scn, seed);
+    let (settings, model) = cfg
+        .stages
+        .gross_error
+        .clone()
+        .map(|g| (g.settings, g.model))
+        .unwrap_or_default();
+    let (samples, truth) = dc::simulate_decoded(&scn, seed)?;
+    // Without a fitted model the online stage spends its first `warmup_samples` identifying
+    // one (passing samples through); every detector is scored on the samples after that.
+    let from = if model.is_some() {
+        0
+    } else {
+        settings.warmup_samples.min(samples.len())
+    };
+    let rows = dc::compare_detectors(&samples, &truth, &settings, model.as_ref(), from)
+        .map_err(|e| anyhow!(e))?;
+    Ok(DetectorReport {
+        scenario: scenario.display().to_string(),
+        seed,
+        samples: samples.len(),
+        scored_from: from,
+        gross_samples: truth[from..]
+            .iter()
+            .map(|t| t.gross_mask.iter().filter(|m| **m).count() as u64)
+            .sum(),
+        rows,
+    })
+}
+
+impl fmt::Display for DetectorReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.text())
+    }
+}
+
+/// `compare LOG`: the bias models of the FOS paper per channel.
+#[derive(Debug, Clone, Serialize)]
+#[serde(transparent)]
+pub struct BiasCompareReport {
+    pub channels: Vec<CompareReport>,
+}
+
+impl BiasCompareReport {
+    /// CSV of every channel's rows (one header per channel, as each table is written).
+    pub fn to_csv(&self) -> String {
+        self.channels.iter().map(|r| r.to_csv()).collect()
+    }
+}
+
+impl fmt::Display for BiasCompareReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for r in &self.channels {
+            writeln!(f, "{}", r.to_text_table())?;
+        }
+        Ok(())
+    }
+}
+
+/// `compare LOG`: each channel's comparison, after `skip_s`; `temp_exo` adds the temperature as
+/// an exogenous FOS input (the log must carry it on every sample).
+pub fn bias_models(
+    log: &Path,
+    channels: &[String],
+    skip_s: f64,
+    temp_exo: bool,
+) -> Result<BiasCompareReport> {
+    let (rate, samples) = load_span(log, skip_s)?;
+    let chans = parse_channels(channels)?;
+    let temp: Vec<f64> = samples.iter().filter_map(|s| s.temp_c).collect();
+    let have_temp = temp_exo && temp.len() == samples.len();
+    ensure!(
+        !temp_exo || have_temp,
+        "--temp-exo: the log has no complete temperature channel"
+    );
+    let settings = CompareSettings::paper(rate);
+    let exo: Vec<&[f64]> = if have_temp {
+        vec![&temp[..]]
+    } else {
+        Vec::new()
+    };
+    let mut out = Vec::new();
+    for c in chans {
+        let y: Vec<f64> = samples.iter().map(|s| s.channel(c)).collect();
+        let kind = if c < 3 {
+            SensorKind::Gyro
+        } else {
+            SensorKind::Accel
+        };
+        out.push(compare_channel(
+            &y,
+            &exo,
+            CHANNEL_NAMES[c],
+            kind,
+            &settings,
+        )?);
+    }
+    Ok(BiasCompareReport { channels: out })
+}

@@ -1,0 +1,193 @@
+//! `imuprep import`, `export` and `simulate`: recordings between formats, and simulated ones.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, ensure};
+use serde::Serialize;
+
+use crate::frame::detect::{ProtocolArgs, ProtocolConfig};
+use crate::io::convert::{ExportFormat, encode_stream, read_any};
+use crate::io::csv::{self as csvio, ImportOptions};
+
+/// `--col KEY=COLUMN` mappings → the importer's column names (keys: t gx gy gz ax ay az temp).
+pub fn parse_columns(cols: &[String], o: &mut ImportOptions) -> Result<()> {
+    for c in cols {
+        let (k, v) = c
+            .split_once('=')
+            .with_context(|| format!("--col {c:?}: expected KEY=COLUMN"))?;
+        let i = ["t", "gx", "gy", "gz", "ax", "ay", "az", "temp"]
+            .iter()
+            .position(|x| *x == k)
+            .with_context(|| format!("--col {c:?}: key must be one of t gx gy gz ax ay az temp"))?;
+        o.columns[i] = Some(v.to_string());
+    }
+    Ok(())
+}
+
+/// What `import` wrote.
+#[derive(Debug, Clone, Serialize)]
+pub struct ImportReport {
+    pub input: PathBuf,
+    pub output: PathBuf,
+    /// `"<protocol> input: <what was found>"` when the input went through a protocol decoder.
+    pub decoded: Option<String>,
+    pub samples: usize,
+    pub duration_s: f64,
+    pub sample_rate_hz: f64,
+}
+
+/// Convert `input` (CSV as `o` says, else any protocol the decoders read) into a native log.
+pub fn import(
+    input: &Path,
+    output: &Path,
+    proto: &ProtocolArgs,
+    o: &ImportOptions,
+) -> Result<ImportReport> {
+    if let Some(r) = o.time_from_index_hz {
+        ensure!(r.is_finite() && r > 0.0, "--rate must be > 0 Hz");
+    }
+    let is_csv = {
+        let n = input.to_string_lossy().to_ascii_lowercase();
+        n.ends_with(".csv") || n.ends_with(".csv.gz")
+    };
+    let (d, samples, decoded) = if is_csv && proto.protocol.is_none() {
+        let (d, s) = csvio::read_csv(input, o)?;
+        (d, s, None)
+    } else {
+        let mut pc = ProtocolConfig::auto();
+        proto.apply(&mut pc);
+        let f = read_any(input, &pc)?;
+        let mut d = f.descriptor.unwrap_or_default();
+        d.gyro_range_rad_s = o.gyro_range_rad_s;
+        d.accel_range_m_s2 = o.accel_range_m_s2;
+        (
+            d,
+            f.samples,
+            Some(format!("{} input: {}", f.protocol, f.found)),
+        )
+    };
+    csvio::write_log(output, &d, &samples)?;
+    Ok(ImportReport {
+        input: input.to_path_buf(),
+        output: output.to_path_buf(),
+        decoded,
+        samples: samples.len(),
+        duration_s: samples.last().map_or(0.0, |s| s.t_s() - samples[0].t_s()),
+        sample_rate_hz: d.sample_rate_hz,
+    })
+}
+
+impl fmt::Display for ImportReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(d) = &self.decoded {
+            writeln!(f, "{d}")?;
+        }
+        writeln!(
+            f,
+            "imported {} samples ({:.1} s at {:.2} Hz) from {} into {}",
+            self.samples,
+            self.duration_s,
+            self.sample_rate_hz,
+            self.input.display(),
+            self.output.display()
+        )
+    }
+}
+
+/// What `export` wrote.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExportReport {
+    pub output: PathBuf,
+    pub samples: usize,
+    pub crc_errors: u64,
+    pub resyncs: u64,
+}
+
+/// Write the samples of `log` (any protocol) to `output` as `to`.
+pub fn export(
+    log: &Path,
+    output: &Path,
+    to: ExportFormat,
+    proto: &ProtocolArgs,
+) -> Result<ExportReport> {
+    let mut pc = ProtocolConfig::auto();
+    proto.apply(&mut pc);
+    let f = read_any(log, &pc)?;
+    if to == ExportFormat::Csv {
+        csvio::write_csv(output, &f.samples)?;
+    } else {
+        let d = f.descriptor.unwrap_or_default();
+        let b = encode_stream(to, &d, &f.samples);
+        std::fs::write(output, &b).with_context(|| format!("writing {}", output.display()))?;
+    }
+    Ok(ExportReport {
+        output: output.to_path_buf(),
+        samples: f.samples.len(),
+        crc_errors: f.stats.crc_errors,
+        resyncs: f.stats.resyncs,
+    })
+}
+
+impl fmt::Display for ExportReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "exported {} samples to {} ({} CRC errors, {} resyncs in the log)",
+            self.samples,
+            self.output.display(),
+            self.crc_errors,
+            self.resyncs
+        )
+    }
+}
+
+/// What `simulate` wrote.
+#[derive(Debug, Clone, Serialize)]
+pub struct SimulateReport {
+    pub output: PathBuf,
+    pub seed: u64,
+    pub instants: u64,
+    pub frames: u64,
+    pub dropped: u64,
+    pub duplicated: u64,
+    pub bytes: u64,
+}
+
+/// Simulate `scenario` (with `--set` overrides) into a replay log and an optional truth sidecar.
+pub fn simulate(
+    scenario: &Path,
+    sets: &[String],
+    seed: Option<u64>,
+    output: &Path,
+    truth: Option<&Path>,
+) -> Result<SimulateReport> {
+    let scn = super::read_scenario(scenario, sets)?;
+    let seed = crate::sim::log::effective_seed(&scn, seed);
+    let s = crate::sim::log::write_sim_log(&scn, seed, output, truth)?;
+    Ok(SimulateReport {
+        output: output.to_path_buf(),
+        seed,
+        instants: s.instants,
+        frames: s.frames,
+        dropped: s.dropped,
+        duplicated: s.duplicated,
+        bytes: s.bytes,
+    })
+}
+
+impl fmt::Display for SimulateReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "simulated {} instants (seed {}): {} frames ({} dropped, {} duplicated), {} bytes → {}",
+            self.instants,
+            self.seed,
+            self.frames,
+            self.dropped,
+            self.duplicated,
+            self.bytes,
+            self.output.display()
+        )
+    }
+}

@@ -1,0 +1,62 @@
+//! `imuprep run` and `replay`: the daemon's pipeline from a config until the source ends (or
+//! SIGINT/SIGTERM), returning the final health summary.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Result, anyhow, ensure};
+
+use crate::config::{Config, SourceConfig};
+use crate::frame::detect::ProtocolArgs;
+use crate::runtime::Health;
+
+/// `--out SPEC` flags → extra sinks of `cfg`; every bad spec is reported at once.
+pub fn add_outs(cfg: &mut Config, outs: &[String]) -> Result<()> {
+    let mut errs = Vec::new();
+    for o in outs {
+        match crate::runtime::parse_out_spec(o) {
+            Ok(s) => cfg.sinks.push(s),
+            Err(e) => errs.push(format!("--out {o}: {e}")),
+        }
+    }
+    ensure!(errs.is_empty(), "{}", errs.join("\n"));
+    Ok(())
+}
+
+/// `cfg` turned into a replay of `log` at `speed` (0 = as fast as possible), with the protocol
+/// flags applied and the log's declared rate given to the stages.
+pub fn replay_config(
+    mut cfg: Config,
+    log: PathBuf,
+    speed: f64,
+    proto: &ProtocolArgs,
+) -> Result<Config> {
+    proto.apply(&mut cfg.protocol);
+    let errs = cfg.protocol.validate();
+    ensure!(errs.is_empty(), "{errs:?}");
+    ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
+    // The log declares its rate: the stages use it rather than the config's nominal one.
+    if let Ok(Some(d)) = crate::io::csv::read_descriptor(&log) {
+        cfg.stages.set_sample_rate(d.sample_rate_hz);
+    }
+    cfg.source = SourceConfig::Replay { path: log, speed };
+    Ok(cfg)
+}
+
+/// Build the pipeline and run the daemon on a two-thread runtime until its source ends.
+pub fn run(cfg: &Config) -> Result<Health> {
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()?;
+    let pipeline = cfg.stages.build().map_err(|e| anyhow!(e))?;
+    tracing::info!(stages = ?pipeline.stage_names(), "pipeline ready");
+    rt.block_on(crate::runtime::run(cfg, pipeline))
+}
+
+/// Write the health summary as JSON when asked.
+pub fn write_summary(health: &Health, path: Option<&Path>) -> Result<()> {
+    match path {
+        Some(p) => super::write_json(p, health),
+        None => Ok(()),
+    }
+}
