@@ -121,6 +121,12 @@ enum Cmd {
         /// noise, which a short AR cannot describe; default 10 (the paper's L) for `fos`.
         #[arg(long)]
         bias_order: Option<usize>,
+        /// Shortest still stretch, seconds, the bias model may be fitted on. The bias model
+        /// describes the sensor's bias, so it is fitted only on the longest still stretch of the
+        /// training span (the bias stage's own stillness test); without one this long, bias.toml
+        /// holds no channel models and the stage learns each gyro's bias at warm-up.
+        #[arg(long, default_value_t = 60.0)]
+        min_still_s: f64,
     },
     /// Score the configured pipeline against a calibration-only baseline on a simulated scenario
     /// (truth known): RMS of 1-s mean error, 60-s heading drift, manoeuvre integrals (gyros).
@@ -356,12 +362,14 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             skip_s,
             bias_method,
             bias_order,
+            min_still_s,
         } => {
             let o = report::fit::FitOptions {
                 train_s,
                 skip_s,
                 bias_method,
                 bias_order: bias_order.unwrap_or(bias_method.default_order()),
+                min_still_s,
             };
             print!("{}", report::fit::fit(&log, &out_dir, &o)?);
             Ok(ExitCode::SUCCESS)

@@ -56,8 +56,43 @@ fn assert_fitted_models_applied(h: &serde_json::Value) {
 
 #[test]
 fn fit_writes_models_that_the_daemon_loads_and_applies() {
-    let (_dir, _, h) = fit_and_replay(&["--train-s", "60", "--bias-order", "8"]);
+    // The bench's longest still stretch in its first 60 s is 58.5 s: allow 30 s.
+    let (_dir, out, h) = fit_and_replay(&[
+        "--train-s",
+        "60",
+        "--bias-order",
+        "8",
+        "--min-still-s",
+        "30",
+    ]);
+    assert!(out.contains("on the longest still stretch"), "{out}");
     assert_fitted_models_applied(&h);
+}
+
+#[test]
+fn fit_on_a_moving_log_learns_no_motion_as_bias() {
+    // The bundled drive has no still stretch of 60 s in its first 180 s: a bias model fitted
+    // there would take the drive's motion for bias. fit must say so and write no channel
+    // model, so the stage learns each gyro's bias at warm-up as with the default config.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let out = run(&["fit", "replay/drive.log", "--out-dir", d]);
+    assert!(out.contains("bias model: NOT FITTED"), "{out}");
+    let m = imuprep::model::bias_model::BiasModelFile::load(&dir.path().join("bias.toml"))
+        .expect("the file written still loads");
+    assert!(m.channels.is_empty(), "{m:?}");
+    // A shorter minimum admits the drive's stops: the model is then fitted on one of them.
+    let out = run(&[
+        "fit",
+        "replay/drive.log",
+        "--out-dir",
+        d,
+        "--min-still-s",
+        "5",
+    ]);
+    assert!(out.contains("on the longest still stretch"), "{out}");
+    let m = imuprep::model::bias_model::BiasModelFile::load(&dir.path().join("bias.toml")).unwrap();
+    assert_eq!(m.channels.len(), imuprep::sample::CHANNEL_NAMES.len());
 }
 
 #[test]

@@ -13,7 +13,8 @@ use crate::model::bias_model::{BiasModelFile, ChannelBiasModel, MAX_FILE_AR_ORDE
 use crate::model::fos::FosSettings;
 use crate::model::fos_model::{FosModel, FosModelSpec};
 use crate::model::{ArFit, ModelError};
-use crate::sample::CHANNEL_NAMES;
+use crate::sample::{CHANNEL_NAMES, Sample};
+use crate::stage::stillness::{StillnessDetector, StillnessSettings};
 
 /// How `fit` estimates the bias model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -57,6 +58,44 @@ pub struct FitOptions {
     pub bias_method: BiasMethod,
     /// AR order of the bias model (for `fos`: the largest lag L).
     pub bias_order: usize,
+    /// Shortest still stretch (seconds) the bias model may be fitted on.
+    pub min_still_s: f64,
+}
+
+/// The longest still stretch of the training span, by the bias stage's own stillness test
+/// (default settings: stillness relative to the sensor's learned noise floor).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct StillStretch {
+    /// First sample of the stretch (index into the training span).
+    pub start: usize,
+    /// Its length, samples.
+    pub len: usize,
+    /// Samples of the whole span judged still.
+    pub still_total: usize,
+}
+
+/// The longest run of samples the stillness detector calls still.
+pub fn longest_still_stretch(samples: &[Sample], rate: f64) -> StillStretch {
+    let mut det = StillnessDetector::new(&StillnessSettings::default(), rate);
+    let (mut best, mut run_start, mut still_total) = ((0, 0), None, 0);
+    for (i, s) in samples.iter().enumerate() {
+        let g = [s.gyro[0], s.gyro[1], s.gyro[2]];
+        let a = [s.accel[0], s.accel[1], s.accel[2]];
+        if det.update(&g, &a, &[None; 3]) {
+            still_total += 1;
+            let start = *run_start.get_or_insert(i);
+            if i + 1 - start > best.1 {
+                best = (start, i + 1 - start);
+            }
+        } else {
+            run_start = None;
+        }
+    }
+    StillStretch {
+        start: best.0,
+        len: best.1,
+        still_total,
+    }
 }
 
 /// One channel's ARIMA identification.
@@ -95,6 +134,10 @@ pub struct FitReport {
     pub arima_path: PathBuf,
     pub bias_method: BiasMethod,
     pub bias_order: usize,
+    /// The still stretch the bias model was fitted on (or the longest one found).
+    pub still: StillStretch,
+    /// Why no bias model was fitted (no still stretch long enough), if so.
+    pub bias_skipped: Option<String>,
     pub bias: Vec<BiasRow>,
     pub bias_path: PathBuf,
 }
@@ -136,10 +179,36 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
         file.to_toml_string().map_err(|e| anyhow!("{e}"))?,
     )?;
 
+    // The bias model describes the sensor's bias, not the vehicle's motion: fit it only where
+    // the sensor was still (a model fitted on motion takes the motion's mean and dynamics for
+    // bias, and the bias stage then subtracts them).
+    let still = longest_still_stretch(&samples[..n], rate);
+    let need = ((o.min_still_s * rate).ceil() as usize).max(4 * bias_order);
+    let bias_skipped = (still.len < need).then(|| {
+        format!(
+            "no still stretch of {:.0} s (and {} samples for order {bias_order}) in the training span: \
+             the longest is {:.1} s ({} samples still in all); bias.toml holds no channel models, \
+             so the bias stage learns each gyro's bias at warm-up",
+            o.min_still_s,
+            4 * bias_order,
+            still.len as f64 / rate,
+            still.still_total
+        )
+    });
+    let still_span = still.start..still.start + still.len;
+    let still_series = |c: usize| -> Vec<f64> {
+        samples[still_span.clone()]
+            .iter()
+            .map(|s| s.channel(c))
+            .collect()
+    };
     let mut bias = BiasModelFile::default();
     let mut rows = Vec::new();
     for (c, name) in CHANNEL_NAMES.iter().enumerate() {
-        let (m, terms) = fit_bias_channel(name, &series(c), rate, o.bias_method, bias_order)?;
+        if bias_skipped.is_some() {
+            break;
+        }
+        let (m, terms) = fit_bias_channel(name, &still_series(c), rate, o.bias_method, bias_order)?;
         rows.push(BiasRow {
             channel: name.to_string(),
             method: m.method.clone(),
@@ -152,10 +221,12 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
     bias.validate()
         .map_err(|e| anyhow!("bias model: {}", e.join("; ")))?;
     let bias_path = out_dir.join("bias.toml");
-    std::fs::write(
-        &bias_path,
-        bias.to_toml_string().map_err(|e| anyhow!(e.to_string()))?,
-    )?;
+    let mut text = match &bias_skipped {
+        Some(why) => format!("# imuprep fit: {why}\n"),
+        None => String::new(),
+    };
+    text += &bias.to_toml_string().map_err(|e| anyhow!(e.to_string()))?;
+    std::fs::write(&bias_path, text)?;
     Ok(FitReport {
         samples: n,
         sample_rate_hz: rate,
@@ -163,6 +234,8 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
         arima_path,
         bias_method: o.bias_method,
         bias_order,
+        still,
+        bias_skipped,
         bias: rows,
         bias_path,
     })
@@ -249,14 +322,24 @@ impl fmt::Display for FitReport {
         let p = self.arima_path.display();
         writeln!(f, "wrote {p} (use it as [gross_error] model = \"{p}\")")?;
         let order = self.bias_order;
+        let p = self.bias_path.display();
+        if let Some(why) = &self.bias_skipped {
+            writeln!(f, "bias model: NOT FITTED — {why}")?;
+            return writeln!(f, "wrote {p} (no channel models)");
+        }
+        let on = format!(
+            "on the longest still stretch, {:.1} s from {:.1} s of the span",
+            self.still.len as f64 / rate,
+            self.still.start as f64 / rate
+        );
         match self.bias_method {
             BiasMethod::Fos => writeln!(
                 f,
-                "bias model: FOS CP=1 L={order} (constant + lags, as AR) per channel on the same span:"
+                "bias model: FOS CP=1 L={order} (constant + lags, as AR) per channel {on}:"
             )?,
             m => writeln!(
                 f,
-                "bias model: {} AR({order}) per channel on the same span:",
+                "bias model: {} AR({order}) per channel {on}:",
                 m.file_name()
             )?,
         }
@@ -272,7 +355,66 @@ impl fmt::Display for FitReport {
                 r.channel, r.method, r.mean, r.innovation_sd
             )?;
         }
-        let p = self.bias_path.display();
         writeln!(f, "wrote {p} (use it as [bias] model = \"{p}\")")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    /// 100 Hz: `still_a` s at rest, 5 s of a 1 Hz, 0.5 rad/s rotation, `still_b` s at rest;
+    /// seeded white noise 0.005 rad/s and 0.02 m/s² on every axis.
+    fn record(still_a: f64, still_b: f64) -> Vec<Sample> {
+        let mut rng = crate::rng::Rng::new(7);
+        let n_a = (still_a * 100.0) as usize;
+        let n_m = 500;
+        let n = n_a + n_m + (still_b * 100.0) as usize;
+        (0..n)
+            .map(|i| {
+                let t = i as f64 / 100.0;
+                let w = if (n_a..n_a + n_m).contains(&i) {
+                    0.5 * (std::f64::consts::TAU * t).sin()
+                } else {
+                    0.0
+                };
+                Sample {
+                    t_ns: (t * 1e9) as u64,
+                    gyro: Vector3::new(
+                        0.01 + 0.005 * rng.normal(),
+                        w + 0.005 * rng.normal(),
+                        0.005 * rng.normal(),
+                    ),
+                    accel: Vector3::new(
+                        0.02 * rng.normal(),
+                        0.02 * rng.normal(),
+                        9.81 + 0.02 * rng.normal(),
+                    ),
+                    ..Default::default()
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_longest_still_stretch_excludes_the_motion() {
+        let s = record(20.0, 70.0);
+        let st = longest_still_stretch(&s, 100.0);
+        // The stretch after the rotation: it starts after the rotation ends (2500) and the
+        // detector's entry delay (window 0.5 s + enter_after 1 s, plus the floor's first
+        // window), so it lies inside 2500..9500 and covers most of it (≥ 65 of the 70 s).
+        assert!(st.start >= 2500, "{st:?}");
+        assert_eq!(st.start + st.len, s.len(), "{st:?}");
+        assert!(st.len >= 6500, "{st:?}");
+    }
+
+    #[test]
+    fn a_record_in_motion_throughout_has_no_long_still_stretch() {
+        let mut s = record(0.0, 0.0);
+        // 100 s of the rotation: nothing is still for longer than a fraction of a cycle.
+        s = (0..20).flat_map(|_| s.clone()).collect();
+        let st = longest_still_stretch(&s, 100.0);
+        assert!(st.len < 100, "{st:?}");
     }
 }
