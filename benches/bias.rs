@@ -107,14 +107,7 @@ fn bench(c: &mut Criterion) {
         ),
     ];
     for (name, m) in cases {
-        let mut stage = BiasStage::new(
-            &BiasSettings {
-                model: Some(m),
-                ..Default::default()
-            },
-            None,
-        )
-        .unwrap();
+        let mut stage = BiasStage::new(&BiasSettings::default(), Some(&m)).unwrap();
         group.bench_function(name, |b| {
             b.iter(|| {
                 for s in &samples {

@@ -5,7 +5,7 @@
 //! is deserialised on its own: mistakes in different sections are all reported in one run. Value
 //! checks (`validate`) then run on every section that parsed.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
@@ -63,6 +63,12 @@ impl Errors {
     }
     pub fn is_empty(&self) -> bool {
         self.0.is_empty()
+    }
+    /// Drop repeats of an error already recorded (same path, same message), keeping the order.
+    pub fn dedup(&mut self) {
+        let mut seen = std::collections::HashSet::new();
+        self.0
+            .retain(|e| seen.insert((e.path.clone(), e.message.clone())));
     }
     pub fn into_vec(self) -> Vec<ConfigError> {
         self.0
@@ -171,7 +177,7 @@ fn default_queue() -> usize {
 }
 
 /// Health reporting.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct HealthConfig {
     /// Interval between health log lines, s (0 = only the final summary).
@@ -264,6 +270,9 @@ impl Config {
                 );
             }
         }
+        // A file changes only what it names: everything else comes from the embedded defaults
+        // (`[source]` excepted — it must be given, and is taken whole).
+        let table = overlay_on_defaults(table);
         // The protocol keys of [source] are read on their own (the source kinds' tables deny
         // unknown keys).
         let mut table = table;
@@ -327,6 +336,7 @@ impl Config {
             format!("must be ≥ 0 s, got {}", health.interval_s),
         );
         let stages = crate::stage::build::StagesConfig::from_table(&table, base, &mut errs);
+        errs.dedup();
         if errs.is_empty() {
             Ok(Config {
                 source: source.expect("no errors means the source parsed"),
@@ -338,6 +348,135 @@ impl Config {
         } else {
             Err(ConfigErrors(errs.into_vec()))
         }
+    }
+}
+
+/// `user` laid over the embedded defaults: tables merge key by key (recursively), any other
+/// value replaces the default's; `[source]` and `[[sinks]]` are the user's alone (a source of
+/// another kind shares no keys with the default's).
+pub fn overlay_on_defaults(user: toml::Table) -> toml::Table {
+    let mut base: toml::Table = DEFAULT_TOML
+        .parse()
+        .expect("the embedded config/default.toml parses (tested)");
+    base.remove("source");
+    base.remove("sinks");
+    overlay(&mut base, user);
+    base
+}
+
+/// Merge `top` into `base`: sub-tables merge, other values replace.
+pub fn overlay(base: &mut toml::Table, top: toml::Table) {
+    for (k, v) in top {
+        match (base.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(t)) => overlay(b, t),
+            (_, v) => {
+                base.insert(k, v);
+            }
+        }
+    }
+}
+
+/// `T` from `user` laid key by key over `base` (a table of `T`'s fields, usually its
+/// defaults): a key that does not deserialise — unknown, or of the wrong type — is reported once,
+/// at its own path (`prefix.key.sub`), and keeps the base value; every other key still applies.
+/// So every structural mistake of a section is found in one run, and the value checks that follow
+/// see every key that parsed.
+pub fn lenient<T: serde::de::DeserializeOwned>(
+    base: toml::Table,
+    user: &toml::Table,
+    prefix: &str,
+    errs: &mut Errors,
+) -> Option<T> {
+    let check = |t: &toml::Table| {
+        toml::Value::Table(t.clone())
+            .try_into::<T>()
+            .map(|_| ())
+            .map_err(|e| clean_serde(&e.to_string()))
+    };
+    let mut acc = base;
+    apply_keys(&mut acc, &mut Vec::new(), user, prefix, errs, &check);
+    match toml::Value::Table(acc).try_into::<T>() {
+        Ok(t) => Some(t),
+        Err(e) => {
+            errs.push(prefix, clean_serde(&e.to_string()));
+            None
+        }
+    }
+}
+
+/// The value at `at` inside `root`, if any.
+fn value_at<'a>(root: &'a toml::Table, at: &[String]) -> Option<&'a toml::Value> {
+    let (last, parents) = at.split_last()?;
+    let mut t = root;
+    for k in parents {
+        t = t.get(k)?.as_table()?;
+    }
+    t.get(last)
+}
+
+/// Set the value at `at` inside `root` (the parents exist: they were walked to get here).
+fn set_at(root: &mut toml::Table, at: &[String], v: toml::Value) {
+    let (last, parents) = at.split_last().expect("a key path is never empty");
+    let mut t = root;
+    for k in parents {
+        t = t
+            .get_mut(k)
+            .and_then(|x| x.as_table_mut())
+            .expect("parent tables exist");
+    }
+    t.insert(last.clone(), v);
+}
+
+fn apply_keys(
+    root: &mut toml::Table,
+    at: &mut Vec<String>,
+    user: &toml::Table,
+    prefix: &str,
+    errs: &mut Errors,
+    check: &dyn Fn(&toml::Table) -> Result<(), String>,
+) {
+    for (k, v) in user {
+        at.push(k.clone());
+        match (value_at(root, at), v) {
+            (Some(toml::Value::Table(bt)), toml::Value::Table(ut)) => {
+                // The sub-table as a whole first (a tagged enum changes variant only so), key by
+                // key when that fails, to name the key at fault.
+                let mut merged = bt.clone();
+                overlay(&mut merged, ut.clone());
+                let mut trial = root.clone();
+                set_at(&mut trial, at, toml::Value::Table(merged));
+                if check(&trial).is_ok() {
+                    *root = trial;
+                } else {
+                    apply_keys(root, at, ut, prefix, errs, check)
+                }
+            }
+            _ => {
+                let mut trial = root.clone();
+                set_at(&mut trial, at, v.clone());
+                match check(&trial) {
+                    Ok(()) => *root = trial,
+                    Err(e) => errs.push(format!("{prefix}.{}", at.join(".")), e),
+                }
+            }
+        }
+        at.pop();
+    }
+}
+
+/// Value-check messages that start with their key (`k = 60 must be …`, `gyro.scale[1]: …`)
+/// recorded at `prefix.key`; others at `prefix`.
+pub fn push_keyed(errs: &mut Errors, prefix: &str, message: String) {
+    let key_len = message
+        .find(|c: char| !(c.is_ascii_alphanumeric() || "_.[]".contains(c)))
+        .unwrap_or(0);
+    let (key, rest) = message.split_at(key_len);
+    if key_len > 0 && rest.starts_with(": ") {
+        errs.push(format!("{prefix}.{key}"), rest[2..].to_string());
+    } else if key_len > 0 && rest.starts_with(" = ") {
+        errs.push(format!("{prefix}.{key}"), message.clone());
+    } else {
+        errs.push(prefix, message);
     }
 }
 

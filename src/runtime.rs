@@ -33,6 +33,8 @@ pub struct Health {
     pub flagged_warming_up: u64,
     pub flagged_bias_removed: u64,
     pub source_outages: u64,
+    /// The cleaning stages the pipeline runs, in order; empty = samples are published raw.
+    pub cleaning_stages: Vec<String>,
     pub stages: Vec<(String, u64)>,
     pub sinks: Vec<SinkReport>,
     /// Why the run ended: "end of input", "signal", ...
@@ -125,6 +127,9 @@ impl Health {
         if self.source_outages > 0 {
             let _ = writeln!(o, "  source     : {} outages", self.source_outages);
         }
+        if self.cleaning_stages.is_empty() {
+            let _ = writeln!(o, "  cleaning   : {NO_CLEANING}");
+        }
         // Non-zero stage counters only (the JSON summary has them all).
         let nz: Vec<String> = self
             .stages
@@ -162,7 +167,7 @@ impl Health {
             .iter()
             .map(|s| s.dropped + s.clients.iter().map(|c| c.samples_dropped).sum::<u64>())
             .sum();
-        format!(
+        let line = format!(
             "in={} out={} crc_err={} resyncs={} gaps={} dup={} nan={} sat={} replaced={} outages={} sink_dropped={}",
             self.samples_in,
             self.samples_out,
@@ -175,12 +180,27 @@ impl Health {
             self.flagged_replaced,
             self.source_outages,
             dropped
-        )
+        );
+        if self.cleaning_stages.is_empty() {
+            line + " cleaning=NONE"
+        } else {
+            line
+        }
     }
+}
+
+/// What the summary and the log say when no cleaning stage runs.
+pub const NO_CLEANING: &str = "NONE — no cleaning stage is enabled ([gross_error] and [bias] are off): samples are published raw";
+
+fn cleaning_stages(p: &Pipeline) -> Vec<String> {
+    p.stage_names().iter().map(|s| s.to_string()).collect()
 }
 
 /// Run source → pipeline → sinks until the input ends or a signal arrives.
 pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health> {
+    if pipeline.stage_names().is_empty() {
+        tracing::warn!("cleaning: {NO_CLEANING}");
+    }
     // Sinks first: a bad address or path fails before any data is read.
     let mut sinks = Vec::new();
     for s in &cfg.sinks {
@@ -212,7 +232,10 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
         )),
     };
     let started = Instant::now();
-    let mut health = Health::default();
+    let mut health = Health {
+        cleaning_stages: cleaning_stages(&pipeline),
+        ..Health::default()
+    };
     let interval = cfg.health.interval_s;
     let mut tick = tokio::time::interval(Duration::from_secs_f64(if interval > 0.0 {
         interval
@@ -288,6 +311,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     }
     health.elapsed_s = started.elapsed().as_secs_f64();
     health.stages = pipeline.counters();
+    health.cleaning_stages = cleaning_stages(&pipeline);
     health.sinks = closing.iter().map(|(n, s, _)| s.report(n)).collect();
     Ok(health)
 }
@@ -309,6 +333,7 @@ async fn publish(out: Vec<Sample>, health: &mut Health, sinks: &[SinkHandle]) {
 fn fill(h: &mut Health, p: &Pipeline, sinks: &[SinkHandle], started: Instant) {
     h.elapsed_s = started.elapsed().as_secs_f64();
     h.stages = p.counters();
+    h.cleaning_stages = cleaning_stages(p);
     h.sinks = sinks.iter().map(|s| s.stats.report(&s.name)).collect();
 }
 

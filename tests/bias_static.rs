@@ -85,9 +85,9 @@ fn kf_from_the_true_model_reaches_the_one_step_optimum_on_a_static_log() {
         // No random-constant state: the static model is exactly AR(2) bias + white noise.
         let settings = BiasSettings {
             turn_on_bias_sd_rad_s: 0.0,
-            ..settings_with(Some(model))
+            ..settings_with()
         };
-        let mut stage = BiasStage::new(&settings, None).unwrap();
+        let mut stage = BiasStage::new(&settings, Some(&model)).unwrap();
         let ratio = innovation_ratio(&mut stage, &phi, q, r, N_STATIC, 100 + i as u64);
         let mean = ratio.iter().sum::<f64>() / 3.0;
         eprintln!(
@@ -143,9 +143,9 @@ fn kf_from_a_long_burg_fit_of_the_raw_signal_reaches_the_physical_optimum() {
         let (model, _) = fitted_model(&phi, q, r, 64, 7000 + 10 * i as u64);
         let settings = BiasSettings {
             turn_on_bias_sd_rad_s: 0.0,
-            ..settings_with(Some(model))
+            ..settings_with()
         };
-        let mut stage = BiasStage::new(&settings, None).unwrap();
+        let mut stage = BiasStage::new(&settings, Some(&model)).unwrap();
         let ss = stage.state_space(2).unwrap().clone();
         let ratio = innovation_ratio(&mut stage, &phi, q, r, N_STATIC, 200 + i as u64);
         let mean = ratio.iter().sum::<f64>() / 3.0;
@@ -168,9 +168,9 @@ fn kf_loses_nothing_against_a_short_fitted_models_own_predictor() {
     let (model, fit) = fitted_model(&phi, q, r, 4, 9000);
     let settings = BiasSettings {
         turn_on_bias_sd_rad_s: 0.0,
-        ..settings_with(Some(model))
+        ..settings_with()
     };
-    let mut stage = BiasStage::new(&settings, None).unwrap();
+    let mut stage = BiasStage::new(&settings, Some(&model)).unwrap();
     let mut bias_gen = ArGen::new(&phi, q, 9100);
     let mut nz = Rng::new(9101);
     let (mut kf_se, mut kf_n, mut ar_se, mut ar_n) = (0.0, 0usize, 0.0, 0usize);

@@ -91,3 +91,263 @@ lookahead_samples = 5000
     assert!(s.contains("tail_window_samples = 50"), "{s}");
     assert!(s.contains("lookahead_samples = 5000"), "{s}");
 }
+
+/// The stage sections of a user file are laid over the embedded defaults: a file that names one
+/// gross-error setting keeps both stages enabled with every other default (issue 13, item 1:
+/// such a file used to run with no stage at all and publish raw data as if cleaned).
+#[test]
+fn a_user_file_changes_only_what_it_names() {
+    let text = "[source]\nkind = \"stdin\"\n\n[gross_error.settings]\nk = 5.0\n";
+    let c = Config::from_toml_str(text, Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let d = Config::default_embedded().unwrap();
+    let g = c
+        .stages
+        .gross_error
+        .as_ref()
+        .expect("gross_error inherits enabled = true");
+    assert_eq!(g.settings.k, 5.0);
+    let dg = &d.stages.gross_error.as_ref().unwrap().settings;
+    let expected = imuprep::stage::gross_error::GrossErrorSettings {
+        k: 5.0,
+        ..dg.clone()
+    };
+    assert_eq!(g.settings, expected, "only k differs from the defaults");
+    let b = c
+        .stages
+        .bias
+        .as_ref()
+        .expect("bias inherits enabled = true");
+    assert_eq!(b.settings, d.stages.bias.as_ref().unwrap().settings);
+    assert_eq!(c.health, d.health);
+    assert_eq!(
+        c.stages.build().unwrap().stage_names(),
+        ["gross_error", "bias"]
+    );
+    // Switching a stage off is said in the file, and only that stage goes.
+    let off = "[source]\nkind = \"stdin\"\n[bias]\nenabled = false\n";
+    let c = Config::from_toml_str(off, Path::new(".")).unwrap();
+    assert_eq!(c.stages.build().unwrap().stage_names(), ["gross_error"]);
+}
+
+/// A pipeline with no cleaning stage is said in the summary and the health data (issue 13,
+/// item 1: it used to publish raw data with no word about it).
+#[test]
+fn a_run_without_cleaning_stages_says_so_in_the_summary_and_the_health_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let summary = dir.path().join("s.json");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_imuprep"))
+        .arg("replay")
+        .arg(root.join("replay/static_bench.log"))
+        .arg("--config")
+        .arg(root.join("config/passthrough.toml"))
+        .arg("--summary-json")
+        .arg(&summary)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("cleaning   : NONE — no cleaning stage is enabled"),
+        "{err}"
+    );
+    let h: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    assert_eq!(h["cleaning_stages"], serde_json::json!([]), "{h}");
+    // With the defaults the stages are listed and nothing is said.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_imuprep"))
+        .arg("replay")
+        .arg(root.join("replay/static_bench.log"))
+        .arg("--summary-json")
+        .arg(&summary)
+        .output()
+        .unwrap();
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("cleaning   : NONE"));
+    let h: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    assert_eq!(
+        h["cleaning_stages"],
+        serde_json::json!(["gross_error", "bias"])
+    );
+}
+
+/// Fourteen mistakes in every section, structural and in value, with two missing model files:
+/// all reported in one run, each once, each at its own key path, and nothing else — no
+/// knock-on error at a key the file never set (issue 13, item 6).
+#[test]
+fn every_config_error_is_reported_in_one_run_once_by_key_path() {
+    let text = r#"
+[source]
+kind = "serial"
+port = ""
+baud = 0
+
+[health]
+interval_s = -1.0
+
+[[sinks]]
+kind = "tcp"
+bind = "nowhere"
+
+[gross_error]
+model = "missing/arima.toml"
+
+[gross_error.settings]
+k = "five"
+kk = 3.0
+jump_k = 0.0
+post_samples = 1
+
+[gross_error.settings.identify]
+p_max = "three"
+
+[bias]
+model = "missing/bias.toml"
+
+[bias.settings]
+sample_rate = 100.0
+
+[bias.settings.gyro]
+scale = [0.1, 1.0, 1.0]
+
+[bias.settings.stillness]
+window_s = 0.0
+"#;
+    let e = Config::from_toml_str(text, Path::new("/nonexistent")).unwrap_err();
+    let mut paths: Vec<&str> = e.0.iter().map(|x| x.path.as_str()).collect();
+    paths.sort();
+    let mut want = vec![
+        "source.port",
+        "source.baud",
+        "health.interval_s",
+        "sinks[0].bind",
+        "gross_error.model",
+        "gross_error.settings.k",
+        "gross_error.settings.kk",
+        "gross_error.settings.jump_k",
+        "gross_error.settings.post_samples",
+        "gross_error.settings.identify.p_max",
+        "bias.model",
+        "bias.settings.sample_rate",
+        "bias.settings.gyro.scale[0]",
+        "bias.settings.stillness.window_s",
+    ];
+    want.sort();
+    assert_eq!(paths, want, "{e}");
+}
+
+/// Leaf key paths of a TOML table (`a.b.c`).
+fn leaf_paths(t: &toml::Table, prefix: &str, out: &mut Vec<String>) {
+    for (k, v) in t {
+        let p = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        match v {
+            toml::Value::Table(s) if !s.is_empty() && k != "adf_lag" => leaf_paths(s, &p, out),
+            _ => out.push(p),
+        }
+    }
+}
+
+/// The value at a dotted path.
+fn at<'a>(t: &'a toml::Table, path: &str) -> Option<&'a toml::Value> {
+    let mut v: Option<&toml::Value> = None;
+    let mut cur = t;
+    for k in path.split('.') {
+        v = cur.get(k);
+        if let Some(toml::Value::Table(s)) = v {
+            cur = s;
+        }
+    }
+    v
+}
+
+/// `config/default.toml` lists every setting of both stages with the value the code uses by
+/// default, and every value it documents in its comments parses (issue 13, item 7: it listed
+/// 11 of 22 gross-error keys and documented a `replacement` value the parser rejected).
+#[test]
+fn default_toml_lists_every_setting_and_every_documented_value_parses() {
+    use imuprep::stage::bias_settings::BiasSettings;
+    use imuprep::stage::gross_error::GrossErrorSettings;
+    let file: toml::Table = imuprep::config::DEFAULT_TOML.parse().unwrap();
+    for (section, defaults) in [
+        (
+            "gross_error.settings",
+            toml::Table::try_from(GrossErrorSettings::default()).unwrap(),
+        ),
+        (
+            "bias.settings",
+            toml::Table::try_from(BiasSettings::default()).unwrap(),
+        ),
+        (
+            "health",
+            toml::Table::try_from(imuprep::config::HealthConfig::default()).unwrap(),
+        ),
+    ] {
+        let mut keys = Vec::new();
+        leaf_paths(&defaults, "", &mut keys);
+        assert!(keys.len() > 10 || section == "health");
+        for k in keys {
+            let full = format!("{section}.{k}");
+            let got = at(&file, &full).unwrap_or_else(|| panic!("{full} is not in default.toml"));
+            let want = at(&defaults, &k).unwrap();
+            assert_eq!(
+                got, want,
+                "{full}: default.toml says {got}, the code uses {want}"
+            );
+        }
+    }
+    // Every documented alternative value.
+    let base = imuprep::config::DEFAULT_TOML;
+    let variants = [
+        (
+            "replacement = \"interpolation\"",
+            "replacement = \"prediction\"",
+        ),
+        (
+            "replacement = \"interpolation\"",
+            "replacement = \"median\"",
+        ),
+        (
+            "adf_lag = { rule = \"aic\" }",
+            "adf_lag = { rule = \"aic\", max_lag = 8 }",
+        ),
+        (
+            "adf_lag = { rule = \"aic\" }",
+            "adf_lag = { rule = \"fixed\", lags = 4 }",
+        ),
+        ("median_window = 3", "median_window = 5"),
+        ("lookahead_samples = 16", "lookahead_samples = 0"),
+    ];
+    for (from, to) in variants {
+        let i = base
+            .find(from)
+            .unwrap_or_else(|| panic!("{from} not in default.toml"));
+        let text = format!("{}{to}{}", &base[..i], &base[i + from.len()..]);
+        Config::from_toml_str(&text, Path::new(".")).unwrap_or_else(|e| panic!("{to}: {e}"));
+    }
+    // The commented examples, uncommented: the serial source, the per-protocol tables and the
+    // four sinks.
+    let uncomment = |from: &str, to: &str| -> String {
+        let (i, j) = (base.find(from).unwrap(), base.find(to).unwrap());
+        let block: String = base[i..j]
+            .lines()
+            .map(|l| l.strip_prefix("# ").or(l.strip_prefix('#')).unwrap_or(l))
+            .collect::<Vec<_>>()
+            .join("\n");
+        format!("{}{block}\n{}", &base[..i], &base[j..])
+    };
+    let serial = uncomment("# kind = \"serial\"", "# Wire protocol")
+        .replace("kind = \"replay\"\npath = \"replay/drive.log\"", "");
+    let serial = serial.replacen("speed = 0.0 ", "# speed ", 1);
+    for (name, text) in [
+        ("serial source", serial),
+        ("protocol tables", uncomment("# [source.ubx]", "\n[health]")),
+        ("sinks", uncomment("# [[sinks]]", "# Gross errors")),
+    ] {
+        Config::from_toml_str(&text, Path::new("."))
+            .unwrap_or_else(|e| panic!("{name}: {e}\n{text}"));
+    }
+}

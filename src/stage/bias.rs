@@ -98,9 +98,6 @@ pub enum BiasStageError {
     /// The settings are invalid (all problems listed).
     #[error(transparent)]
     Settings(#[from] SettingsErrors),
-    /// `model_path` is set but no model was passed to [`BiasStage::new`].
-    #[error("model_path `{0}` is not resolved: load it and pass the model to BiasStage::new")]
-    ModelPathUnresolved(String),
     /// The model passed in is invalid (all problems listed).
     #[error("invalid bias model:\n  {}", .0.join("\n  "))]
     Model(Vec<String>),
@@ -210,15 +207,15 @@ pub struct BiasStage {
 }
 
 impl BiasStage {
-    /// Build the stage. `model` (already loaded from `settings.model_path` by the caller, or any
-    /// other source) takes precedence over an inline `settings.model`.
+    /// Build the stage with `model` (from the config's `[bias] model`, a file or inline), or
+    /// without one (each gyro channel identifies its own during warm-up).
     pub fn new(
         settings: &BiasSettings,
         model: Option<&BiasModelFile>,
     ) -> Result<Self, BiasStageError> {
         settings.validate()?;
-        let model = match (model, &settings.model, &settings.model_path) {
-            (Some(m), _, _) => {
+        let model = match model {
+            Some(m) => {
                 let mut errs = m.validate().err().unwrap_or_default();
                 for (i, ch) in m.channels.iter().enumerate() {
                     if (ch.sample_rate_hz / settings.sample_rate_hz - 1.0).abs() > 0.01 {
@@ -233,9 +230,7 @@ impl BiasStage {
                 }
                 Some(m)
             }
-            (None, Some(m), _) => Some(m),
-            (None, None, Some(p)) => return Err(BiasStageError::ModelPathUnresolved(p.clone())),
-            (None, None, None) => None,
+            None => None,
         };
         let fs = settings.sample_rate_hz;
         // Validation guarantees invertible calibrations.

@@ -4,36 +4,47 @@
 //! one the stage identifies its own model from a warm-up window) and a `settings` table. Model
 //! files are read and checked during validation, so a bad model stops the run before it starts.
 
-use crate::config::{Errors, clean_serde, resolve, section};
+use crate::config::{Errors, clean_serde, lenient, push_keyed, resolve};
 use crate::model::arima::ArimaModelFile;
 use crate::model::bias_model::BiasModelFile;
 use crate::stage::bias::BiasStage;
 use crate::stage::bias_settings::BiasSettings;
 use crate::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
 use crate::stage::{Pipeline, Stage};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// `[gross_error]` as written.
-#[derive(Debug, Clone, Deserialize, Default)]
+#[derive(Debug, Clone, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct GrossErrorSection {
     #[serde(default)]
     enabled: bool,
     /// ARIMA model file from `imuprep fit` (relative to the config file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     model: Option<PathBuf>,
     #[serde(default)]
     settings: GrossErrorSettings,
 }
 
+/// `[bias] model`: the one place a bias model is given — a file from `imuprep fit` /
+/// `imuprep diagnose` (relative to the config file), or the model itself inline
+/// (`[[bias.model.channels]]`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum BiasModelSource {
+    File(PathBuf),
+    Inline(BiasModelFile),
+}
+
 /// `[bias]` as written.
-#[derive(Debug, Clone, Deserialize, Default)]
+#[derive(Debug, Clone, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct BiasSection {
     #[serde(default)]
     enabled: bool,
-    /// Bias model file from `imuprep fit` / `imuprep diagnose` (relative to the config file).
-    model: Option<PathBuf>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    model: Option<BiasModelSource>,
     #[serde(default)]
     settings: BiasSettings,
 }
@@ -83,6 +94,23 @@ pub fn load_model<T>(
     }
 }
 
+/// One stage section of `table` read key by key over the type's defaults
+/// ([`lenient`]): every structural mistake in it is reported, at its own key path.
+fn stage_section<T>(table: &toml::Table, key: &str, errs: &mut Errors) -> T
+where
+    T: Serialize + serde::de::DeserializeOwned + Default,
+{
+    let base = toml::Table::try_from(T::default()).expect("stage defaults serialise to TOML");
+    match table.get(key) {
+        None => T::default(),
+        Some(toml::Value::Table(user)) => lenient(base, user, key, errs).unwrap_or_default(),
+        Some(_) => {
+            errs.push(key, "must be a table");
+            T::default()
+        }
+    }
+}
+
 impl StagesConfig {
     /// Adopt the sensor's declared rate (from a log's descriptor) where the stages need one.
     pub fn set_sample_rate(&mut self, rate_hz: f64) {
@@ -93,62 +121,62 @@ impl StagesConfig {
         }
     }
 
-    /// Read the stage sections of a config table; `None` if any of them had an error.
+    /// Read the stage sections of a config table (already laid over the embedded defaults);
+    /// `None` if any of them had an error. Every section is checked in full, each mistake
+    /// reported once at its key path: structure key by key, then values, then model files.
     pub fn from_table(table: &toml::Table, base: &Path, errs: &mut Errors) -> Option<StagesConfig> {
         let n = errs.len();
-        let ge: GrossErrorSection = section(table, "gross_error", errs).unwrap_or_default();
+        let ge: GrossErrorSection = stage_section(table, "gross_error", errs);
         // Settings written in a disabled section are still checked: a mistake must not wait
         // until the day the stage is switched on.
         if let Err(v) = ge.settings.validate() {
             for m in v {
-                errs.push("gross_error.settings", m);
+                push_keyed(errs, "gross_error.settings", m);
             }
         }
-        let gross_error = if ge.enabled {
-            let model = ge.model.as_ref().and_then(|m| {
-                load_model(
-                    base,
-                    m,
-                    "gross_error.model",
-                    |t| ArimaModelFile::from_toml_str(t).map_err(|e| e.to_string()),
-                    errs,
-                )
-            });
-            Some(GrossErrorConfig {
-                settings: ge.settings,
-                model,
-            })
-        } else {
-            None
-        };
-        let bs: BiasSection = section(table, "bias", errs).unwrap_or_default();
+        let model = ge.model.as_ref().and_then(|m| {
+            load_model(
+                base,
+                m,
+                "gross_error.model",
+                |t| ArimaModelFile::from_toml_str(t).map_err(|e| e.to_string()),
+                errs,
+            )
+        });
+        let gross_error = ge.enabled.then_some(GrossErrorConfig {
+            settings: ge.settings,
+            model,
+        });
+        let bs: BiasSection = stage_section(table, "bias", errs);
         if let Err(e) = bs.settings.validate() {
             for m in e.0 {
-                errs.push("bias.settings", m);
+                push_keyed(errs, "bias.settings", m);
             }
         }
-        let bias = if bs.enabled {
-            let file = bs
-                .model
-                .clone()
-                .or(bs.settings.model_path.as_ref().map(PathBuf::from));
-            let model = match file {
-                Some(f) => load_model(
-                    base,
-                    &f,
-                    "bias.model",
-                    |t| BiasModelFile::from_toml_str(t).map_err(|e| e.to_string()),
-                    errs,
-                ),
-                None => bs.settings.model.clone(),
-            };
-            Some(BiasConfig {
-                settings: bs.settings,
-                model,
-            })
-        } else {
-            None
+        let model = match &bs.model {
+            Some(BiasModelSource::File(f)) => load_model(
+                base,
+                f,
+                "bias.model",
+                |t| BiasModelFile::from_toml_str(t).map_err(|e| e.to_string()),
+                errs,
+            ),
+            Some(BiasModelSource::Inline(m)) => {
+                if let Err(v) = m.validate() {
+                    for x in v {
+                        push_keyed(errs, "bias.model", x);
+                    }
+                }
+                Some(m.clone())
+            }
+            None => None,
         };
+        // The model's rate is checked against the stage's when the stage is built: replay
+        // adopts the log's declared rate first.
+        let bias = bs.enabled.then_some(BiasConfig {
+            settings: bs.settings,
+            model,
+        });
         (errs.len() == n).then_some(StagesConfig { gross_error, bias })
     }
 

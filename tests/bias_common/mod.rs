@@ -94,9 +94,9 @@ pub fn truth_model(
     }
 }
 
-pub fn settings_with(model: Option<BiasModelFile>) -> BiasSettings {
+/// Settings for a stage built with a test model (passed to `BiasStage::new` beside them).
+pub fn settings_with() -> BiasSettings {
     BiasSettings {
-        model,
         // Only the model's declared effects: the tests compare a model with an effect against
         // the same model without it.
         default_step_rad_s: 0.0,
@@ -276,7 +276,7 @@ pub fn slow_q() -> f64 {
 
 /// Stage with the true AR(2) drive-bias model on the three gyros (turn-on bias unknown to it).
 pub fn drive_stage(effects: [Vec<Effect>; 3]) -> BiasStage {
-    BiasStage::new(&settings_with(Some(drive_model(effects))), None).unwrap()
+    BiasStage::new(&settings_with(), Some(&drive_model(effects))).unwrap()
 }
 
 /// The true AR(2) drive-bias model on gx, gy, gz with the given effects.

@@ -239,7 +239,12 @@ impl GrossErrorSettings {
                 self.post_samples
             ));
         }
-        if self.lookahead_samples > 0 && self.lookahead_samples < self.post_samples + 1 {
+        // Cross-key checks run only on keys that passed their own: one mistake, one message.
+        if self.lookahead_samples > 0
+            && self.lookahead_samples <= MAX_LOOKAHEAD
+            && (2..=MAX_POST).contains(&self.post_samples)
+            && self.lookahead_samples < self.post_samples + 1
+        {
             e.push(format!(
                 "lookahead_samples = {} must be 0 (causal) or at least post_samples + 1 = {}",
                 self.lookahead_samples,
@@ -253,10 +258,14 @@ impl GrossErrorSettings {
                 id.p_max, id.d_max, id.q_max
             ));
         }
-        if let Err(v) = id.validate() {
-            e.extend(v.into_iter().map(|s| format!("identify: {s}")));
-        }
-        if self.warmup_samples < id.min_len() {
+        let id_ok = match id.validate() {
+            Ok(()) => true,
+            Err(v) => {
+                e.extend(v.into_iter().map(|s| format!("identify: {s}")));
+                false
+            }
+        };
+        if id_ok && self.warmup_samples < id.min_len() {
             e.push(format!(
                 "warmup_samples = {} is below the {} samples identification needs",
                 self.warmup_samples,
