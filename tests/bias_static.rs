@@ -6,7 +6,6 @@ use common::*;
 use imuprep::model::bias_model::{BiasModelFile, ChannelBiasModel};
 use imuprep::model::bias_state_space::innovation_var_kolmogorov;
 use imuprep::rng::Rng;
-use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
 use imuprep::stage::bias_settings::BiasSettings;
 

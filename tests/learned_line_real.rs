@@ -17,7 +17,6 @@ mod common;
 use imuprep::analysis::spectrum::{Psd, periodogram};
 use imuprep::io::csv::{ImportOptions, read_csv};
 use imuprep::model::bias_model::BiasModelFile;
-use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
 use imuprep::stage::bias_settings::BiasSettings;
 

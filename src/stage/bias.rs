@@ -634,12 +634,9 @@ fn calibrate(cal: &Calibration, raw: &Vector3<f64>) -> Vector3<f64> {
     out
 }
 
-impl Stage for BiasStage {
-    fn name(&self) -> &'static str {
-        "bias"
-    }
-
-    fn process(&mut self, mut s: Sample) -> Sample {
+impl BiasStage {
+    /// One sample through the stage (it has no look-ahead: [`Stage::push`] emits it at once).
+    pub fn process(&mut self, mut s: Sample) -> Sample {
         self.counters.samples += 1;
         let mut steps = self.steps_since_previous(&s);
         let t_s = s.t_s();
@@ -791,6 +788,16 @@ impl Stage for BiasStage {
             s.flags |= flags::EFFECT_COMPENSATED;
         }
         s
+    }
+}
+
+impl Stage for BiasStage {
+    fn name(&self) -> &'static str {
+        "bias"
+    }
+
+    fn push(&mut self, s: Sample, out: &mut Vec<Sample>) {
+        out.push(self.process(s));
     }
 
     fn counters(&self) -> Vec<(String, u64)> {

@@ -4,7 +4,6 @@
 use imuprep::model::bias_model::{ArOf, BiasModelFile, ChannelBiasModel, Effect};
 use imuprep::rng::Rng;
 use imuprep::sample::Sample;
-use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
 use imuprep::stage::bias_settings::BiasSettings;
 use std::f64::consts::PI;
