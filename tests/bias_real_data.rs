@@ -3,7 +3,7 @@
 
 use imuprep::sample::{Sample, flags};
 use imuprep::stage::bias::BiasStage;
-use imuprep::stage::bias_settings::BiasSettings;
+use imuprep::stage::bias::settings::BiasSettings;
 use std::path::PathBuf;
 
 const G: f64 = 9.80665;

@@ -6,14 +6,8 @@
 //! [`Stage::counters`].
 
 pub mod bias;
-pub mod bias_kf;
-pub mod bias_settings;
 pub mod build;
-pub mod cusum;
 pub mod gross_error;
-pub mod line_canceller;
-pub mod stillness;
-pub mod temperature;
 
 use crate::sample::Sample;
 
