@@ -6,9 +6,8 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use imuprep::model::bias_model::{ArOf, BiasModelFile, ChannelBiasModel, Effect};
 use imuprep::rng::Rng;
 use imuprep::sample::Sample;
-use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
-use imuprep::stage::bias_settings::BiasSettings;
+use imuprep::stage::bias::settings::BiasSettings;
 use std::hint::black_box;
 
 const N: usize = 10_000;

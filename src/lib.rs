@@ -10,7 +10,8 @@
 //! ```
 //!
 //! Async lives only at the edges ([`io`], [`runtime`]); the numerical stages ([`stage`]) are
-//! synchronous and pure, and the offline tools share their models.
+//! synchronous and pure, and the offline tools share their models. Layout and floors:
+//! `docs/architecture.md`.
 
 pub mod analysis;
 pub mod config;
@@ -21,6 +22,7 @@ pub mod report;
 pub mod rng;
 pub mod runtime;
 pub mod sample;
+pub mod settings;
 pub mod sim;
 pub mod stage;
 pub mod stats;

@@ -9,7 +9,7 @@ use imuprep::rng::Rng;
 use imuprep::sample::flags;
 use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
-use imuprep::stage::bias_settings::BiasSettings;
+use imuprep::stage::bias::settings::BiasSettings;
 use std::f64::consts::TAU;
 
 #[test]
@@ -316,7 +316,7 @@ fn warm_up_identifies_a_model_at_the_first_stop_then_removes_the_bias() {
     // 8-s stops of this drive leave ~6.5 s of STILL), flagged WARMING_UP until then, with the
     // stretch's running mean removed as a provisional bias from its first second on.
     let settings = BiasSettings {
-        warmup: imuprep::stage::bias_settings::WarmupSettings {
+        warmup: imuprep::stage::bias::settings::WarmupSettings {
             still_samples: 500,
             ..Default::default()
         },

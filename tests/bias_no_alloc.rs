@@ -9,7 +9,7 @@ use imuprep::model::bias_model::Effect;
 use imuprep::rng::Rng;
 use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
-use imuprep::stage::bias_settings::{BiasSettings, WarmupSettings};
+use imuprep::stage::bias::settings::{BiasSettings, WarmupSettings};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 

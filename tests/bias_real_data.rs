@@ -2,9 +2,8 @@
 //! beside the project; the tests skip with a message when it is absent).
 
 use imuprep::sample::{Sample, flags};
-use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
-use imuprep::stage::bias_settings::BiasSettings;
+use imuprep::stage::bias::settings::BiasSettings;
 use std::path::PathBuf;
 
 const G: f64 = 9.80665;

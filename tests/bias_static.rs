@@ -6,9 +6,8 @@ use common::*;
 use imuprep::model::bias_model::{BiasModelFile, ChannelBiasModel};
 use imuprep::model::bias_state_space::innovation_var_kolmogorov;
 use imuprep::rng::Rng;
-use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
-use imuprep::stage::bias_settings::BiasSettings;
+use imuprep::stage::bias::settings::BiasSettings;
 
 /// Run a static log of `n` samples (each gyro = its own AR bias + white noise) through `stage`;
 /// returns the innovation MSE of each gyro channel divided by `optimum`.

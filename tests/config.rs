@@ -269,7 +269,7 @@ fn at<'a>(t: &'a toml::Table, path: &str) -> Option<&'a toml::Value> {
 /// 11 of 22 gross-error keys and documented a `replacement` value the parser rejected).
 #[test]
 fn default_toml_lists_every_setting_and_every_documented_value_parses() {
-    use imuprep::stage::bias_settings::BiasSettings;
+    use imuprep::stage::bias::settings::BiasSettings;
     use imuprep::stage::gross_error::GrossErrorSettings;
     let file: toml::Table = imuprep::config::DEFAULT_TOML.parse().unwrap();
     for (section, defaults) in [

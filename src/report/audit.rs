@@ -192,7 +192,7 @@ pub fn run_config(
     let mut cfg = cfg.clone();
     cfg.stages.set_sample_rate(desc.sample_rate_hz);
     let mut p = cfg.stages.build()?;
-    Ok(p.run_all(samples))
+    Ok(crate::stage::run_through(&mut p, samples))
 }
 
 /// Three-axis gyro sd of consecutive 1-s windows.

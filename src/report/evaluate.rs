@@ -113,7 +113,7 @@ pub fn evaluate(
     mut pipeline: Pipeline,
     mut baseline: impl FnMut(Sample) -> Sample,
 ) -> Vec<ChannelEval> {
-    let out: Vec<Sample> = pipeline.run_all(samples);
+    let out: Vec<Sample> = crate::stage::run_through(&mut pipeline, samples);
     let base: Vec<Sample> = samples.iter().map(|s| baseline(*s)).collect();
     let mut res = Vec::new();
     for (c, ch_name) in CHANNEL_NAMES.iter().enumerate().take(3) {
@@ -238,7 +238,7 @@ pub fn static_position_drift(
     if !still || n == 0 || samples.len() < n {
         return None;
     }
-    let out: Vec<Sample> = pipeline.run_all(samples);
+    let out: Vec<Sample> = crate::stage::run_through(&mut pipeline, samples);
     let base: Vec<Sample> = samples.iter().map(|s| baseline(*s)).collect();
     let rms = |e: Vec<f64>| (e.iter().map(|x| x * x).sum::<f64>() / e.len().max(1) as f64).sqrt();
     let dt = 1.0 / rate_hz;

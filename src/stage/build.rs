@@ -4,11 +4,11 @@
 //! one the stage identifies its own model from a warm-up window) and a `settings` table. Model
 //! files are read and checked during validation, so a bad model stops the run before it starts.
 
-use crate::config::{Errors, clean_serde, lenient, push_keyed, resolve};
 use crate::model::arima::ArimaModelFile;
 use crate::model::bias_model::BiasModelFile;
+use crate::settings::{Errors, clean_serde, lenient, push_keyed, resolve};
 use crate::stage::bias::BiasStage;
-use crate::stage::bias_settings::BiasSettings;
+use crate::stage::bias::settings::BiasSettings;
 use crate::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
 use crate::stage::{Pipeline, Stage};
 use serde::{Deserialize, Serialize};

@@ -1,17 +1,13 @@
 //! Synchronous per-sample stages and the [`Pipeline`] that runs them in order.
 //!
 //! A stage is plain Rust: no I/O, no clock reads (time arrives in the sample), no allocation and
-//! no `tracing` per sample. Health is read from it at report intervals through [`Stage::counters`].
+//! no `tracing` per sample. One entry point, [`Stage::push`] (with [`Stage::flush`] at the end of
+//! the input); a [`Pipeline`] is itself a stage. Health is read at report intervals through
+//! [`Stage::counters`].
 
 pub mod bias;
-pub mod bias_kf;
-pub mod bias_settings;
 pub mod build;
-pub mod cusum;
 pub mod gross_error;
-pub mod line_canceller;
-pub mod stillness;
-pub mod temperature;
 
 use crate::sample::Sample;
 
@@ -19,16 +15,12 @@ use crate::sample::Sample;
 pub trait Stage: Send {
     /// Short name used in health reports (`gross_error`, `bias`, ...).
     fn name(&self) -> &'static str;
-    /// Process one sample and return it (corrected, flagged), with no look-ahead.
-    fn process(&mut self, s: Sample) -> Sample;
-    /// Process one sample with the stage's configured look-ahead: append to `out` the samples
-    /// that are now final, oldest first. A stage with a look-ahead of `L` samples holds the
-    /// last `L` and emits each once `L` newer ones have been seen, so it may revise what it did
-    /// to a held sample; [`Stage::flush`] emits the held ones at the end of the input. Without a
-    /// look-ahead (the default) this is [`Stage::process`], one sample in, the same one out.
-    fn push(&mut self, s: Sample, out: &mut Vec<Sample>) {
-        out.push(self.process(s));
-    }
+    /// One sample in: append to `out` the samples that are now final, oldest first — the one
+    /// entry point. A stage with a look-ahead of `L` samples holds the last `L` and emits each
+    /// once `L` newer ones have been seen, so it may revise what it did to a held sample;
+    /// [`Stage::flush`] emits the held ones at the end of the input. Without a look-ahead, one
+    /// sample in, the same one out.
+    fn push(&mut self, s: Sample, out: &mut Vec<Sample>);
     /// End of input: append the samples still held by [`Stage::push`], oldest first.
     fn flush(&mut self, _out: &mut Vec<Sample>) {}
     /// Look-ahead of [`Stage::push`], in samples (the output's lag behind the input).
@@ -68,16 +60,6 @@ impl Pipeline {
         Pipeline::default()
     }
 
-    /// One sample through every stage, with no look-ahead (a stage's configured look-ahead is
-    /// not applied: use [`Pipeline::push`] and [`Pipeline::flush`] for that).
-    #[inline]
-    pub fn process(&mut self, mut s: Sample) -> Sample {
-        for st in self.stages.iter_mut() {
-            s = st.process(s);
-        }
-        s
-    }
-
     /// The output's lag behind the input, in samples (0: every `push` emits its own sample).
     pub fn lookahead(&self) -> usize {
         self.lookahead
@@ -88,10 +70,6 @@ impl Pipeline {
     /// once, in order.
     #[inline]
     pub fn push(&mut self, s: Sample, out: &mut Vec<Sample>) {
-        if self.lookahead == 0 {
-            out.push(self.process(s));
-            return;
-        }
         self.a.clear();
         self.a.push(s);
         self.through(0, out);
@@ -121,17 +99,6 @@ impl Pipeline {
         out.append(&mut self.a);
     }
 
-    /// A whole recording through the pipeline, look-ahead included: one output per input, in
-    /// order.
-    pub fn run_all(&mut self, samples: &[Sample]) -> Vec<Sample> {
-        let mut out = Vec::with_capacity(samples.len());
-        for s in samples {
-            self.push(*s, &mut out);
-        }
-        self.flush(&mut out);
-        out
-    }
-
     pub fn stage_names(&self) -> Vec<&'static str> {
         self.stages.iter().map(|s| s.name()).collect()
     }
@@ -148,7 +115,27 @@ impl Pipeline {
     }
 }
 
-/// A whole recording through one stage, its look-ahead included: one output per input, in order.
+/// The pipeline is itself a stage: stages compose.
+impl Stage for Pipeline {
+    fn name(&self) -> &'static str {
+        "pipeline"
+    }
+    fn push(&mut self, s: Sample, out: &mut Vec<Sample>) {
+        Pipeline::push(self, s, out)
+    }
+    fn flush(&mut self, out: &mut Vec<Sample>) {
+        Pipeline::flush(self, out)
+    }
+    fn lookahead(&self) -> usize {
+        self.lookahead
+    }
+    fn counters(&self) -> Vec<(String, u64)> {
+        Pipeline::counters(self)
+    }
+}
+
+/// A whole recording through a stage (or a [`Pipeline`]), its look-ahead included: one output
+/// per input, in order.
 pub fn run_through(stage: &mut dyn Stage, samples: &[Sample]) -> Vec<Sample> {
     let mut out = Vec::with_capacity(samples.len());
     for s in samples {

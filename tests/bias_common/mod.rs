@@ -4,9 +4,8 @@
 use imuprep::model::bias_model::{ArOf, BiasModelFile, ChannelBiasModel, Effect};
 use imuprep::rng::Rng;
 use imuprep::sample::Sample;
-use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
-use imuprep::stage::bias_settings::BiasSettings;
+use imuprep::stage::bias::settings::BiasSettings;
 use std::f64::consts::PI;
 
 pub const FS: f64 = 100.0;

@@ -673,13 +673,10 @@ fn at_ring(ring: &[f64; RING], i: u64) -> f64 {
     ring[(i % RING as u64) as usize]
 }
 
-impl Stage for GrossErrorStage {
-    fn name(&self) -> &'static str {
-        "gross_error"
-    }
-
-    /// The causal stage: one sample in, the same sample out, no look-ahead (module docs).
-    fn process(&mut self, mut s: Sample) -> Sample {
+impl GrossErrorStage {
+    /// The causal stage: one sample in, the same sample out, no look-ahead (module docs); what
+    /// [`Stage::push`] does when `lookahead_samples` is 0.
+    pub fn process(&mut self, mut s: Sample) -> Sample {
         if self.take_repeat(&mut s) {
             return s;
         }
@@ -687,6 +684,12 @@ impl Stage for GrossErrorStage {
         self.last_out = Some((self.n_in, s));
         self.n_in += 1;
         s
+    }
+}
+
+impl Stage for GrossErrorStage {
+    fn name(&self) -> &'static str {
+        "gross_error"
     }
 
     fn push(&mut self, mut s: Sample, out: &mut Vec<Sample>) {

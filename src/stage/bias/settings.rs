@@ -15,7 +15,7 @@
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::stage::stillness::StillnessSettings;
+use crate::stage::bias::stillness::StillnessSettings;
 
 /// Largest bias-update delay, samples (fixed-size delay line).
 pub const MAX_UPDATE_DELAY: usize = 512;

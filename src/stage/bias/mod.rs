@@ -4,18 +4,18 @@
 //! Per sample, in order (unit = rad/s for gyro channels, m/s² for accelerometer channels):
 //!
 //! 1. **Calibration** (all six channels): `corrected = M^-1 (raw - bias)`, `M = diag(scale) N`
-//!    per triad ([`crate::stage::bias_settings`]).
+//!    per triad ([`crate::stage::bias::settings`]).
 //! 2. **Deterministic effects** of the model file (issue 6), subtracted from the channel:
 //!    temperature `c1 (T_l - T0) + c2 (T_l - T0)^2` with the lagged temperature `T_l`
-//!    ([`crate::stage::temperature`]); gyro g-sensitivity `k · f` with `f` the calibrated specific
+//!    ([`crate::stage::bias::temperature`]); gyro g-sensitivity `k · f` with `f` the calibrated specific
 //!    force of the same sample.
 //! 3. **Vibration lines**: each line is removed by an adaptive notch whose weights track its
-//!    amplitude and phase continuously ([`crate::stage::line_canceller`]; unit DC gain, so bias and
+//!    amplitude and phase continuously ([`crate::stage::bias::line_canceller`]; unit DC gain, so bias and
 //!    manoeuvres pass).
-//! 4. **Stillness** ([`crate::stage::stillness`]) on the result, with the current gyro bias
+//! 4. **Stillness** ([`crate::stage::bias::stillness`]) on the result, with the current gyro bias
 //!    estimate as the reference rate.
 //! 5. **Stochastic gyro bias** per gyro channel: a Kalman filter on the fitted model in
-//!    state-space form ([`crate::stage::bias_kf`], model from
+//!    state-space form ([`crate::stage::bias::kf`], model from
 //!    [`crate::model::bias_state_space::state_space_from_model`]). Measurement `z = y - mean`
 //!    (the expected true rate at rest is 0; the Earth rate, ≤ 7.3e-5 rad/s, is below consumer
 //!    MEMS noise and is absorbed into the estimate) is used **only while still**, and with a delay
@@ -23,7 +23,7 @@
 //!    reports rest that many samples later, so the onset of a manoeuvre never reaches the
 //!    estimate. The published estimate is the filter's prediction over that delay. While moving
 //!    the filter only predicts: the subtracted bias is the model's propagation, never the motion.
-//!    A CUSUM on the normalised innovations ([`crate::stage::cusum`]), present when the model has
+//!    A CUSUM on the normalised innovations ([`crate::stage::bias::cusum`]), present when the model has
 //!    a `step` effect, inflates the random-constant state on an alarm so the filter re-anchors.
 //!    A `rate_random_walk` effect sets that state's process noise.
 //! 6. **Accelerometer channels**: calibration and deterministic effects only. Decision: at rest
@@ -68,20 +68,27 @@
 //! After a gap longer than 100 samples the delay line is flushed without updates and the detector
 //! restarts.
 
+pub mod cusum;
+pub mod kf;
+pub mod line_canceller;
+pub mod settings;
+pub mod stillness;
+pub mod temperature;
+
 use nalgebra::Vector3;
 
 use crate::model::bias_model::{BiasModelFile, Effect};
 use crate::model::bias_state_space::{BiasStateSpace, StateSpaceError, state_space_from_model};
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use crate::stage::Stage;
-use crate::stage::bias_kf::{BiasKf, ConstantState, Lead};
-use crate::stage::bias_settings::{
+use crate::stage::bias::cusum::Cusum;
+use crate::stage::bias::kf::{BiasKf, ConstantState, Lead};
+use crate::stage::bias::line_canceller::LineCanceller;
+use crate::stage::bias::settings::{
     BiasSettings, Calibration, MAX_UPDATE_DELAY, SettingsErrors, WarmupSettings,
 };
-use crate::stage::cusum::Cusum;
-use crate::stage::line_canceller::LineCanceller;
-use crate::stage::stillness::StillnessDetector;
-use crate::stage::temperature::TemperatureComp;
+use crate::stage::bias::stillness::StillnessDetector;
+use crate::stage::bias::temperature::TemperatureComp;
 
 /// Most vibration lines cancelled per channel.
 pub const MAX_LINES: usize = 4;
@@ -261,7 +268,7 @@ impl BiasStage {
             detector: StillnessDetector::new(&settings.stillness, fs),
             delay: (settings.update_delay_s * fs).round().clamp(
                 0.0,
-                crate::stage::stillness::window_samples(settings.stillness.window_s, fs)
+                crate::stage::bias::stillness::window_samples(settings.stillness.window_s, fs)
                     .min(MAX_UPDATE_DELAY) as f64,
             ) as usize,
             ring: [DelayEntry {
@@ -634,12 +641,9 @@ fn calibrate(cal: &Calibration, raw: &Vector3<f64>) -> Vector3<f64> {
     out
 }
 
-impl Stage for BiasStage {
-    fn name(&self) -> &'static str {
-        "bias"
-    }
-
-    fn process(&mut self, mut s: Sample) -> Sample {
+impl BiasStage {
+    /// One sample through the stage (it has no look-ahead: [`Stage::push`] emits it at once).
+    pub fn process(&mut self, mut s: Sample) -> Sample {
         self.counters.samples += 1;
         let mut steps = self.steps_since_previous(&s);
         let t_s = s.t_s();
@@ -791,6 +795,16 @@ impl Stage for BiasStage {
             s.flags |= flags::EFFECT_COMPENSATED;
         }
         s
+    }
+}
+
+impl Stage for BiasStage {
+    fn name(&self) -> &'static str {
+        "bias"
+    }
+
+    fn push(&mut self, s: Sample, out: &mut Vec<Sample>) {
+        out.push(self.process(s));
     }
 
     fn counters(&self) -> Vec<(String, u64)> {

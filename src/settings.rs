@@ -1,0 +1,215 @@
+//! The settings toolkit under every config section: errors located by key path, collected over
+//! a whole file ([`Errors`]), a TOML table laid over another ([`overlay`]) and a section read key
+//! by key over its defaults ([`lenient`]). `config.rs` (the whole file) and `stage/build.rs` (the
+//! stage sections) both use it; it uses neither.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// One configuration mistake, located by its key path (e.g. `sinks[1].bind`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConfigError {
+    pub path: String,
+    pub message: String,
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.path, self.message)
+    }
+}
+
+/// All mistakes found in one configuration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConfigErrors(pub Vec<ConfigError>);
+
+impl fmt::Display for ConfigErrors {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "{} configuration error(s):", self.0.len())?;
+        for e in &self.0 {
+            writeln!(f, "  - {e}")?;
+        }
+        Ok(())
+    }
+}
+impl std::error::Error for ConfigErrors {}
+
+/// Collects errors while validating.
+#[derive(Default)]
+pub struct Errors(Vec<ConfigError>);
+
+impl Errors {
+    pub fn push(&mut self, path: impl Into<String>, message: impl Into<String>) {
+        self.0.push(ConfigError {
+            path: path.into(),
+            message: message.into(),
+        });
+    }
+    /// Record `message` at `path` unless `ok`.
+    pub fn check(&mut self, ok: bool, path: impl Into<String>, message: impl Into<String>) {
+        if !ok {
+            self.push(path, message);
+        }
+    }
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+    /// Drop repeats of an error already recorded (same path, same message), keeping the order.
+    pub fn dedup(&mut self) {
+        let mut seen = std::collections::HashSet::new();
+        self.0
+            .retain(|e| seen.insert((e.path.clone(), e.message.clone())));
+    }
+    pub fn into_vec(self) -> Vec<ConfigError> {
+        self.0
+    }
+}
+
+/// Merge `top` into `base`: sub-tables merge, other values replace.
+pub fn overlay(base: &mut toml::Table, top: toml::Table) {
+    for (k, v) in top {
+        match (base.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(t)) => overlay(b, t),
+            (_, v) => {
+                base.insert(k, v);
+            }
+        }
+    }
+}
+
+/// `T` from `user` laid key by key over `base` (a table of `T`'s fields, usually its
+/// defaults): a key that does not deserialise — unknown, or of the wrong type — is reported once,
+/// at its own path (`prefix.key.sub`), and keeps the base value; every other key still applies.
+/// So every structural mistake of a section is found in one run, and the value checks that follow
+/// see every key that parsed.
+pub fn lenient<T: serde::de::DeserializeOwned>(
+    base: toml::Table,
+    user: &toml::Table,
+    prefix: &str,
+    errs: &mut Errors,
+) -> Option<T> {
+    let check = |t: &toml::Table| {
+        toml::Value::Table(t.clone())
+            .try_into::<T>()
+            .map(|_| ())
+            .map_err(|e| clean_serde(&e.to_string()))
+    };
+    let mut acc = base;
+    apply_keys(&mut acc, &mut Vec::new(), user, prefix, errs, &check);
+    match toml::Value::Table(acc).try_into::<T>() {
+        Ok(t) => Some(t),
+        Err(e) => {
+            errs.push(prefix, clean_serde(&e.to_string()));
+            None
+        }
+    }
+}
+
+/// The value at `at` inside `root`, if any.
+fn value_at<'a>(root: &'a toml::Table, at: &[String]) -> Option<&'a toml::Value> {
+    let (last, parents) = at.split_last()?;
+    let mut t = root;
+    for k in parents {
+        t = t.get(k)?.as_table()?;
+    }
+    t.get(last)
+}
+
+/// Set the value at `at` inside `root` (the parents exist: they were walked to get here).
+fn set_at(root: &mut toml::Table, at: &[String], v: toml::Value) {
+    let (last, parents) = at.split_last().expect("a key path is never empty");
+    let mut t = root;
+    for k in parents {
+        t = t
+            .get_mut(k)
+            .and_then(|x| x.as_table_mut())
+            .expect("parent tables exist");
+    }
+    t.insert(last.clone(), v);
+}
+
+fn apply_keys(
+    root: &mut toml::Table,
+    at: &mut Vec<String>,
+    user: &toml::Table,
+    prefix: &str,
+    errs: &mut Errors,
+    check: &dyn Fn(&toml::Table) -> Result<(), String>,
+) {
+    for (k, v) in user {
+        at.push(k.clone());
+        match (value_at(root, at), v) {
+            (Some(toml::Value::Table(bt)), toml::Value::Table(ut)) => {
+                // The sub-table as a whole first (a tagged enum changes variant only so), key by
+                // key when that fails, to name the key at fault.
+                let mut merged = bt.clone();
+                overlay(&mut merged, ut.clone());
+                let mut trial = root.clone();
+                set_at(&mut trial, at, toml::Value::Table(merged));
+                if check(&trial).is_ok() {
+                    *root = trial;
+                } else {
+                    apply_keys(root, at, ut, prefix, errs, check)
+                }
+            }
+            _ => {
+                let mut trial = root.clone();
+                set_at(&mut trial, at, v.clone());
+                match check(&trial) {
+                    Ok(()) => *root = trial,
+                    Err(e) => errs.push(format!("{prefix}.{}", at.join(".")), e),
+                }
+            }
+        }
+        at.pop();
+    }
+}
+
+/// Value-check messages that start with their key (`k = 60 must be …`, `gyro.scale[1]: …`)
+/// recorded at `prefix.key`; others at `prefix`.
+pub fn push_keyed(errs: &mut Errors, prefix: &str, message: String) {
+    let key_len = message
+        .find(|c: char| !(c.is_ascii_alphanumeric() || "_.[]".contains(c)))
+        .unwrap_or(0);
+    let (key, rest) = message.split_at(key_len);
+    if key_len > 0 && rest.starts_with(": ") {
+        errs.push(format!("{prefix}.{key}"), rest[2..].to_string());
+    } else if key_len > 0 && rest.starts_with(" = ") {
+        errs.push(format!("{prefix}.{key}"), message.clone());
+    } else {
+        errs.push(prefix, message);
+    }
+}
+
+/// Deserialise one top-level section, recording its error under its name.
+pub fn section<T: serde::de::DeserializeOwned>(
+    table: &toml::Table,
+    key: &str,
+    errs: &mut Errors,
+) -> Option<T> {
+    let v = table.get(key)?;
+    match v.clone().try_into::<T>() {
+        Ok(t) => Some(t),
+        Err(e) => {
+            errs.push(key, clean_serde(&e.to_string()));
+            None
+        }
+    }
+}
+
+/// serde's TOML messages span lines; keep them on one.
+pub fn clean_serde(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Resolve `p` against `base` unless absolute.
+pub fn resolve(base: &Path, p: &Path) -> PathBuf {
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        base.join(p)
+    }
+}
