@@ -14,7 +14,7 @@ use crate::model::fos::FosSettings;
 use crate::model::fos_model::{FosModel, FosModelSpec};
 use crate::model::{ArFit, ModelError};
 use crate::sample::{CHANNEL_NAMES, Sample};
-use crate::stage::stillness::{StillnessDetector, StillnessSettings};
+use crate::stage::bias::stillness::{StillnessDetector, StillnessSettings};
 
 /// How `fit` estimates the bias model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
