@@ -685,16 +685,24 @@ fn compare_bias(
 
 /// Samples of a log after `skip_s`, with the log's sample rate.
 fn load_span(log: &std::path::Path, skip_s: f64) -> Result<(f64, Vec<imuprep::Sample>)> {
-    let (desc, samples, _) = csvio::read_log(log)?;
+    load_span_to(log, skip_s, None)
+}
+
+/// Samples of a log after `skip_s`, at most `span_s` of them (streamed: the rest is not read).
+fn load_span_to(
+    log: &std::path::Path,
+    skip_s: f64,
+    span_s: Option<f64>,
+) -> Result<(f64, Vec<imuprep::Sample>)> {
+    let (desc, samples, _) = csvio::read_log_span(log, skip_s, span_s)?;
     let rate = desc.map(|d| d.sample_rate_hz).unwrap_or(0.0);
     anyhow::ensure!(
         rate > 0.0,
         "{}: the log does not declare its sample rate",
         log.display()
     );
-    let skip = (skip_s * rate).round() as usize;
-    anyhow::ensure!(skip < samples.len(), "--skip-s removes the whole log");
-    Ok((rate, samples[skip..].to_vec()))
+    anyhow::ensure!(!samples.is_empty(), "--skip-s removes the whole log");
+    Ok((rate, samples))
 }
 
 fn fit(
@@ -712,7 +720,8 @@ fn fit(
         (1..=MAX_FILE_AR_ORDER).contains(&bias_order),
         "--bias-order must be in 1..={MAX_FILE_AR_ORDER} (got {bias_order})"
     );
-    let (rate, samples) = load_span(log, skip_s)?;
+    // only the training span is read
+    let (rate, samples) = load_span_to(log, skip_s, Some(train_s))?;
     let n = ((train_s * rate).round() as usize).min(samples.len());
     std::fs::create_dir_all(out_dir)?;
     let mut file = ArimaModelFile::default();
@@ -1013,7 +1022,7 @@ fn diagnose(
     to_s: Option<f64>,
     out_dir: &std::path::Path,
 ) -> Result<Added> {
-    let (rate, samples) = load_span(log, from_s)?;
+    let (rate, samples) = load_span_to(log, from_s, to_s.map(|t| (t - from_s).max(0.0)))?;
     let end = match to_s {
         Some(t) => (((t - from_s) * rate).round() as usize).min(samples.len()),
         None => samples.len(),
