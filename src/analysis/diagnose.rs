@@ -46,7 +46,7 @@ use super::changepoint::{ChangePoint, ChangePointSettings, binary_segmentation};
 use super::exogenous::{
     Exogenous, ExogenousReport, analyse as exo_analyse, lagged_polynomial_scan,
 };
-use super::joint_model::{JointFit, LevelSpec, fit as joint_fit, mse};
+use super::joint_model::{JointFit, LevelSpec, fit as joint_fit, fit_orders, mse};
 use super::quantisation::{Quantisation, Saturation, quantisation, saturation};
 use super::spectrum::{
     PeakSettings, Psd, SpectralPeak, find_peaks, periodogram, refine_line, welch,
@@ -309,8 +309,10 @@ impl Ctx<'_> {
             l => l,
         };
         let mut best = (p_now, f64::INFINITY);
-        for p in 1..=max_p {
-            let Ok(f) = joint_fit(self.y, &cols, split.train.clone(), p, level) else {
+        let fits = fit_orders(self.y, &cols, split.train.clone(), max_p, level);
+        for (i, f) in fits.into_iter().enumerate() {
+            let p = i + 1;
+            let Some(f) = f else {
                 continue;
             };
             let r = f.residuals_to(self.y, &cols, split.validation.end);

@@ -30,7 +30,7 @@
 //! validation or test segment is predicted with its true history.
 
 use super::AnalysisError;
-use crate::model::{ArFit, burg};
+use crate::model::{ArFit, burg, burg_orders};
 use nalgebra::{DMatrix, DVector};
 use std::ops::Range;
 
@@ -207,6 +207,45 @@ pub fn fit(
         }
     }
     Ok(jf)
+}
+
+/// [`fit`] at every AR order 1..=max_order (element p − 1; `None` where that order cannot be
+/// fitted). Without regressors or level the AR is fitted to one residual whatever the order, so
+/// every order comes from one Burg pass (`burg_orders`); otherwise the GLS passes depend on the
+/// order and each order is fitted separately.
+pub fn fit_orders(
+    y: &[f64],
+    cols: &[Vec<f64>],
+    range: Range<usize>,
+    max_order: usize,
+    level: LevelSpec,
+) -> Vec<Option<JointFit>> {
+    if !cols.is_empty() || level != LevelSpec::None {
+        return (1..=max_order)
+            .map(|p| fit(y, cols, range.clone(), p, level).ok())
+            .collect();
+    }
+    // What `fit` does without regressors or level: intercept by OLS, Burg on the residual. Its
+    // length check (`4 p + 16` samples) decides which orders are allowed.
+    let usable = (1..=max_order)
+        .take_while(|p| range.len() >= 4 * p + 16)
+        .count();
+    let Ok(first) = fit(y, cols, range.clone(), 1, level) else {
+        return vec![None; max_order];
+    };
+    let d = first.open_loop(y, cols);
+    let ars = burg_orders(&d[range], usable).unwrap_or_default();
+    let mut out: Vec<Option<JointFit>> = ars
+        .into_iter()
+        .map(|ar| {
+            Some(JointFit {
+                ar,
+                ..first.clone()
+            })
+        })
+        .collect();
+    out.resize(max_order, None);
+    out
 }
 
 /// e_n = z_n − Σ φ_i z_{n−i} (the AR error filter, no mean: linear).
@@ -408,6 +447,39 @@ mod tests {
         assert!(k > 0.0099 && k < 0.04, "{k}");
         let q = f.level_q_per_sample.unwrap();
         assert!(q > 1e-4 && q < 1.6e-3, "{q}");
+    }
+
+    #[test]
+    fn every_order_from_one_pass_equals_separate_fits() {
+        // Without regressors or level, `fit_orders` must give what `fit` gives order by order
+        // (same intercept, same AR to Burg's rounding: 1e-12); orders the range is too short
+        // for are None, as `fit` errors there.
+        let mut rng = Rng::new(23);
+        let mut u = 0.0;
+        let y: Vec<f64> = (0..3000)
+            .map(|_| {
+                u = 0.9 * u + rng.normal();
+                2.0 + u
+            })
+            .collect();
+        let range = 100..200; // 100 samples: orders up to 21 allowed (4 p + 16 <= 100)
+        let all = fit_orders(&y, &[], range.clone(), 25, LevelSpec::None);
+        assert_eq!(all.len(), 25);
+        for (i, f) in all.iter().enumerate() {
+            let p = i + 1;
+            match fit(&y, &[], range.clone(), p, LevelSpec::None) {
+                Ok(one) => {
+                    let f = f.as_ref().expect("fit_orders lost an order fit accepts");
+                    assert_eq!(f.intercept, one.intercept);
+                    for (a, b) in f.ar.coeffs.iter().zip(&one.ar.coeffs) {
+                        assert!((a - b).abs() < 1e-12, "p={p}");
+                    }
+                    assert!((f.ar.noise_var / one.ar.noise_var - 1.0).abs() < 1e-12);
+                }
+                Err(_) => assert!(f.is_none(), "p={p}"),
+            }
+        }
+        assert!(all[20].is_some() && all[21].is_none());
     }
 
     #[test]

@@ -374,34 +374,122 @@ pub fn write_log(path: &Path, d: &Descriptor, samples: &[Sample]) -> Result<(), 
     })
 }
 
-/// Read every sample of a recorded log (through the live decoder), with its decoder counters.
+/// Read a recorded log: the first descriptor, every sample, decoder statistics.
+///
+/// Streams the file (see [`read_log_span`]); memory is the samples only.
 pub fn read_log(
     path: &Path,
 ) -> Result<(Option<Descriptor>, Vec<Sample>, crate::frame::DecoderStats), CsvError> {
-    let bytes = std::fs::read(path).map_err(|err| CsvError::Io {
+    read_log_span(path, 0.0, None)
+}
+
+/// Read the samples of a recorded log from `skip_s` after its start, at most `span_s` of them
+/// (all to the end if `None`); with the first descriptor and the decoder statistics of what was
+/// read.
+///
+/// The file is decoded in 64 KiB reads, never held whole, and reading stops once the span is
+/// complete, so the cost of reading the first minutes of a long log does not grow with its
+/// length. Times are counted in samples at the descriptor's rate (samples seen before the
+/// first descriptor are held until it arrives); a log without a descriptor is read whole.
+pub fn read_log_span(
+    path: &Path,
+    skip_s: f64,
+    span_s: Option<f64>,
+) -> Result<(Option<Descriptor>, Vec<Sample>, crate::frame::DecoderStats), CsvError> {
+    let io = |err| CsvError::Io {
+        path: path.into(),
+        err,
+    };
+    let mut f = std::fs::File::open(path).map_err(io)?;
+    let file_len = f.metadata().map_err(io)?.len();
+    let mut head = [0u8; crate::frame::LOG_HEADER_LEN];
+    let got = read_full(&mut f, &mut head).map_err(io)?;
+    crate::frame::check_log_header(&head[..got]).map_err(|err| CsvError::Log {
         path: path.into(),
         err,
     })?;
-    crate::frame::check_log_header(&bytes).map_err(|err| CsvError::Log {
-        path: path.into(),
-        err,
-    })?;
-    let mut buf = BytesMut::from(&bytes[crate::frame::LOG_HEADER_LEN..]);
+    const CHUNK: usize = 64 * 1024;
+    let mut buf = BytesMut::with_capacity(2 * CHUNK);
     let mut dec = FrameDecoder::new();
-    let mut out = Vec::new();
-    let mut desc = None;
-    loop {
-        let m = dec.decode_eof(&mut buf).map_err(|err| CsvError::Io {
-            path: path.into(),
-            err,
-        })?;
+    let mut desc: Option<Descriptor> = None;
+    // Before the descriptor: held samples. After: (to skip, to keep).
+    let mut held: Vec<Sample> = Vec::new();
+    let mut window: Option<(usize, usize)> = None;
+    let mut out: Vec<Sample> = Vec::new();
+    let keep = |out: &mut Vec<Sample>, w: &mut (usize, usize), s: Sample| -> bool {
+        if w.0 > 0 {
+            w.0 -= 1;
+        } else if w.1 > 0 {
+            out.push(s);
+            w.1 -= 1;
+        }
+        w.1 > 0
+    };
+    let mut eof = false;
+    'read: loop {
+        let m = if eof {
+            dec.decode_eof(&mut buf).map_err(io)?
+        } else {
+            dec.decode(&mut buf).map_err(io)?
+        };
         match m {
-            Some(Message::Sample(s)) => out.push(s),
-            Some(Message::Descriptor(d)) => desc = desc.or(Some(d)),
-            None => break,
+            Some(Message::Descriptor(d)) => {
+                if desc.is_none() {
+                    desc = Some(d);
+                    let rate = d.sample_rate_hz;
+                    let to_samples = |t: f64| (t * rate).round().max(0.0) as usize;
+                    let skip = to_samples(skip_s);
+                    let take = span_s.map_or(usize::MAX, to_samples);
+                    // Reserve once instead of doubling: at most this many plain sample frames.
+                    let frames = (file_len / crate::frame::SAMPLE_FRAME_LEN as u64) as usize;
+                    out.reserve(take.min(frames.saturating_sub(skip)) + held.len());
+                    let mut w = (skip, take);
+                    let mut more = w.1 > 0;
+                    for s in held.drain(..) {
+                        more = keep(&mut out, &mut w, s);
+                    }
+                    window = Some(w);
+                    if !more {
+                        break 'read;
+                    }
+                }
+            }
+            Some(Message::Sample(s)) => match window.as_mut() {
+                Some(w) => {
+                    if !keep(&mut out, w, s) {
+                        break 'read;
+                    }
+                }
+                None => held.push(s),
+            },
+            None if eof => break 'read,
+            None => {
+                let len = buf.len();
+                buf.resize(len + CHUNK, 0);
+                let n = read_full(&mut f, &mut buf[len..]).map_err(io)?;
+                buf.truncate(len + n);
+                eof = n == 0;
+            }
         }
     }
+    if desc.is_none() {
+        out = held;
+    }
     Ok((desc, out, dec.stats()))
+}
+
+/// Read until `buf` is full or the file ends; the number of bytes read.
+fn read_full(f: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match f.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
 }
 
 /// Write samples as canonical CSV plus `seq` and `flags`.

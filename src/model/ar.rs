@@ -68,15 +68,11 @@ impl ArFit {
 pub fn autocovariance_biased(x: &[f64], max_lag: usize) -> (Vec<f64>, f64) {
     let mu = mean(x);
     let d: Vec<f64> = x.iter().map(|v| v - mu).collect();
-    let n = d.len();
-    let r = (0..=max_lag)
-        .map(|k| {
-            if k >= n {
-                return 0.0;
-            }
-            let s: f64 = d[k..].iter().zip(&d[..n - k]).map(|(a, b)| a * b).sum();
-            s / n as f64
-        })
+    let n = d.len() as f64;
+    // one blocked pass, every lag's sum over several accumulators (`kernels`)
+    let r = super::kernels::lagged_products(&d, max_lag)
+        .into_iter()
+        .map(|s| s / n)
         .collect();
     (r, mu)
 }
@@ -96,6 +92,52 @@ pub fn yule_walker(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
         noise_var: l.var,
         mean: mu,
     })
+}
+
+/// Yule-Walker fits of every order 1..=p from one autocovariance and one Levinson-Durbin
+/// recursion (which passes through every order): element `m - 1` is the AR(m) fit, equal to
+/// `yule_walker(x, m)` to rounding.
+///
+/// Fewer than p fits are returned only when the prediction-error variance reaches zero at some
+/// order q + 1 > 1 (`yule_walker(x, q + 1)` is then an error); an error is returned when no
+/// order can be fitted.
+pub fn yule_walker_orders(x: &[f64], p: usize) -> Result<Vec<ArFit>, ModelError> {
+    check_ar_input(x, p)?;
+    let (r, mu) = autocovariance_biased(x, p);
+    if r[0].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return Err(ModelError::ZeroVariance);
+    }
+    // The recursion of `levinson_durbin`, keeping each order's (phi, E_m).
+    let mut fits: Vec<ArFit> = Vec::with_capacity(p);
+    let mut phi: Vec<f64> = Vec::with_capacity(p);
+    let mut e = r[0];
+    for m in 1..=p {
+        let mut num = r[m];
+        for i in 1..m {
+            num -= phi[i - 1] * r[m - i];
+        }
+        let k = num / e;
+        let prev = phi.clone();
+        for i in 1..m {
+            phi[i - 1] = prev[i - 1] - k * prev[m - i - 1];
+        }
+        phi.push(k);
+        e *= 1.0 - k * k;
+        if e.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            break;
+        }
+        fits.push(ArFit {
+            coeffs: phi.clone(),
+            noise_var: e,
+            mean: mu,
+        });
+    }
+    if fits.is_empty() {
+        return Err(ModelError::Singular(format!(
+            "Levinson-Durbin error energy reached {e} at order 1"
+        )));
+    }
+    Ok(fits)
 }
 
 #[cfg(test)]
@@ -141,6 +183,29 @@ mod tests {
         }
         let e_direct = r[0] - (0..p).map(|i| phi[i] * r[i + 1]).sum::<f64>();
         assert!((e - e_direct).abs() < 1e-12);
+    }
+
+    #[test]
+    #[test]
+    fn yule_walker_orders_match_one_fit_per_order() {
+        // Same autocovariance, same recursion: each order's fit equals a separate Levinson
+        // solve of that order to rounding (1e-13 for these well-conditioned AR(1)-like systems).
+        let x = ar1(0.7, 5003, 9);
+        let all = yule_walker_orders(&x, 8).unwrap();
+        assert_eq!(all.len(), 8);
+        for (m0, fit) in all.iter().enumerate() {
+            let one = yule_walker(&x, m0 + 1).unwrap();
+            assert_eq!(fit.coeffs.len(), m0 + 1);
+            for (u, v) in fit.coeffs.iter().zip(&one.coeffs) {
+                assert!((u - v).abs() < 1e-13);
+            }
+            assert!((fit.noise_var / one.noise_var - 1.0).abs() < 1e-13);
+            assert_eq!(fit.mean, one.mean);
+        }
+        assert_eq!(
+            yule_walker_orders(&[2.0; 20], 2),
+            Err(ModelError::ZeroVariance)
+        );
     }
 
     #[test]

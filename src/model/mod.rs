@@ -11,9 +11,10 @@ pub mod covariance;
 pub mod fos;
 pub mod fos_candidates;
 pub mod fos_model;
+mod kernels;
 
-pub use ar::{ArFit, yule_walker};
-pub use burg::burg;
+pub use ar::{ArFit, yule_walker, yule_walker_orders};
+pub use burg::{burg, burg_orders};
 pub use covariance::covariance;
 
 /// Why a model could not be fitted. Fitting never panics on user data; it returns one of these.
@@ -72,5 +73,5 @@ pub(crate) fn mean(x: &[f64]) -> f64 {
     if x.is_empty() {
         return 0.0;
     }
-    x.iter().sum::<f64>() / x.len() as f64
+    kernels::sum(x) / x.len() as f64
 }

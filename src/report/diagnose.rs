@@ -10,7 +10,7 @@ use std::path::Path;
 use anyhow::{Result, anyhow, ensure};
 use serde::Serialize;
 
-use super::{load_span, parse_channels};
+use super::{load_span, load_span_to, parse_channels};
 use crate::analysis::diagnose::{ChannelInput, DiagnoseSettings, diagnose_channel};
 use crate::analysis::diagnose_report::{DiagnoseReport, channel_plots, effect_text};
 use crate::analysis::exogenous::Exogenous;
@@ -52,7 +52,7 @@ pub fn diagnose(
     out_dir: &Path,
     progress: &mut dyn Write,
 ) -> Result<Added> {
-    let (rate, samples) = load_span(log, from_s)?;
+    let (rate, samples) = load_span_to(log, from_s, to_s.map(|t| (t - from_s).max(0.0)))?;
     let end = match to_s {
         Some(t) => (((t - from_s) * rate).round() as usize).min(samples.len()),
         None => samples.len(),

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, anyhow, ensure};
 use serde::Serialize;
 
-use super::load_span;
+use super::load_span_to;
 use crate::model::arima::{ArimaModelFile, IdentifySettings, identify};
 use crate::model::bias_model::{BiasModelFile, ChannelBiasModel, MAX_FILE_AR_ORDER};
 use crate::model::fos::FosSettings;
@@ -149,7 +149,8 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
         (1..=MAX_FILE_AR_ORDER).contains(&bias_order),
         "--bias-order must be in 1..={MAX_FILE_AR_ORDER} (got {bias_order})"
     );
-    let (rate, samples) = load_span(log, o.skip_s)?;
+    // Only the training span is read.
+    let (rate, samples) = load_span_to(log, o.skip_s, Some(o.train_s))?;
     let n = ((o.train_s * rate).round() as usize).min(samples.len());
     std::fs::create_dir_all(out_dir)?;
     let series = |c: usize| -> Vec<f64> { samples[..n].iter().map(|s| s.channel(c)).collect() };

@@ -23,16 +23,21 @@ use crate::sample::Sample;
 
 /// Samples of a log after `skip_s`, with the log's sample rate.
 pub fn load_span(log: &Path, skip_s: f64) -> Result<(f64, Vec<Sample>)> {
-    let (desc, samples, _) = crate::io::csv::read_log(log)?;
+    load_span_to(log, skip_s, None)
+}
+
+/// Samples of a log after `skip_s`, at most `span_s` seconds of them (streamed: the rest of the
+/// file is not read), with the log's sample rate.
+pub fn load_span_to(log: &Path, skip_s: f64, span_s: Option<f64>) -> Result<(f64, Vec<Sample>)> {
+    let (desc, samples, _) = crate::io::csv::read_log_span(log, skip_s, span_s)?;
     let rate = desc.map(|d| d.sample_rate_hz).unwrap_or(0.0);
     ensure!(
         rate > 0.0,
         "{}: the log does not declare its sample rate",
         log.display()
     );
-    let skip = (skip_s * rate).round() as usize;
-    ensure!(skip < samples.len(), "--skip-s removes the whole log");
-    Ok((rate, samples[skip..].to_vec()))
+    ensure!(!samples.is_empty(), "--skip-s removes the whole log");
+    Ok((rate, samples))
 }
 
 /// Channel names (gx gy gz ax ay az) → indices; none given = all six.
