@@ -186,7 +186,6 @@ mod tests {
     }
 
     #[test]
-    #[test]
     fn yule_walker_orders_match_one_fit_per_order() {
         // Same autocovariance, same recursion: each order's fit equals a separate Levinson
         // solve of that order to rounding (1e-13 for these well-conditioned AR(1)-like systems).
