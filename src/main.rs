@@ -510,7 +510,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 csvio::write_csv(&output, &samples)?;
             } else {
                 let d = f.descriptor.unwrap_or_default();
-                let b = imuprep::io::convert::encode_stream(to, &d, &samples);
+                let b = imuprep::io::convert::encode_stream(to, &d, &samples)?;
                 std::fs::write(&output, &b)
                     .with_context(|| format!("writing {}", output.display()))?;
             }
