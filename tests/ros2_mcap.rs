@@ -291,11 +291,8 @@ fn a_chunk_with_a_bad_crc_is_dropped_whole_and_garbage_is_survived() {
     g.extend_from_slice(&BAG[..200]);
     let mut dec = McapDecoder::default();
     let (items, st) = run(&mut dec, &g, 256);
-    assert_eq!(
-        samples(&items).len(),
-        60 + 0,
-        "the repeated head has no chunk end"
-    );
+    // The repeated head ends inside its chunk's first record: nothing more to decode there.
+    assert_eq!(samples(&items).len(), 60);
     assert!(st.garbage_bytes >= 37);
     // Seeded random corruption: never a panic, never more samples than there are.
     let mut x = 0x9E37_79B9_7F4A_7C15u64;

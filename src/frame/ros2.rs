@@ -181,7 +181,7 @@ pub fn encode_imu(m: &ImuMsg, out: &mut Vec<u8>) {
     out.extend_from_slice(&(name.len() as u32 + 1).to_le_bytes());
     out.extend_from_slice(name);
     out.push(0);
-    while (out.len() - start - 4) % 8 != 0 {
+    while !(out.len() - start - 4).is_multiple_of(8) {
         out.push(0);
     }
     let put = |out: &mut Vec<u8>, v: &[f64]| {

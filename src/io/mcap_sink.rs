@@ -108,7 +108,13 @@ impl<W: Write + Seek> ImuBagWriter<W> {
 
     /// The Imu message for `s` (values as written: FLU).
     pub fn imu_msg(&self, s: &Sample) -> ImuMsg {
-        let sign = |c: usize| if self.frd && c % 3 != 0 { -1.0 } else { 1.0 };
+        let sign = |c: usize| {
+            if self.frd && !c.is_multiple_of(3) {
+                -1.0
+            } else {
+                1.0
+            }
+        };
         let ch = s.channels();
         let v = |c: usize| ch[c] * sign(c);
         let var = |c: usize| {
