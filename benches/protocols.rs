@@ -3,7 +3,9 @@
 //! `cargo bench --bench protocols` — criterion prints the median time per 100 000 IMU samples
 //! and the throughput in samples/s (elements/s). Frames/s: native, MAVLink and ULog carry one
 //! sample per frame; the UBX stream packs 4 sets per ESF-RAW message (as receivers batch them),
-//! so its frames/s is a quarter of its samples/s.
+//! so its frames/s is a quarter of its samples/s. With `--features ros2`, also a ROS 2 bag
+//! (MCAP as the `mcap:` sink writes it: 1 MiB chunks with CRCs, one sensor_msgs/msg/Imu per
+//! sample), CRCs checked.
 
 use bytes::BytesMut;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -93,6 +95,19 @@ fn bench(c: &mut Criterion) {
     g.bench_function("ulog_sensor_combined", |b| {
         b.iter(|| black_box(count(Box::new(UlogDecoder::default()), &ulg)))
     });
+    #[cfg(feature = "ros2")]
+    {
+        use imuprep::frame::mcap::McapDecoder;
+        let bag = imuprep::io::mcap_sink::encode_bag(
+            &imuprep::frame::Descriptor::default(),
+            &ss,
+            Default::default(),
+        )
+        .expect("bag");
+        g.bench_function("mcap_ros2_imu", |b| {
+            b.iter(|| black_box(count(Box::new(McapDecoder::default()), &bag)))
+        });
+    }
     g.finish();
 }
 

@@ -108,6 +108,27 @@ pub enum SinkConfig {
         #[serde(default)]
         path: Option<PathBuf>,
     },
+    /// A ROS 2 bag (MCAP) with sensor_msgs/msg/Imu (bias σ² on the covariance diagonals) and a
+    /// health topic (std_msgs/msg/String, JSON); needs a build with `--features ros2`.
+    Mcap {
+        path: PathBuf,
+        #[serde(default = "default_mcap_topic")]
+        topic: String,
+        #[serde(default = "default_mcap_frame")]
+        frame_id: String,
+        #[serde(default = "default_mcap_health")]
+        health_topic: String,
+    },
+}
+
+fn default_mcap_topic() -> String {
+    "/imu/clean".into()
+}
+fn default_mcap_frame() -> String {
+    "imu_link".into()
+}
+fn default_mcap_health() -> String {
+    "/imuprep/health".into()
 }
 
 fn csv() -> Format {
@@ -161,6 +182,13 @@ pub enum Sink {
     /// Inline output (see [`SinkConfig::Inline`]); `None` = a new pseudo-terminal.
     Inline {
         path: Option<PathBuf>,
+    },
+    /// ROS 2 bag (see [`SinkConfig::Mcap`]).
+    Mcap {
+        path: PathBuf,
+        topic: String,
+        frame_id: String,
+        health_topic: String,
     },
 }
 
@@ -358,6 +386,29 @@ fn validate_sink(s: &SinkConfig, base: &Path, path: &str, errs: &mut Errors) -> 
         SinkConfig::Inline { path: p } => Some(Sink::Inline {
             path: p.as_ref().map(|p| resolve(base, p)),
         }),
+        SinkConfig::Mcap {
+            path: p,
+            topic,
+            frame_id,
+            health_topic,
+        } => {
+            errs.check(
+                cfg!(feature = "ros2"),
+                format!("{path}.kind"),
+                "mcap needs a build with ROS 2 support (cargo build --release --features ros2)",
+            );
+            errs.check(
+                topic.starts_with('/') && health_topic.starts_with('/') && topic != health_topic,
+                format!("{path}.topic"),
+                "topics must be absolute (start with /) and differ",
+            );
+            Some(Sink::Mcap {
+                path: resolve(base, p),
+                topic: topic.clone(),
+                frame_id: frame_id.clone(),
+                health_topic: health_topic.clone(),
+            })
+        }
         SinkConfig::Udp { targets, format } => {
             let mut out = Vec::new();
             for (i, t) in targets.iter().enumerate() {

@@ -408,8 +408,14 @@ pub fn parse_out_spec(spec: &str) -> Result<Sink, String> {
             },
         }),
         "pty" => Ok(Sink::Inline { path: None }),
+        "mcap" if !rest.is_empty() => Ok(Sink::Mcap {
+            path: rest.into(),
+            topic: "/imu/clean".into(),
+            frame_id: "imu_link".into(),
+            health_topic: "/imuprep/health".into(),
+        }),
         _ => Err(format!(
-            "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR, inline:PATH (the input's own protocol, to a serial device or file), pty: (the same on a new pseudo-terminal, its path printed)"
+            "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR, inline:PATH (the input's own protocol, to a serial device or file), pty: (the same on a new pseudo-terminal, its path printed), mcap:PATH (ROS 2 bag, sensor_msgs/msg/Imu)"
         )),
     }
 }

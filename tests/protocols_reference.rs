@@ -192,6 +192,46 @@ fn mavlink_inline_keeps_every_message_and_unsigned_bytes() {
 }
 
 #[test]
+fn mavlink_raw_imu_inline_writes_cleaned_values_back_in_counts_with_the_configured_scales() {
+    let want = rows(MAV_EXPECTED);
+    let key = want
+        .iter()
+        .find(|r| r[2] == "27")
+        .expect("a RAW_IMU stream")[..4]
+        .to_vec();
+    let o = mav_opts(&key);
+    let (items, _) = run(&mut MavlinkDecoder::new(o.clone()), MAV, 4096);
+    let raw = samples(&items);
+    assert!(!raw.is_empty());
+    // A "cleaned" sample: gx + 5 counts (5 × 1e-3 rad/s), az − 3 counts (3 × 1e-2 m/s²). The
+    // encoder has no scales of its own (0, 0): it must use the ones the carrier brings.
+    let mut enc = InlineEncoder::new(Protocol::Mavlink, 0.0, 0.0);
+    let mut out = BytesMut::new();
+    for it in &items {
+        match it {
+            Decoded::Sample(s, c) => {
+                let mut x = *s;
+                x.gyro[0] += 5e-3;
+                x.accel[2] -= 3e-2;
+                enc.sample(c.as_ref(), &x, &mut out)
+            }
+            Decoded::Other(b) => enc.other(b, &mut out),
+            Decoded::Descriptor(_) => {}
+        }
+    }
+    let (again, st) = run(&mut MavlinkDecoder::new(o), &out, 4096);
+    assert_eq!((st.frames_ok, st.crc_errors), (185, 0));
+    let back = samples(&again);
+    assert_eq!(back.len(), raw.len());
+    for (b, r) in back.iter().zip(&raw) {
+        // Whole counts both ways: equal to float rounding of the scales.
+        assert!((b.gyro[0] - (r.gyro[0] + 5e-3)).abs() < 1e-12);
+        assert!((b.accel[2] - (r.accel[2] - 3e-2)).abs() < 1e-12);
+        assert_eq!((b.gyro[1], b.accel[0]), (r.gyro[1], r.accel[0]));
+    }
+}
+
+#[test]
 fn ulog_real_files_equal_pyulog() {
     let Some(dir) = common::real_data("px4_ulog") else {
         eprintln!("SKIPPED: ulog_real_files_equal_pyulog (../shared/data/real/px4_ulog absent)");

@@ -1,13 +1,15 @@
-//! Choosing a decoder: `[source] protocol = "native" | "ubx" | "mavlink" | "ulog" | "auto"` and
-//! the per-protocol options (`[source.ubx]`, `[source.mavlink]`, `[source.ulog]`), the same
+//! Choosing a decoder: `[source] protocol = "native" | "ubx" | "mavlink" | "ulog" | "mcap" |
+//! "auto"` and the per-protocol options (`[source.ubx]`, `[source.mavlink]`, `[source.ulog]`,
+//! `[source.mcap]`), the same
 //! settings as command-line flags, and detection of the protocol from the first bytes.
 //!
 //! Detection feeds the first bytes (up to [`DETECT_BYTES`]) to every decoder and takes the one
 //! that finds the most good frames (IMU samples counting double); a file magic (native log,
-//! ULog) decides at once.
+//! ULog, MCAP) decides at once.
 
 use super::mavlink::{MavlinkDecoder, MavlinkOptions};
 use super::protocol::{Decoded, Protocol, ProtocolDecoder};
+use super::ros2::McapOptions;
 use super::ubx::{UbxDecoder, UbxOptions};
 use super::ulog::{UlogDecoder, UlogOptions};
 use super::{DecoderStats, Descriptor, FrameDecoder, LOG_HEADER_LEN, LOG_MAGIC};
@@ -26,6 +28,8 @@ pub enum ProtocolChoice {
     Ubx,
     Mavlink,
     Ulog,
+    /// ROS 2 bag (MCAP) with sensor_msgs/msg/Imu; needs a build with `--features ros2`.
+    Mcap,
     Auto,
 }
 
@@ -37,10 +41,11 @@ pub struct ProtocolConfig {
     pub ubx: UbxOptions,
     pub mavlink: MavlinkOptions,
     pub ulog: UlogOptions,
+    pub mcap: McapOptions,
 }
 
 /// Keys of `[source]` that belong to [`ProtocolConfig`].
-pub const SOURCE_KEYS: [&str; 4] = ["protocol", "ubx", "mavlink", "ulog"];
+pub const SOURCE_KEYS: [&str; 5] = ["protocol", "ubx", "mavlink", "ulog", "mcap"];
 
 impl ProtocolConfig {
     /// Default options, protocol detected from the first bytes.
@@ -58,6 +63,10 @@ impl ProtocolConfig {
             Protocol::Ubx => Box::new(UbxDecoder::new(self.ubx)),
             Protocol::Mavlink => Box::new(MavlinkDecoder::new(self.mavlink.clone())),
             Protocol::Ulog => Box::new(UlogDecoder::new(self.ulog.clone())),
+            #[cfg(feature = "ros2")]
+            Protocol::Mcap => Box::new(super::mcap::McapDecoder::new(self.mcap.clone())),
+            #[cfg(not(feature = "ros2"))]
+            Protocol::Mcap => Box::new(super::ros2::NoRos2Decoder::default()),
         }
     }
 
@@ -68,6 +77,7 @@ impl ProtocolConfig {
             ProtocolChoice::Ubx => Protocol::Ubx,
             ProtocolChoice::Mavlink => Protocol::Mavlink,
             ProtocolChoice::Ulog => Protocol::Ulog,
+            ProtocolChoice::Mcap => Protocol::Mcap,
             ProtocolChoice::Auto => detect(head, self),
         }
     }
@@ -125,7 +135,17 @@ impl ProtocolConfig {
             "ulog.topic",
             "must be sensor_combined or sensor_gyro (paired with sensor_accel)",
         );
-        for r in [u.rate_hz, m.rate_hz, self.ulog.rate_hz] {
+        check(
+            ["header", "log"].contains(&self.mcap.time.as_str()),
+            "mcap.time",
+            "must be \"header\" (header.stamp) or \"log\" (the recorder's log time)",
+        );
+        check(
+            cfg!(feature = "ros2") || self.protocol != ProtocolChoice::Mcap,
+            "protocol",
+            "mcap needs a build with ROS 2 support (cargo build --release --features ros2)",
+        );
+        for r in [u.rate_hz, m.rate_hz, self.ulog.rate_hz, self.mcap.rate_hz] {
             check(
                 r.is_finite() && r >= 0.0,
                 "rate_hz",
@@ -140,10 +160,12 @@ impl ProtocolConfig {
 #[derive(Clone, Debug, Default, clap::Args)]
 pub struct ProtocolArgs {
     /// Input protocol: native, ubx (u-blox ESF-RAW/ESF-MEAS), mavlink (HIGHRES_IMU, SCALED_IMU*,
-    /// RAW_IMU), ulog (PX4 sensor_combined), or auto (detect from the first bytes).
+    /// RAW_IMU), ulog (PX4 sensor_combined), mcap (ROS 2 bag, sensor_msgs/msg/Imu), or auto
+    /// (detect from the first bytes).
     #[arg(long, value_enum)]
     pub protocol: Option<ProtocolChoice>,
-    /// ULog topic: sensor_combined, or sensor_gyro (paired with sensor_accel, with temperature).
+    /// Topic: a ROS 2 topic (starts with `/`, e.g. /imu/data) for MCAP bags; for ULog
+    /// sensor_combined, or sensor_gyro (paired with sensor_accel, with temperature).
     #[arg(long)]
     pub topic: Option<String>,
     /// IMU instance: ULog multi-instance id, MAVLink instance (SCALED_IMU2 = 1, HIGHRES_IMU id).
@@ -176,7 +198,12 @@ impl ProtocolArgs {
             c.protocol = p;
         }
         if let Some(t) = &self.topic {
-            c.ulog.topic = t.clone();
+            // ROS 2 topic names are absolute (`/imu/data`); ULog topic names never start with `/`.
+            if t.starts_with('/') || c.protocol == ProtocolChoice::Mcap {
+                c.mcap.topic = Some(t.clone());
+            } else {
+                c.ulog.topic = t.clone();
+            }
         }
         if let Some(i) = self.instance {
             c.ulog.instance = i;
@@ -210,6 +237,9 @@ pub fn detect(head: &[u8], c: &ProtocolConfig) -> Protocol {
     }
     if head.starts_with(&super::ulog::MAGIC) {
         return Protocol::Ulog;
+    }
+    if head.starts_with(&super::ros2::MAGIC) {
+        return Protocol::Mcap;
     }
     let mut best = (Protocol::Native, 0u64);
     for p in [Protocol::Native, Protocol::Ubx, Protocol::Mavlink] {

@@ -9,6 +9,7 @@
 
 use super::protocol::{Carrier, Protocol};
 use super::{mavlink, ubx, ulog};
+
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
 
@@ -20,6 +21,8 @@ pub struct InlineEncoder {
     raw_accel_scale: f64,
     /// A multi-sample frame being patched: original, patched copy.
     cur: Option<(Bytes, Vec<u8>)>,
+    /// MCAP: past the data section (its summary refers to the input's offsets: not written).
+    mcap_summary: bool,
 }
 
 impl InlineEncoder {
@@ -29,13 +32,45 @@ impl InlineEncoder {
             raw_gyro_scale,
             raw_accel_scale,
             cur: None,
+            mcap_summary: false,
         }
     }
 
     /// A message that is not IMU data: written unchanged (after any frame still being filled).
     pub fn other(&mut self, b: &[u8], out: &mut BytesMut) {
         self.flush(out);
+        if self.protocol == Protocol::Mcap {
+            self.mcap_other(b, out);
+            return;
+        }
         out.extend_from_slice(b);
+    }
+
+    /// MCAP pass-through. The decoder hands over the records of each chunk one by one, so the
+    /// output is an MCAP without chunks: the indexes, statistics and summary of the input point
+    /// at its own chunk offsets and are left out; the data-end record's CRC and the footer's
+    /// summary offsets are written as 0 ("not present"), as the format allows.
+    fn mcap_other(&mut self, b: &[u8], out: &mut BytesMut) {
+        use super::ros2::MAGIC;
+        if b == MAGIC {
+            out.extend_from_slice(b);
+            return;
+        }
+        match b.first() {
+            Some(0x0F) => {
+                self.mcap_summary = true;
+                out.extend_from_slice(&[0x0F, 4, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+            }
+            Some(0x02) => {
+                out.extend_from_slice(&[0x02, 20, 0, 0, 0, 0, 0, 0, 0]);
+                out.extend_from_slice(&[0u8; 20]);
+            }
+            // Message index, chunk index, attachment index, statistics, metadata index,
+            // summary offset.
+            Some(0x07 | 0x08 | 0x0A | 0x0B | 0x0D | 0x0E) => {}
+            _ if self.mcap_summary => {}
+            _ => out.extend_from_slice(b),
+        }
     }
 
     /// Write what is held (a multi-sample frame whose later samples never came).
@@ -60,7 +95,11 @@ impl InlineEncoder {
             Protocol::Native => super::encode_sample(s, out),
             Protocol::Mavlink => {
                 self.flush(out);
-                mavlink::reencode(&c.frame, s, self.raw_gyro_scale, self.raw_accel_scale, out)
+                // RAW_IMU: the scales the decoder read the counts with (from the config).
+                let [g, a] = c
+                    .raw_scale
+                    .unwrap_or([self.raw_gyro_scale, self.raw_accel_scale]);
+                mavlink::reencode(&c.frame, s, g, a, out)
             }
             Protocol::Ubx => {
                 let same = matches!(&self.cur, Some((o, _)) if o.as_ptr() == c.frame.as_ptr() && o.len() == c.frame.len());
@@ -83,6 +122,15 @@ impl InlineEncoder {
                         out.extend_from_slice(&f2);
                     }
                 }
+            }
+            Protocol::Mcap => {
+                self.flush(out);
+                let mut f = c.frame.to_vec();
+                // offsets: angular_velocity.x in the record, big endian, not patchable.
+                if c.offsets[3] == 0 {
+                    super::ros2::patch_imu(&mut f, c.offsets[0] as usize, c.offsets[2] == 0, s);
+                }
+                out.extend_from_slice(&f);
             }
             Protocol::Ulog => {
                 self.flush(out);

@@ -329,6 +329,8 @@ impl MavlinkDecoder {
                 slot: 0,
                 slots: 1,
                 offsets: [0; 4],
+                raw_scale: (key.msgid == MSG_RAW_IMU)
+                    .then_some([self.opts.gyro_scale_rad_s, self.opts.accel_scale_m_s2]),
             }),
         )
     }

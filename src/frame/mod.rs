@@ -21,7 +21,10 @@ pub mod detect;
 pub mod inline;
 pub mod mavlink;
 mod mavlink_crc;
+#[cfg(feature = "ros2")]
+pub mod mcap;
 pub mod protocol;
+pub mod ros2;
 pub mod ubx;
 pub mod ulog;
 

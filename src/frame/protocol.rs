@@ -30,6 +30,8 @@ pub enum Protocol {
     Mavlink,
     /// PX4 ULog: sensor_combined, or sensor_gyro + sensor_accel of one instance.
     Ulog,
+    /// ROS 2 bag in MCAP: sensor_msgs/msg/Imu (CDR) of one topic; other records passed through.
+    Mcap,
 }
 
 impl Protocol {
@@ -39,6 +41,7 @@ impl Protocol {
             Protocol::Ubx => "ubx",
             Protocol::Mavlink => "mavlink",
             Protocol::Ulog => "ulog",
+            Protocol::Mcap => "mcap",
         }
     }
 }
@@ -67,8 +70,12 @@ pub struct Carrier {
     /// Samples `frame` carries in all; the re-encoded frame is written after the last one.
     pub slots: u16,
     /// Protocol-specific byte offsets of the values in the frame(s) (ULog: gyro, accel,
-    /// temperature (u16::MAX = none), pair flag); unused by UBX and MAVLink.
+    /// temperature (u16::MAX = none), pair flag; MCAP: angular velocity, -, big endian, not
+    /// patchable); unused by UBX and MAVLink.
     pub offsets: [u16; 4],
+    /// MAVLink RAW_IMU: the configured scales (gyro rad/s, accel m/s² per count) the counts
+    /// were read with, so the inline output writes cleaned values back in counts.
+    pub raw_scale: Option<[f64; 2]>,
 }
 
 /// One item out of a decoder, in input order. The sample is kept inline (not boxed): it is

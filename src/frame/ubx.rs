@@ -375,6 +375,7 @@ impl UbxDecoder {
                 slot: i as u16,
                 slots,
                 offsets: [0; 4],
+                raw_scale: None,
             };
             self.emit(t, vals, carrier);
         }
@@ -439,6 +440,7 @@ impl UbxDecoder {
                         slot: 0,
                         slots: 1,
                         offsets: [0; 4],
+                        raw_scale: None,
                     },
                 };
                 if part.complete() {

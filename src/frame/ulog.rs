@@ -363,6 +363,7 @@ impl UlogDecoder {
                     slot: 0,
                     slots: 1,
                     offsets: off,
+                    raw_scale: None,
                 };
                 self.sample_from(t, [g[0], g[1], g[2], a[0], a[1], a[2]], temp, c)
             }
@@ -417,6 +418,7 @@ impl UlogDecoder {
             slot: 0,
             slots: 1,
             offsets: off,
+            raw_scale: None,
         };
         self.sample_from(t, [gv[0], gv[1], gv[2], av[0], av[1], av[2]], temp, c)
     }

@@ -24,6 +24,8 @@ pub enum ExportFormat {
     Mavlink,
     /// PX4 ULog with sensor_combined.
     Ulog,
+    /// ROS 2 bag (MCAP) with sensor_msgs/msg/Imu on /imu/clean (needs `--features ros2`).
+    Mcap,
 }
 
 /// Read a recording in any protocol the decoders know.
@@ -33,8 +35,13 @@ pub fn read_any(path: &Path, c: &ProtocolConfig) -> std::io::Result<DecodedFile>
     Ok(decode_bytes(&bytes, c))
 }
 
-/// The samples as a byte stream in `to` (not CSV).
-pub fn encode_stream(to: ExportFormat, d: &Descriptor, samples: &[Sample]) -> BytesMut {
+/// The samples as a byte stream in `to` (not CSV). Fails only for `Mcap` (a build without ROS 2
+/// support, or the bag writer's own error).
+pub fn encode_stream(
+    to: ExportFormat,
+    d: &Descriptor,
+    samples: &[Sample],
+) -> std::io::Result<BytesMut> {
     let mut out = BytesMut::with_capacity(samples.len() * 64 + 1024);
     match to {
         ExportFormat::Csv | ExportFormat::Native => {
@@ -57,6 +64,21 @@ pub fn encode_stream(to: ExportFormat, d: &Descriptor, samples: &[Sample]) -> By
             }
         }
         ExportFormat::Ulog => ulog::encode_sensor_combined_log(samples, &mut out),
+        ExportFormat::Mcap => {
+            #[cfg(feature = "ros2")]
+            {
+                let b = crate::io::mcap_sink::encode_bag(d, samples, Default::default())
+                    .map_err(|e| std::io::Error::other(format!("mcap: {e}")))?;
+                out.extend_from_slice(&b);
+            }
+            #[cfg(not(feature = "ros2"))]
+            {
+                let _ = d;
+                return Err(std::io::Error::other(
+                    "export --to mcap: this build has no ROS 2 support (cargo build --release --features ros2)",
+                ));
+            }
+        }
     }
-    out
+    Ok(out)
 }

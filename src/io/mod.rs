@@ -4,5 +4,7 @@
 pub mod convert;
 pub mod csv;
 pub mod format;
+#[cfg(feature = "ros2")]
+pub mod mcap_sink;
 pub mod sink;
 pub mod source;

@@ -150,6 +150,33 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
                 tokio::spawn(udp_sender(sock, targets, format, rx, st)),
             )
         }
+        Sink::Mcap {
+            path,
+            topic,
+            frame_id,
+            health_topic,
+        } => {
+            #[cfg(feature = "ros2")]
+            {
+                let opts = crate::io::mcap_sink::McapSinkOptions {
+                    topic,
+                    frame_id,
+                    health_topic,
+                };
+                (
+                    format!("mcap:{}", path.display()),
+                    true,
+                    crate::io::mcap_sink::start(path, opts, rx, st)?,
+                )
+            }
+            #[cfg(not(feature = "ros2"))]
+            {
+                let _ = (path, topic, frame_id, health_topic, rx, st);
+                return Err(std::io::Error::other(
+                    "mcap sink: this build has no ROS 2 support (cargo build --release --features ros2)",
+                ));
+            }
+        }
         Sink::Inline { path } => {
             let (name, task) = start_inline(path, rx, st).await?;
             return Ok(SinkHandle {
@@ -443,8 +470,8 @@ fn drain_others(
     while let Some(front) = queue.front() {
         match front {
             SideItem::Protocol(p) => {
-                // The mavlink RAW_IMU scales are not known here; RAW_IMU values re-encode with
-                // the scales below only if the config's are passed (see docs/protocols.md).
+                // MAVLink RAW_IMU frames carry the configured scales in their carrier; the
+                // zeros here are only a fallback (RAW_IMU values then pass unchanged).
                 *enc = Some(InlineEncoder::new(*p, 0.0, 0.0));
                 queue.pop_front();
             }

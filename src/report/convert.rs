@@ -118,7 +118,7 @@ pub fn export(
         csvio::write_csv(output, &f.samples)?;
     } else {
         let d = f.descriptor.unwrap_or_default();
-        let b = encode_stream(to, &d, &f.samples);
+        let b = encode_stream(to, &d, &f.samples)?;
         std::fs::write(output, &b).with_context(|| format!("writing {}", output.display()))?;
     }
     Ok(ExportReport {

@@ -1,0 +1,523 @@
+//! ROS 2 bags in MCAP: IMU samples from the `sensor_msgs/msg/Imu` (CDR) messages of one topic;
+//! every other record passes through whole, in order.
+//!
+//! ```text
+//! file  : magic 89 "MCAP0" 0D 0A | records | magic
+//! record: opcode u8 | length u64 LE | body
+//!   01 header  03 schema  04 channel  05 message (channel id, sequence, log time, publish time,
+//!   data)  06 chunk (records, possibly compressed, with a CRC-32 of the uncompressed bytes)
+//!   07..0E indexes, attachments, metadata, statistics   0F data end   02 footer
+//! ```
+//!
+//! The records are framed here (so that a bad record is counted and the search restarts one
+//! byte after it, and each record's bytes are kept for pass-through); their bodies are parsed by
+//! the `mcap` crate, which also decompresses zstd / lz4 chunks when built with the
+//! `ros2-compression` feature. The records inside a chunk come out one by one, as if the file
+//! had no chunks. A chunk whose CRC fails is dropped whole (counted): its messages cannot be
+//! trusted. MCAP records outside chunks carry no checksum; as for ULog, an implausible record
+//! (reserved opcode, impossible length, a message on a channel never declared) is a fault.
+//!
+//! The topic read is `[source.mcap] topic` (`--topic /imu/data`), else the first channel whose
+//! schema is `sensor_msgs/msg/Imu` in CDR. Time is `header.stamp` (the message's log time when
+//! the stamp is zero, or always with `time = "log"`); sequence and gap flags come from it.
+//! The sample carries angular velocity and linear acceleration; orientation and the three
+//! covariance matrices stay in the carrier (the original message), so inline output keeps them.
+
+use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder, TimeTracker, flag_values};
+use super::ros2;
+use super::{DecoderStats, Descriptor};
+use crate::sample::Sample;
+use bytes::{Buf, Bytes, BytesMut};
+use std::collections::HashMap;
+
+pub use super::ros2::{MAGIC, MAX_RECORD, McapOptions};
+pub const OP_HEADER: u8 = 0x01;
+pub const OP_FOOTER: u8 = 0x02;
+pub const OP_SCHEMA: u8 = 0x03;
+pub const OP_CHANNEL: u8 = 0x04;
+pub const OP_MESSAGE: u8 = 0x05;
+pub const OP_CHUNK: u8 = 0x06;
+pub const OP_DATA_END: u8 = 0x0F;
+
+/// Smallest body of each record type (fixed fields with empty strings and maps).
+fn min_len(op: u8) -> Option<u64> {
+    Some(match op {
+        0x01 => 8,
+        0x02 => 20,
+        0x03 => 2 + 4 + 4 + 4,
+        0x04 => 2 + 2 + 4 + 4 + 4,
+        0x05 => 2 + 4 + 8 + 8,
+        0x06 => 8 + 8 + 8 + 4 + 4 + 8,
+        0x07 => 2 + 4,
+        0x08 => 8 * 4 + 4 + 8 + 4 + 8 + 8,
+        0x09 => 8 + 8 + 4 + 4 + 8 + 4,
+        0x0A => 8 * 5 + 4 + 4,
+        0x0B => 8 + 2 + 4 * 4 + 8 + 8 + 4,
+        0x0C => 4 + 4,
+        0x0D => 8 + 8 + 4,
+        0x0E => 1 + 8 + 8,
+        0x0F => 4,
+        0x80..=0xFF => 0,
+        _ => return None,
+    })
+}
+
+#[derive(Clone, Debug)]
+struct Channel {
+    topic: String,
+    schema_id: u16,
+    encoding: String,
+}
+
+/// Decoder for an MCAP stream (a file read front to back, or stdin).
+pub struct McapDecoder {
+    opts: McapOptions,
+    stats: DecoderStats,
+    tracker: TimeTracker,
+    magic_done: bool,
+    schemas: HashMap<u16, String>,
+    channels: HashMap<u16, Channel>,
+    selected: Option<u16>,
+    /// Records of the chunk being read (uncompressed), and the read position in them.
+    chunk: Option<(Bytes, usize)>,
+    descriptor: Option<Descriptor>,
+    pending: Option<Decoded>,
+    counted: usize,
+    in_garbage: bool,
+    chunks: u64,
+    unsupported: Vec<String>,
+    bad_cdr: u64,
+}
+
+impl Default for McapDecoder {
+    fn default() -> Self {
+        Self::new(McapOptions::default())
+    }
+}
+
+impl McapDecoder {
+    pub fn new(opts: McapOptions) -> Self {
+        McapDecoder {
+            tracker: TimeTracker::with_rate_hz(opts.rate_hz),
+            opts,
+            stats: DecoderStats::default(),
+            magic_done: false,
+            schemas: HashMap::new(),
+            channels: HashMap::new(),
+            selected: None,
+            chunk: None,
+            descriptor: None,
+            pending: None,
+            counted: 0,
+            in_garbage: false,
+            chunks: 0,
+            unsupported: Vec::new(),
+            bad_cdr: 0,
+        }
+    }
+
+    fn other(&mut self, b: Bytes) -> Decoded {
+        self.stats.frames_ok += 1;
+        self.stats.other_messages += 1;
+        self.stats.other_bytes += b.len() as u64;
+        Decoded::Other(b)
+    }
+
+    fn garbage(&mut self, buf: &mut BytesMut, n: usize) {
+        buf.advance(n);
+        self.counted = self.counted.saturating_sub(n);
+        self.stats.garbage_bytes += n as u64;
+        if !self.in_garbage {
+            self.stats.resyncs += 1;
+            self.in_garbage = true;
+        }
+    }
+
+    fn fault(&mut self, buf: &mut BytesMut) {
+        buf.advance(1);
+        self.counted = self.counted.saturating_sub(1);
+        self.stats.garbage_bytes += 1;
+        self.stats.resyncs += 1;
+        self.in_garbage = true;
+    }
+
+    fn is_imu(&self, c: &Channel) -> bool {
+        c.encoding == "cdr"
+            && self
+                .schemas
+                .get(&c.schema_id)
+                .is_some_and(|s| s == ros2::IMU_SCHEMA)
+    }
+
+    fn add_channel(&mut self, id: u16, c: Channel) {
+        if self.selected.is_none() && self.is_imu(&c) {
+            let wanted = match &self.opts.topic {
+                Some(t) => *t == c.topic,
+                None => true,
+            };
+            if wanted {
+                self.selected = Some(id);
+            }
+        }
+        self.channels.insert(id, c);
+    }
+
+    /// A sample from a message record of the selected channel.
+    fn message(&mut self, rec: Bytes, log_time: u64) -> Decoded {
+        let data = &rec[9 + 22..];
+        let (sec, nsec, ch, g, le) = match ros2::decode_imu_fast(data) {
+            Ok(x) => x,
+            Err(_) => {
+                self.bad_cdr += 1;
+                self.stats.bad_payload += 1;
+                return self.other(rec);
+            }
+        };
+        let stamp = (sec as i64)
+            .checked_mul(1_000_000_000)
+            .and_then(|s| s.checked_add(nsec as i64))
+            .filter(|t| *t > 0 && nsec < 1_000_000_000);
+        let t_ns = match (self.opts.time.as_str(), stamp) {
+            ("header", Some(t)) => t as u64,
+            _ => log_time,
+        };
+        let mut s = Sample {
+            t_ns,
+            temp_c: None,
+            ..Sample::default()
+        };
+        s.set_channels(&ch);
+        self.tracker.track(&mut s, &mut self.stats);
+        if self.descriptor.is_none()
+            && let Some(r) = self.tracker.rate_hz()
+        {
+            let d = Descriptor {
+                sample_rate_hz: r,
+                axes: super::AxisConvention::Flu,
+                ..Descriptor::default()
+            };
+            self.descriptor = Some(d);
+            self.stats.descriptors += 1;
+            self.pending = Some(Decoded::Descriptor(d));
+        }
+        flag_values(&mut s, self.descriptor.as_ref(), &mut self.stats);
+        self.stats.samples += 1;
+        self.stats.frames_ok += 1;
+        let at = 9 + 22 + g;
+        let c = Carrier {
+            frame: rec,
+            frame2: None,
+            between: None,
+            slot: 0,
+            slots: 1,
+            // offset of angular_velocity.x in the record; byte order; patchable.
+            offsets: [
+                at.min(u16::MAX as usize) as u16,
+                0,
+                u16::from(!le),
+                u16::from(at > u16::MAX as usize - 200),
+            ],
+            raw_scale: None,
+        };
+        Decoded::Sample(s, Some(c))
+    }
+
+    /// Handle one whole record (`rec` = opcode, length, body). `Err(())` = implausible content
+    /// (a fault); `Ok(None)` = consumed without an item (a chunk now being read).
+    fn record(&mut self, rec: Bytes, in_chunk: bool) -> Result<Option<Decoded>, ()> {
+        let op = rec[0];
+        let body = &rec[9..];
+        let parsed = ::mcap::parse_record(op, body).map_err(|_| ())?;
+        use ::mcap::records::Record;
+        match parsed {
+            Record::Schema { header, .. } => {
+                self.schemas.insert(header.id, header.name);
+            }
+            Record::Channel(c) => {
+                let ch = Channel {
+                    topic: c.topic,
+                    schema_id: c.schema_id,
+                    encoding: c.message_encoding,
+                };
+                self.add_channel(c.id, ch);
+            }
+            Record::Message { header, .. } => {
+                if !self.channels.contains_key(&header.channel_id) && !in_chunk {
+                    return Err(());
+                }
+                if Some(header.channel_id) == self.selected {
+                    return Ok(Some(self.message(rec, header.log_time)));
+                }
+            }
+            Record::Chunk { header, data } => {
+                if in_chunk {
+                    return Err(());
+                }
+                let start = data.as_ptr() as usize - rec.as_ptr() as usize;
+                let len = data.len();
+                let records = if header.compression.is_empty() {
+                    if header.uncompressed_size != len as u64 {
+                        return Err(());
+                    }
+                    rec.slice(start..start + len)
+                } else {
+                    match decompress(&rec) {
+                        Ok(v) => Bytes::from(v),
+                        Err(e) => {
+                            // No decompressor in this build: the chunk passes through whole.
+                            let name = header.compression.clone();
+                            if !self.unsupported.contains(&name) {
+                                tracing::warn!(
+                                    "MCAP chunk compressed with {name:?}: {e} (build with --features ros2-compression)"
+                                );
+                                self.unsupported.push(name);
+                            }
+                            self.stats.unknown_type += 1;
+                            return Ok(Some(self.other(rec)));
+                        }
+                    }
+                };
+                if header.uncompressed_crc != 0 && crc32(&records) != header.uncompressed_crc {
+                    self.stats.crc_errors += 1;
+                    self.stats.garbage_bytes += rec.len() as u64;
+                    return Ok(None);
+                }
+                self.chunks += 1;
+                self.chunk = Some((records, 0));
+                return Ok(None);
+            }
+            _ => {}
+        }
+        Ok(Some(self.other(rec)))
+    }
+
+    /// The next item from the chunk being read.
+    fn next_in_chunk(&mut self) -> Option<Decoded> {
+        loop {
+            let (data, pos) = self.chunk.take()?;
+            let rest = data.len() - pos;
+            if rest == 0 {
+                return None;
+            }
+            if rest < 9 {
+                self.stats.bad_payload += 1;
+                self.stats.garbage_bytes += rest as u64;
+                return None;
+            }
+            let op = data[pos];
+            let n = u64::from_le_bytes(data[pos + 1..pos + 9].try_into().expect("8 bytes"));
+            let ok = min_len(op).is_some_and(|m| n >= m) && n <= (rest - 9) as u64;
+            if !ok {
+                // The chunk's CRC passed (or was not written) but its records do not frame:
+                // the rest of the chunk is lost, counted.
+                self.stats.bad_payload += 1;
+                self.stats.garbage_bytes += rest as u64;
+                return None;
+            }
+            let end = pos + 9 + n as usize;
+            let rec = data.slice(pos..end);
+            self.chunk = Some((data, end));
+            match self.record(rec, true) {
+                Ok(Some(d)) => return Some(d),
+                Ok(None) => continue,
+                Err(()) => {
+                    self.stats.bad_payload += 1;
+                    self.stats.garbage_bytes += (end - pos) as u64;
+                }
+            }
+        }
+    }
+
+    fn step(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
+        loop {
+            if let Some(d) = self.next_in_chunk() {
+                return Some(d);
+            }
+            if !self.magic_done {
+                match buf.windows(MAGIC.len()).position(|w| w == MAGIC) {
+                    Some(0) => {}
+                    Some(p) => self.garbage(buf, p),
+                    None => {
+                        let keep = (MAGIC.len() - 1).min(buf.len());
+                        let n = buf.len() - keep;
+                        if n > 0 {
+                            self.garbage(buf, n);
+                        }
+                        return None;
+                    }
+                }
+                self.magic_done = true;
+                self.in_garbage = false;
+                self.counted = self.counted.saturating_sub(MAGIC.len());
+                let m = buf.split_to(MAGIC.len()).freeze();
+                return Some(self.other(m));
+            }
+            if buf.len() >= MAGIC.len() && buf[..MAGIC.len()] == MAGIC {
+                // The closing magic (or a second file appended).
+                self.in_garbage = false;
+                self.counted = self.counted.saturating_sub(MAGIC.len());
+                let m = buf.split_to(MAGIC.len()).freeze();
+                return Some(self.other(m));
+            }
+            if buf.len() < 9 {
+                return None;
+            }
+            let op = buf[0];
+            let n = u64::from_le_bytes(buf[1..9].try_into().expect("8 bytes"));
+            let plausible = min_len(op).is_some_and(|m| n >= m)
+                && n <= MAX_RECORD
+                && match op {
+                    OP_FOOTER => n == 20,
+                    OP_DATA_END => n == 4,
+                    0x0E => n == 17,
+                    _ => true,
+                };
+            if !plausible {
+                self.stats.header_errors += 1;
+                self.fault(buf);
+                continue;
+            }
+            let total = 9 + n as usize;
+            if buf.len() < total {
+                // Not reserved here: a corrupt length must not allocate what it claims.
+                return None;
+            }
+            let rec = buf.split_to(total).freeze();
+            match self.record(rec.clone(), false) {
+                Ok(d) => {
+                    self.in_garbage = false;
+                    self.counted = self.counted.saturating_sub(total);
+                    if let Some(d) = d {
+                        return Some(d);
+                    }
+                }
+                Err(()) => {
+                    // Put the bytes back (the record was not one): step one byte.
+                    let mut back = BytesMut::with_capacity(rec.len() + buf.len());
+                    back.extend_from_slice(&rec);
+                    back.extend_from_slice(buf);
+                    *buf = back;
+                    self.stats.bad_payload += 1;
+                    self.fault(buf);
+                }
+            }
+        }
+    }
+}
+
+/// CRC-32 (ISO-HDLC, as zlib) used by MCAP: `crc32fast` (carry-less multiply where the CPU
+/// has it; a byte-wise table took over half the decode time of a chunked bag).
+fn crc32(b: &[u8]) -> u32 {
+    crc32fast::hash(b)
+}
+
+/// The uncompressed records of a compressed chunk record, through the `mcap` crate's reader
+/// (zstd and lz4 when built with `ros2-compression`).
+fn decompress(rec: &[u8]) -> Result<Vec<u8>, String> {
+    use ::mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+    let mut r = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_skip_start_magic(true)
+            .with_skip_end_magic(true)
+            .with_validate_chunk_crcs(false)
+            .with_record_length_limit(MAX_RECORD as usize),
+    );
+    let mut input = rec;
+    let mut out = Vec::new();
+    while let Some(ev) = r.next_event() {
+        match ev.map_err(|e| e.to_string())? {
+            LinearReadEvent::ReadRequest(need) => {
+                let k = need.min(input.len());
+                r.insert(k).copy_from_slice(&input[..k]);
+                r.notify_read(k);
+                input = &input[k..];
+            }
+            LinearReadEvent::Record { opcode, data } => {
+                out.push(opcode);
+                out.extend_from_slice(&(data.len() as u64).to_le_bytes());
+                out.extend_from_slice(data);
+            }
+        }
+    }
+    Ok(out)
+}
+
+impl ProtocolDecoder for McapDecoder {
+    fn protocol(&self) -> Protocol {
+        Protocol::Mcap
+    }
+    fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
+        if buf.len() > self.counted {
+            self.stats.bytes_in += (buf.len() - self.counted) as u64;
+        }
+        self.counted = buf.len();
+        if let Some(p) = self.pending.take() {
+            return Some(p);
+        }
+        self.step(buf)
+    }
+    fn decode_item_eof(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
+        if let Some(d) = self.decode_item(buf) {
+            return Some(d);
+        }
+        while !buf.is_empty() {
+            self.discard_tail(buf);
+            if let Some(d) = self.decode_item(buf) {
+                return Some(d);
+            }
+        }
+        None
+    }
+    fn discard_tail(&mut self, buf: &mut BytesMut) {
+        if !buf.is_empty() {
+            // A record cut short: count it once, then look for records after its first byte.
+            if !self.in_garbage {
+                self.stats.truncated += 1;
+            }
+            self.fault(buf);
+        }
+    }
+    fn stats(&self) -> DecoderStats {
+        self.stats
+    }
+    fn descriptor(&self) -> Option<Descriptor> {
+        self.descriptor
+    }
+    fn found(&self) -> String {
+        let mut imu: Vec<&str> = self
+            .channels
+            .values()
+            .filter(|c| self.is_imu(c))
+            .map(|c| c.topic.as_str())
+            .collect();
+        imu.sort_unstable();
+        imu.dedup();
+        let reading = match self.selected.and_then(|i| self.channels.get(&i)) {
+            Some(c) => c.topic.clone(),
+            None => format!(
+                "nothing (no sensor_msgs/msg/Imu topic{})",
+                self.opts
+                    .topic
+                    .as_ref()
+                    .map_or(String::new(), |t| format!(" named {t}"))
+            ),
+        };
+        let mut s = format!(
+            "MCAP: {} channels, {} chunks; sensor_msgs/msg/Imu topics: {:?}; reading {}",
+            self.channels.len(),
+            self.chunks,
+            imu,
+            reading
+        );
+        if self.bad_cdr > 0 {
+            s += &format!("; {} Imu messages with bad CDR", self.bad_cdr);
+        }
+        if !self.unsupported.is_empty() {
+            s += &format!(
+                "; chunks passed through undecoded (compression {:?}: build with --features ros2-compression)",
+                self.unsupported
+            );
+        }
+        s
+    }
+}

@@ -1,0 +1,402 @@
+//! ROS 2 bags (MCAP, sensor_msgs/msg/Imu in CDR) against a bag made by `rosbags` and the values
+//! rosbags reads from it (tests/reference/gen_mcap_reference.py); inline re-encoding keeps every
+//! message; the MCAP sink's bag is read back by the `mcap` crate here and by rosbags
+//! (tests/reference/check_mcap_sink.py, its result committed). Needs `--features ros2`.
+use bytes::BytesMut;
+use imuprep::frame::detect::{ProtocolChoice, ProtocolConfig, decode_bytes};
+use imuprep::frame::inline::InlineEncoder;
+use imuprep::frame::mcap::{McapDecoder, McapOptions};
+use imuprep::frame::ros2;
+use imuprep::frame::{
+    AxisConvention, Decoded, DecoderStats, Descriptor, Protocol, ProtocolDecoder,
+};
+use imuprep::io::mcap_sink::{McapSinkOptions, encode_bag};
+use imuprep::sample::{Sample, flags};
+
+const BAG: &[u8] = include_bytes!("reference/mcap_bag.mcap");
+const EXPECTED: &str = include_str!("reference/mcap_expected.csv");
+const SINK_BAG: &str = "tests/reference/mcap_sink_bag.mcap";
+const SINK_ROSBAGS: &str = include_str!("reference/mcap_sink_rosbags.csv");
+
+fn run(d: &mut dyn ProtocolDecoder, bytes: &[u8], chunk: usize) -> (Vec<Decoded>, DecoderStats) {
+    let mut buf = BytesMut::new();
+    let mut out = Vec::new();
+    for c in bytes.chunks(chunk.max(1)) {
+        buf.extend_from_slice(c);
+        while let Some(x) = d.decode_item(&mut buf) {
+            out.push(x);
+        }
+    }
+    while let Some(x) = d.decode_item_eof(&mut buf) {
+        out.push(x);
+    }
+    (out, d.stats())
+}
+
+fn samples(items: &[Decoded]) -> Vec<Sample> {
+    items
+        .iter()
+        .filter_map(|d| match d {
+            Decoded::Sample(s, _) => Some(*s),
+            _ => None,
+        })
+        .collect()
+}
+
+struct Row {
+    topic: String,
+    stamp: u64,
+    log_time: u64,
+    v: Vec<f64>,
+}
+
+fn expected(topic: &str) -> Vec<Row> {
+    EXPECTED
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            Row {
+                topic: f[0].into(),
+                stamp: f[1].parse().unwrap(),
+                log_time: f[2].parse().unwrap(),
+                v: f[3..].iter().map(|x| x.parse().unwrap()).collect(),
+            }
+        })
+        .filter(|r| r.topic == topic)
+        .collect()
+}
+
+fn opts(topic: Option<&str>, time: &str) -> McapOptions {
+    McapOptions {
+        topic: topic.map(str::to_string),
+        time: time.into(),
+        rate_hz: 0.0,
+    }
+}
+
+/// Every record of an MCAP file, through the `mcap` crate (a second opinion on our output).
+fn crate_messages(bytes: &[u8]) -> Vec<(String, String, u64, Vec<u8>)> {
+    mcap::MessageStream::new(bytes)
+        .expect("mcap crate opens it")
+        .map(|m| {
+            let m = m.expect("mcap crate reads every message");
+            let schema = m
+                .channel
+                .schema
+                .as_ref()
+                .map_or(String::new(), |s| s.name.clone());
+            (
+                m.channel.topic.clone(),
+                schema,
+                m.log_time,
+                m.data.into_owned(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn values_equal_rosbags_at_every_chunking() {
+    let want = expected("/imu/data");
+    assert_eq!(want.len(), 60);
+    for chunk in [1, 7, 512, 4096, BAG.len()] {
+        let mut d = McapDecoder::new(opts(None, "header"));
+        let (items, st) = run(&mut d, BAG, chunk);
+        let got = samples(&items);
+        assert_eq!(got.len(), 60, "chunk {chunk}: {}", d.found());
+        for (s, r) in got.iter().zip(&want) {
+            assert_eq!(s.t_ns, r.stamp);
+            // The same IEEE doubles on both sides: exact.
+            assert_eq!(s.channels().to_vec(), r.v[..6].to_vec());
+            assert_eq!(s.temp_c, None);
+        }
+        // Message 30 comes 10 ms after 29 at 200 Hz: one missing period, flagged.
+        let gaps: Vec<usize> = (0..60).filter(|&i| got[i].has(flags::GAP)).collect();
+        assert_eq!(gaps, vec![30]);
+        assert_eq!(
+            (st.missing_frames, st.garbage_bytes, st.crc_errors),
+            (1, 0, 0)
+        );
+        // Everything else passes through: /imu/second, /chatter, schemas, channels, indexes.
+        let others = items
+            .iter()
+            .filter(|d| matches!(d, Decoded::Other(_)))
+            .count();
+        assert!(others >= 20 + 12 + 3 + 3, "chunk {chunk}: {others}");
+        assert!(d.found().contains("reading /imu/data"), "{}", d.found());
+    }
+}
+
+#[test]
+fn covariances_and_the_whole_message_stay_in_the_carrier() {
+    let want = expected("/imu/data");
+    let mut d = McapDecoder::default();
+    let (items, _) = run(&mut d, BAG, 4096);
+    let carriers: Vec<_> = items
+        .iter()
+        .filter_map(|d| match d {
+            Decoded::Sample(_, c) => c.clone(),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(carriers.len(), 60);
+    for (c, r) in carriers.iter().zip(&want) {
+        // Message record: opcode, length, channel/sequence/log/publish time, then the CDR.
+        let m = ros2::decode_imu(&c.frame[9 + 22..]).unwrap();
+        let g = m.angular_velocity_covariance;
+        let a = m.linear_acceleration_covariance;
+        assert_eq!(
+            [g[0], g[4], g[8], a[0], a[4], a[8]].to_vec(),
+            r.v[6..12].to_vec()
+        );
+        assert_eq!(m.orientation_covariance[0], r.v[12]);
+        assert_eq!(m.frame_id, "imu_link");
+    }
+}
+
+#[test]
+fn topic_and_time_source_are_selectable() {
+    let want = expected("/imu/second");
+    assert_eq!(want.len(), 20);
+    let mut d = McapDecoder::new(opts(Some("/imu/second"), "log"));
+    let (items, _) = run(&mut d, BAG, 333);
+    let got = samples(&items);
+    assert_eq!(got.len(), 20);
+    for (s, r) in got.iter().zip(&want) {
+        assert_eq!(s.t_ns, r.log_time);
+        assert_eq!(s.channels().to_vec(), r.v[..6].to_vec());
+    }
+    // A topic that is not there: nothing read, and the summary says so.
+    let mut d = McapDecoder::new(opts(Some("/nope"), "header"));
+    let (items, st) = run(&mut d, BAG, 4096);
+    assert!(samples(&items).is_empty());
+    assert_eq!(st.samples, 0);
+    assert!(
+        d.found()
+            .contains("no sensor_msgs/msg/Imu topic named /nope"),
+        "{}",
+        d.found()
+    );
+}
+
+#[test]
+fn auto_detects_mcap_by_its_magic_and_the_flag_routes_the_topic() {
+    let f = decode_bytes(BAG, &ProtocolConfig::auto());
+    assert_eq!(f.protocol, Protocol::Mcap);
+    assert_eq!(f.samples.len(), 60);
+    assert_eq!(f.descriptor.map(|d| d.axes), Some(AxisConvention::Flu));
+    assert!(
+        f.found.contains("\"/imu/data\", \"/imu/second\""),
+        "{}",
+        f.found
+    );
+    let args = imuprep::frame::detect::ProtocolArgs {
+        topic: Some("/imu/second".into()),
+        ..Default::default()
+    };
+    let mut c = ProtocolConfig::auto();
+    args.apply(&mut c);
+    assert_eq!(c.mcap.topic.as_deref(), Some("/imu/second"));
+    assert_eq!(
+        c.ulog.topic, "sensor_combined",
+        "a ROS topic leaves the ULog topic alone"
+    );
+    assert!(c.validate().is_empty());
+    assert_eq!(decode_bytes(BAG, &c).samples.len(), 20);
+    c.protocol = ProtocolChoice::Mcap;
+    c.mcap.time = "wall".into();
+    assert_eq!(c.validate().len(), 1);
+}
+
+/// Inline output: every message of the bag, the IMU ones with the cleaned values written in.
+fn inline(items: &[Decoded], change: impl Fn(&Sample) -> Sample) -> Vec<u8> {
+    let mut enc = InlineEncoder::new(Protocol::Mcap, 0.0, 0.0);
+    let mut out = BytesMut::new();
+    for it in items {
+        match it {
+            Decoded::Sample(s, c) => enc.sample(c.as_ref(), &change(s), &mut out),
+            Decoded::Other(b) => enc.other(b, &mut out),
+            Decoded::Descriptor(_) => {}
+        }
+    }
+    enc.flush(&mut out);
+    out.to_vec()
+}
+
+#[test]
+fn inline_output_is_an_mcap_with_every_message_and_the_cleaned_values() {
+    let mut d = McapDecoder::default();
+    let (items, _) = run(&mut d, BAG, 4096);
+    let input = crate_messages(BAG);
+    assert_eq!(input.len(), 60 + 20 + 12);
+    // Identity: every message, same topic, time and payload bytes, same order.
+    let same = inline(&items, |s| *s);
+    assert_eq!(crate_messages(&same), input);
+    // Cleaned: gx + 1 rad/s on /imu/data only; covariances and everything else untouched.
+    let out = inline(&items, |s| {
+        let mut x = *s;
+        x.gyro[0] += 1.0;
+        x
+    });
+    let got = crate_messages(&out);
+    assert_eq!(got.len(), input.len());
+    let mut changed = 0;
+    for (o, i) in got.iter().zip(&input) {
+        assert_eq!((&o.0, &o.1, o.2), (&i.0, &i.1, i.2));
+        if o.0 == "/imu/data" {
+            let (a, b) = (
+                ros2::decode_imu(&o.3).unwrap(),
+                ros2::decode_imu(&i.3).unwrap(),
+            );
+            assert_eq!(a.angular_velocity[0], b.angular_velocity[0] + 1.0);
+            assert_eq!(a.angular_velocity[1..], b.angular_velocity[1..]);
+            assert_eq!(a.angular_velocity_covariance, b.angular_velocity_covariance);
+            assert_eq!(a.linear_acceleration, b.linear_acceleration);
+            changed += 1;
+        } else {
+            assert_eq!(o.3, i.3);
+        }
+    }
+    assert_eq!(changed, 60);
+    // And imuprep reads its own inline output back.
+    let mut d2 = McapDecoder::default();
+    let (items2, st2) = run(&mut d2, &out, 1000);
+    assert_eq!(samples(&items2).len(), 60);
+    assert_eq!(st2.garbage_bytes, 0);
+}
+
+#[test]
+fn a_chunk_with_a_bad_crc_is_dropped_whole_and_garbage_is_survived() {
+    // A bag written by the mcap crate (CRCs on): the sink's own output.
+    let mut d = McapDecoder::default();
+    let src = samples(&run(&mut d, BAG, 4096).0);
+    let bag = encode_bag(&Descriptor::default(), &src, McapSinkOptions::default()).unwrap();
+    let mut dec = McapDecoder::default();
+    assert_eq!(samples(&run(&mut dec, &bag, 100).0).len(), 60);
+    // Flip one byte inside an Imu payload: the chunk's CRC fails, its samples are not used.
+    let at = bag
+        .windows(8)
+        .position(|w| w == src[10].gyro[0].to_le_bytes())
+        .unwrap();
+    let mut bad = bag.clone();
+    bad[at + 3] ^= 0x40;
+    let mut dec = McapDecoder::default();
+    let (items, st) = run(&mut dec, &bad, 100);
+    assert_eq!(st.crc_errors, 1);
+    assert!(samples(&items).is_empty(), "one chunk holds them all");
+    // Garbage before, between records and a cut-off tail: every sample still comes through.
+    let mut g = vec![0x55u8; 37];
+    g.extend_from_slice(BAG);
+    g.extend_from_slice(&BAG[..200]);
+    let mut dec = McapDecoder::default();
+    let (items, st) = run(&mut dec, &g, 256);
+    // The repeated head ends inside its chunk's first record: nothing more to decode there.
+    assert_eq!(samples(&items).len(), 60);
+    assert!(st.garbage_bytes >= 37);
+    // Seeded random corruption: never a panic, never more samples than there are.
+    let mut x = 0x9E37_79B9_7F4A_7C15u64;
+    for _ in 0..300 {
+        let mut b = BAG.to_vec();
+        for _ in 0..4 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let i = (x as usize) % b.len();
+            b[i] = (x >> 32) as u8;
+        }
+        let mut dec = McapDecoder::default();
+        let (items, _) = run(&mut dec, &b, 1 + (x as usize % 3000));
+        assert!(samples(&items).len() <= 60);
+    }
+}
+
+/// The samples the sink test writes: the bag's /imu/data, with a bias estimate and its σ as
+/// the bias stage would publish them.
+fn sink_input() -> Vec<Sample> {
+    let mut d = McapDecoder::default();
+    let mut v = samples(&run(&mut d, BAG, 4096).0);
+    for (i, s) in v.iter_mut().enumerate() {
+        for c in 0..6 {
+            s.bias[c] = 1e-3 * (c as f32 + 1.0);
+            s.bias_sd[c] = 1e-4 * (c as f32 + 1.0) * (1.0 + i as f32 / 60.0);
+        }
+        s.flags |= flags::BIAS_REMOVED;
+    }
+    v
+}
+
+#[test]
+fn the_sink_writes_a_bag_the_mcap_crate_and_rosbags_read() {
+    let v = sink_input();
+    let flu = Descriptor {
+        axes: AxisConvention::Flu,
+        ..Descriptor::default()
+    };
+    let bag = encode_bag(&flu, &v, McapSinkOptions::default()).unwrap();
+    if std::env::var_os("IMUPREP_BLESS").is_some() {
+        std::fs::write(SINK_BAG, &bag).unwrap();
+    }
+    // The committed bag is the one rosbags read (tests/reference/check_mcap_sink.py).
+    assert_eq!(
+        std::fs::read(SINK_BAG).unwrap(),
+        bag,
+        "the sink's bytes changed: run with IMUPREP_BLESS=1, then the check script"
+    );
+    let msgs = crate_messages(&bag);
+    let imu: Vec<_> = msgs.iter().filter(|m| m.0 == "/imu/clean").collect();
+    let health: Vec<_> = msgs.iter().filter(|m| m.0 == "/imuprep/health").collect();
+    assert_eq!(imu.len(), 60);
+    assert_eq!(imu[0].1, "sensor_msgs/msg/Imu");
+    // 0.3 s of data: no full second, so the one health message at the end.
+    assert_eq!(health.len(), 1);
+    assert_eq!(health[0].1, "std_msgs/msg/String");
+    let j: serde_json::Value =
+        serde_json::from_str(&ros2::decode_string(&health[0].3).unwrap()).unwrap();
+    assert_eq!(j["samples"], 60);
+    assert_eq!(j["gap"], 1);
+    for (m, s) in imu.iter().zip(&v) {
+        let x = ros2::decode_imu(&m.3).unwrap();
+        assert_eq!(m.2, s.t_ns);
+        assert_eq!(x.angular_velocity.to_vec(), s.channels()[..3].to_vec());
+        let sd = |c: usize| (s.bias_sd[c] as f64).powi(2);
+        assert_eq!(x.angular_velocity_covariance[4], sd(1));
+        assert_eq!(x.linear_acceleration_covariance[8], sd(5));
+        assert_eq!(x.angular_velocity_covariance[1], 0.0);
+        assert_eq!(x.orientation_covariance[0], -1.0);
+    }
+    // rosbags' reading of the committed bag: the same values, the same σ².
+    let rows: Vec<Vec<f64>> = SINK_ROSBAGS
+        .lines()
+        .skip(1)
+        .filter(|l| l.starts_with("/imu/clean"))
+        .map(|l| l.split(',').skip(1).map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 60);
+    for (r, s) in rows.iter().zip(&v) {
+        assert_eq!(r[0] as u64, s.t_ns / 1_000_000_000);
+        assert_eq!(r[1] as u64, s.t_ns % 1_000_000_000);
+        assert_eq!(r[2..8].to_vec(), s.channels().to_vec());
+        let var: Vec<f64> = s.bias_sd.iter().map(|x| (*x as f64).powi(2)).collect();
+        assert_eq!(r[8..14].to_vec(), var);
+    }
+    assert!(
+        SINK_ROSBAGS.contains("/imuprep/health"),
+        "rosbags read the health topic"
+    );
+}
+
+#[test]
+fn frd_input_is_written_in_ros_flu_axes() {
+    let mut s = Sample::default();
+    s.set_channels(&[0.1, 0.2, 0.3, 1.0, 2.0, 9.8]);
+    let frd = Descriptor {
+        axes: AxisConvention::Frd,
+        ..Descriptor::default()
+    };
+    let bag = encode_bag(&frd, &[s], McapSinkOptions::default()).unwrap();
+    let m = crate_messages(&bag);
+    let x = ros2::decode_imu(&m[0].3).unwrap();
+    assert_eq!(x.angular_velocity, [0.1, -0.2, -0.3]);
+    assert_eq!(x.linear_acceleration, [1.0, -2.0, -9.8]);
+}
