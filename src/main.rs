@@ -565,7 +565,10 @@ fn daemon(cfg: Config, summary_json: Option<PathBuf>) -> Result<ExitCode> {
         .build()?;
     let pipeline = cfg.stages.build().map_err(|e| anyhow::anyhow!(e))?;
     tracing::info!(stages = ?pipeline.stage_names(), "pipeline ready");
-    let health = rt.block_on(imuprep::runtime::run(&cfg, pipeline))?;
+    let health = rt.block_on(imuprep::runtime::run(&cfg, pipeline));
+    // A stuck sink may still sit in a blocking write (stdout nobody reads): do not wait for it.
+    rt.shutdown_timeout(std::time::Duration::from_secs(1));
+    let health = health?;
     eprint!("{}", health.text());
     if let Some(p) = summary_json {
         std::fs::write(&p, serde_json::to_string_pretty(&health)?)

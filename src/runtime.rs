@@ -2,6 +2,7 @@
 //! offer the result to every sink — and publish health beside the data.
 
 use crate::config::{Config, Sink, SourceConfig};
+use crate::frame::health::HealthFrame;
 use crate::frame::{DecoderStats, Descriptor};
 use crate::io::sink::{self, SinkHandle, SinkItem, SinkReport};
 use crate::io::source::{self, SourceEvent};
@@ -33,6 +34,14 @@ pub struct Health {
     pub flagged_warming_up: u64,
     pub flagged_bias_removed: u64,
     pub source_outages: u64,
+    /// Times the source stayed open but silent for its stall time (serial) and was reopened.
+    pub source_stalls: u64,
+    /// Sensor time of the last sample published, ns.
+    pub last_t_ns: u64,
+    /// Whether the last sample published was flagged warming up.
+    pub warming_up_now: bool,
+    /// Health reports published beside the samples.
+    pub health_reports: u64,
     pub stages: Vec<(String, u64)>,
     pub sinks: Vec<SinkReport>,
     /// Why the run ended: "end of input", "signal", ...
@@ -44,6 +53,8 @@ pub struct Health {
 impl Health {
     fn count(&mut self, s: &Sample) {
         self.samples_out += 1;
+        self.last_t_ns = s.t_ns;
+        self.warming_up_now = s.flags & flags::WARMING_UP != 0;
         let f = s.flags;
         self.flagged_replaced += u64::from(f & flags::REPLACED != 0);
         self.flagged_suspect += u64::from(f & flags::SUSPECT_ANY != 0);
@@ -135,12 +146,27 @@ impl Health {
         if !nz.is_empty() {
             let _ = writeln!(o, "  stages     : {}", nz.join(" "));
         }
+        if self.source_stalls > 0 {
+            let _ = writeln!(
+                o,
+                "  source     : {} stalls (open but silent; reopened)",
+                self.source_stalls
+            );
+        }
         for s in &self.sinks {
             let _ = writeln!(
                 o,
-                "  sink       : {} — {} out, {} dropped, {} errors",
-                s.name, s.samples_out, s.dropped, s.errors
+                "  sink       : {} — {} out, {} dropped, {} errors, {} health reports",
+                s.name, s.samples_out, s.dropped, s.errors, s.health_out
             );
+            let g = &s.clients_gone;
+            if g.clients > 0 {
+                let _ = writeln!(
+                    o,
+                    "               {} clients gone — {} sent, {} dropped (lag)",
+                    g.clients, g.samples_sent, g.samples_dropped
+                );
+            }
             for c in &s.clients {
                 let _ = writeln!(
                     o,
@@ -155,15 +181,48 @@ impl Health {
         o
     }
 
+    /// Samples lost by every sink and TCP client (present and gone).
+    pub fn sink_dropped(&self) -> u64 {
+        self.sinks.iter().map(|s| s.dropped_total()).sum()
+    }
+
+    /// The counters as published beside the samples (native health frame, JSON line).
+    pub fn frame(&self, n_stages: usize) -> HealthFrame {
+        let d = &self.decoder;
+        HealthFrame {
+            elapsed_ms: (self.elapsed_s * 1e3) as u64,
+            last_t_ns: self.last_t_ns,
+            samples_in: self.samples_in,
+            samples_out: self.samples_out,
+            bytes_in: d.bytes_in,
+            frames_ok: d.frames_ok,
+            crc_errors: d.crc_errors,
+            header_errors: d.header_errors,
+            garbage_bytes: d.garbage_bytes,
+            resyncs: d.resyncs,
+            gaps: d.gaps,
+            missing_frames: d.missing_frames,
+            duplicates: d.duplicates,
+            flagged_replaced: self.flagged_replaced,
+            flagged_suspect: self.flagged_suspect,
+            flagged_non_finite: self.flagged_non_finite,
+            flagged_saturated: self.flagged_saturated,
+            flagged_warming_up: self.flagged_warming_up,
+            flagged_bias_removed: self.flagged_bias_removed,
+            source_outages: self.source_outages,
+            source_stalls: self.source_stalls,
+            sink_dropped: self.sink_dropped(),
+            sink_errors: self.sinks.iter().map(|s| s.errors).sum(),
+            tcp_clients: self.sinks.iter().map(|s| s.clients.len() as u64).sum(),
+            stages: n_stages as u64,
+            warming_up: u64::from(self.warming_up_now),
+        }
+    }
+
     /// One-line form for interval logging.
     fn line(&self) -> String {
-        let dropped: u64 = self
-            .sinks
-            .iter()
-            .map(|s| s.dropped + s.clients.iter().map(|c| c.samples_dropped).sum::<u64>())
-            .sum();
         format!(
-            "in={} out={} crc_err={} resyncs={} gaps={} dup={} nan={} sat={} replaced={} outages={} sink_dropped={}",
+            "in={} out={} crc_err={} resyncs={} gaps={} dup={} nan={} sat={} replaced={} outages={} stalls={} sink_dropped={}",
             self.samples_in,
             self.samples_out,
             self.decoder.crc_errors,
@@ -174,7 +233,8 @@ impl Health {
             self.flagged_saturated,
             self.flagged_replaced,
             self.source_outages,
-            dropped
+            self.source_stalls,
+            self.sink_dropped()
         )
     }
 }
@@ -265,6 +325,12 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
             _ = tick.tick(), if interval > 0.0 => {
                 fill(&mut health, &pipeline, &sinks, started);
                 tracing::info!("health: {}", health.line());
+                // Health as data: beside the samples, on every sink whose format carries it.
+                let frame = health.frame(pipeline.stage_names().len());
+                health.health_reports += 1;
+                for k in &sinks {
+                    k.offer(SinkItem::Health(frame)).await;
+                }
             }
             sig = &mut shutdown => {
                 health.ended_by = format!("signal {sig}");
@@ -277,6 +343,13 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     let mut held = Vec::new();
     pipeline.flush(&mut held);
     publish(held, &mut health, &sinks).await;
+    // A last health report closes every stream that carries them.
+    fill(&mut health, &pipeline, &sinks, started);
+    let frame = health.frame(pipeline.stage_names().len());
+    health.health_reports += 1;
+    for k in &sinks {
+        k.offer(SinkItem::Health(frame)).await;
+    }
     // Dropping each sink's sender closes its queue; the task flushes and ends.
     let mut closing: Vec<_> = sinks
         .into_iter()

@@ -58,6 +58,9 @@ pub struct DecoderStats {
     /// Messages passed through whose checksum could not be verified (MAVLink message ids
     /// without a known CRC-extra).
     pub unverified: u64,
+    /// Health reports ([`MSG_HEALTH`] frames) met in the stream: not samples, skipped by the
+    /// sample path.
+    pub health_frames: u64,
 }
 
 /// Backward sequence jumps up to this many frames are late duplicates; larger ones a restart.
@@ -221,6 +224,16 @@ impl FrameDecoder {
                     self.stats.samples += 1;
                     Some(Message::Sample(s))
                 }
+                (MSG_HEALTH, _) => match health::parse_health(payload) {
+                    Some(h) => {
+                        self.stats.health_frames += 1;
+                        Some(Message::Health(h))
+                    }
+                    None => {
+                        self.stats.bad_payload += 1;
+                        None
+                    }
+                },
                 (MSG_DESCRIPTOR | MSG_SAMPLE | MSG_CLEAN_SAMPLE, _) => {
                     self.stats.bad_payload += 1;
                     None

@@ -4,13 +4,13 @@
 //! or missing; extra columns are ignored. Other layouts are matched by column name (e.g.
 //! `gyro_x_dps`, `Accelerometer X (g)`), with units read from the name or given as options.
 
-use crate::frame::{Descriptor, FrameDecoder, Message, encode_log_header, encode_sample};
+use crate::frame::Descriptor;
 use crate::io::format::{CSV_HEADER, write_csv_row};
+/// The log reader and writer live in [`crate::io::log`]; re-exported here for older callers.
+pub use crate::io::log::{read_descriptor, read_log, write_log};
 use crate::sample::Sample;
-use bytes::BytesMut;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
-use tokio_util::codec::Decoder;
 
 /// Standard gravity, m/s² per g.
 pub const G0: f64 = 9.80665;
@@ -94,11 +94,6 @@ pub enum CsvError {
         path: PathBuf,
         line: usize,
         msg: String,
-    },
-    #[error("{path}: {err}")]
-    Log {
-        path: PathBuf,
-        err: crate::frame::LogHeaderError,
     },
 }
 
@@ -361,49 +356,6 @@ pub fn read_csv(path: &Path, o: &ImportOptions) -> Result<(Descriptor, Vec<Sampl
     Ok((d, out))
 }
 
-/// Write a recorded log: file header, descriptor, sample frames.
-pub fn write_log(path: &Path, d: &Descriptor, samples: &[Sample]) -> Result<(), CsvError> {
-    let mut buf = BytesMut::with_capacity(64 + samples.len() * crate::frame::SAMPLE_FRAME_LEN);
-    encode_log_header(d, &mut buf);
-    for s in samples {
-        encode_sample(s, &mut buf);
-    }
-    std::fs::write(path, &buf).map_err(|err| CsvError::Io {
-        path: path.into(),
-        err,
-    })
-}
-
-/// Read every sample of a recorded log (through the live decoder), with its decoder counters.
-pub fn read_log(
-    path: &Path,
-) -> Result<(Option<Descriptor>, Vec<Sample>, crate::frame::DecoderStats), CsvError> {
-    let bytes = std::fs::read(path).map_err(|err| CsvError::Io {
-        path: path.into(),
-        err,
-    })?;
-    crate::frame::check_log_header(&bytes).map_err(|err| CsvError::Log {
-        path: path.into(),
-        err,
-    })?;
-    let mut buf = BytesMut::from(&bytes[crate::frame::LOG_HEADER_LEN..]);
-    let mut dec = FrameDecoder::new();
-    let mut out = Vec::new();
-    let mut desc = None;
-    loop {
-        let m = dec.decode_eof(&mut buf).map_err(|err| CsvError::Io {
-            path: path.into(),
-            err,
-        })?;
-        match m {
-            Some(Message::Sample(s)) => out.push(s),
-            Some(Message::Descriptor(d)) => desc = desc.or(Some(d)),
-            None => break,
-        }
-    }
-    Ok((desc, out, dec.stats()))
-}
-
 /// Write samples as canonical CSV plus `seq` and `flags`.
 pub fn write_csv(path: &Path, samples: &[Sample]) -> Result<(), CsvError> {
     let io = |err| CsvError::Io {
@@ -420,30 +372,4 @@ pub fn write_csv(path: &Path, samples: &[Sample]) -> Result<(), CsvError> {
         w.write_all(line.as_bytes()).map_err(io)?;
     }
     w.flush().map_err(io)
-}
-
-/// The descriptor at the start of a recorded log (reads only the first frames).
-pub fn read_descriptor(path: &Path) -> Result<Option<Descriptor>, CsvError> {
-    let mut f = std::fs::File::open(path).map_err(|err| CsvError::Io {
-        path: path.into(),
-        err,
-    })?;
-    let mut head = vec![0u8; 4096];
-    let n = f.read(&mut head).map_err(|err| CsvError::Io {
-        path: path.into(),
-        err,
-    })?;
-    head.truncate(n);
-    crate::frame::check_log_header(&head).map_err(|err| CsvError::Log {
-        path: path.into(),
-        err,
-    })?;
-    let mut buf = BytesMut::from(&head[crate::frame::LOG_HEADER_LEN..]);
-    let mut dec = FrameDecoder::new();
-    while let Ok(Some(m)) = dec.decode(&mut buf) {
-        if let Message::Descriptor(d) = m {
-            return Ok(Some(d));
-        }
-    }
-    Ok(None)
 }

@@ -4,5 +4,6 @@
 pub mod convert;
 pub mod csv;
 pub mod format;
+pub mod log;
 pub mod sink;
 pub mod source;

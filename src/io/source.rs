@@ -66,30 +66,13 @@ pub enum SourceError {
 }
 
 /// Open a recorded log and check its file header; the returned reader starts at the first frame.
+/// (The one log reader is [`crate::io::log`]; this maps its errors to the source's.)
 pub async fn open_log(path: &Path) -> Result<tokio::fs::File, SourceError> {
-    let mut f = tokio::fs::File::open(path)
-        .await
-        .map_err(|err| SourceError::Open {
-            path: path.into(),
-            err,
-        })?;
-    let mut h = [0u8; LOG_HEADER_LEN];
-    let mut n = 0;
-    while n < LOG_HEADER_LEN {
-        let k = f.read(&mut h[n..]).await.map_err(|err| SourceError::Open {
-            path: path.into(),
-            err,
-        })?;
-        if k == 0 {
-            break;
-        }
-        n += k;
-    }
-    check_log_header(&h[..n]).map_err(|err| SourceError::Header {
-        path: path.into(),
-        err,
-    })?;
-    Ok(f)
+    use crate::io::log::LogError;
+    crate::io::log::open_log(path).await.map_err(|e| match e {
+        LogError::Io { path, err } => SourceError::Open { path, err },
+        LogError::Header { path, err } => SourceError::Header { path, err },
+    })
 }
 
 /// Pump one byte stream through the decoder to the runtime. Returns the decoder (so a serial
