@@ -388,7 +388,9 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 n.ends_with(".csv") || n.ends_with(".csv.gz")
             };
             let (d, samples) = if is_csv && proto.protocol.is_none() {
-                csvio::read_csv(&input, &o)?
+                let (d, s, report) = csvio::read_csv_report(&input, &o)?;
+                eprintln!("import: {report}");
+                (d, s)
             } else {
                 let mut pc = imuprep::frame::detect::ProtocolConfig::auto();
                 proto.apply(&mut pc);

@@ -8,6 +8,7 @@ use crate::frame::Descriptor;
 use crate::io::format::{CSV_HEADER, write_csv_row};
 /// The log reader and writer live in [`crate::io::log`]; re-exported here for older callers.
 pub use crate::io::log::{read_descriptor, read_log, write_log};
+use crate::io::timing::{TimeFaults, derive_sequence};
 use crate::sample::Sample;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
@@ -243,8 +244,34 @@ fn open_text(path: &Path) -> Result<Box<dyn BufRead>, CsvError> {
     Ok(Box::new(BufReader::with_capacity(1 << 16, r)))
 }
 
-/// Read a CSV into samples (seq = row index) and the descriptor it implies.
+/// What an import found besides the samples.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct ImportReport {
+    /// Rows read (= samples).
+    pub rows: u64,
+    /// Sequence and time faults derived from the time stamps (all zero with `--rate`).
+    pub time: TimeFaults,
+}
+
+impl std::fmt::Display for ImportReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} rows; {}", self.rows, self.time)
+    }
+}
+
+/// Read a CSV into samples and the descriptor it implies (see [`read_csv_report`]).
 pub fn read_csv(path: &Path, o: &ImportOptions) -> Result<(Descriptor, Vec<Sample>), CsvError> {
+    read_csv_report(path, o).map(|(d, s, _)| (d, s))
+}
+
+/// Read a CSV into samples, the descriptor it implies, and what the import found: sequence
+/// numbers and time faults (gaps, duplicate time stamps, steps backwards) are derived from the
+/// time stamps and the median interval ([`crate::io::timing`]) and flagged on the samples;
+/// with `--rate` (time from the row index) the sequence is the row index.
+pub fn read_csv_report(
+    path: &Path,
+    o: &ImportOptions,
+) -> Result<(Descriptor, Vec<Sample>, ImportReport), CsvError> {
     let mut lines = open_text(path)?.lines();
     let io = |err| CsvError::Io {
         path: path.into(),
@@ -335,16 +362,16 @@ pub fn read_csv(path: &Path, o: &ImportOptions) -> Result<(Descriptor, Vec<Sampl
         s.temp_c = get(7)?;
         out.push(s);
     }
-    // Nominal rate from the mean interval: robust to bursty host time stamps, where the median
-    // interval describes the bursts, not the sensor.
-    let span_ns = match (out.first(), out.last()) {
-        (Some(a), Some(b)) => b.t_ns.saturating_sub(a.t_ns),
-        _ => 0,
+    let mut report = ImportReport {
+        rows: out.len() as u64,
+        ..ImportReport::default()
     };
     let rate = match o.time_from_index_hz {
         Some(hz) => hz,
-        None if span_ns > 0 => (out.len() - 1) as f64 * 1e9 / span_ns as f64,
-        None => 0.0,
+        None => {
+            report.time = derive_sequence(&mut out);
+            report.time.nominal_rate_hz
+        }
     };
     let d = Descriptor {
         sample_rate_hz: rate,
@@ -353,7 +380,7 @@ pub fn read_csv(path: &Path, o: &ImportOptions) -> Result<(Descriptor, Vec<Sampl
         axes: Default::default(),
         device_id: o.device_id,
     };
-    Ok((d, out))
+    Ok((d, out, report))
 }
 
 /// Write samples as canonical CSV plus `seq` and `flags`.

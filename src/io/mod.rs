@@ -7,3 +7,4 @@ pub mod format;
 pub mod log;
 pub mod sink;
 pub mod source;
+pub mod timing;
