@@ -285,6 +285,8 @@ fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
+        // Colour codes only for a terminal: a log file or a pipe gets plain text.
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .with_target(false)
         .init();
     match run(cli.cmd) {
@@ -390,12 +392,22 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             let (d, samples) = if is_csv && proto.protocol.is_none() {
                 let (d, s, report) = csvio::read_csv_report(&input, &o)?;
                 eprintln!("import: {report}");
+                if s.is_empty() {
+                    eprintln!(
+                        "imuprep: ERROR: {}: no data rows after the header: nothing to import",
+                        input.display()
+                    );
+                    return Ok(ExitCode::from(INPUT_PROBLEM_EXIT));
+                }
                 (d, s)
             } else {
                 let mut pc = imuprep::frame::detect::ProtocolConfig::auto();
                 proto.apply(&mut pc);
                 let f = imuprep::io::convert::read_any(&input, &pc)?;
                 eprintln!("{} input: {}", f.protocol, f.found);
+                if let Err(code) = check_input(&input, f.samples.len() as u64, &f.stats) {
+                    return Ok(code);
+                }
                 let mut d = f.descriptor.unwrap_or_default();
                 d.gyro_range_rad_s = o.gyro_range_rad_s;
                 d.accel_range_m_s2 = o.accel_range_m_s2;
@@ -507,6 +519,9 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             let mut pc = imuprep::frame::detect::ProtocolConfig::auto();
             proto.apply(&mut pc);
             let f = imuprep::io::convert::read_any(&log, &pc)?;
+            if let Err(code) = check_input(&log, f.samples.len() as u64, &f.stats) {
+                return Ok(code);
+            }
             let (samples, stats) = (f.samples, f.stats);
             if to == imuprep::io::convert::ExportFormat::Csv {
                 csvio::write_csv(&output, &samples)?;
@@ -576,7 +591,33 @@ fn daemon(cfg: Config, summary_json: Option<PathBuf>) -> Result<ExitCode> {
         std::fs::write(&p, serde_json::to_string_pretty(&health)?)
             .with_context(|| format!("writing {}", p.display()))?;
     }
+    // An input that ended by itself (a replayed log, stdin) with nothing or mostly garbage in
+    // it is a failed run, said loudly; a live daemon stopped by a signal only warns.
+    if let Some(problem) = health.input_problem() {
+        eprintln!("imuprep: ERROR: {problem}");
+        if health.ended_by == "end of input" {
+            return Ok(ExitCode::from(INPUT_PROBLEM_EXIT));
+        }
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Exit status of an offline command whose input decoded to nothing or was mostly garbage.
+const INPUT_PROBLEM_EXIT: u8 = 3;
+
+/// Loud failure of an offline command whose input decoded to nothing or was mostly garbage.
+fn check_input(
+    what: &std::path::Path,
+    samples: u64,
+    stats: &imuprep::frame::DecoderStats,
+) -> Result<(), ExitCode> {
+    match stats.input_problem(samples) {
+        Some(problem) => {
+            eprintln!("imuprep: ERROR: {}: {problem}", what.display());
+            Err(ExitCode::from(INPUT_PROBLEM_EXIT))
+        }
+        None => Ok(()),
+    }
 }
 
 /// Read a scenario file with `--set KEY=VALUE` overrides applied.

@@ -181,6 +181,12 @@ impl Health {
         o
     }
 
+    /// What an offline user must be told about the input, if anything: it decoded to nothing,
+    /// or most of it was garbage (see [`DecoderStats::input_problem`]).
+    pub fn input_problem(&self) -> Option<String> {
+        self.decoder.input_problem(self.samples_in)
+    }
+
     /// Samples lost by every sink and TCP client (present and gone).
     pub fn sink_dropped(&self) -> u64 {
         self.sinks.iter().map(|s| s.dropped_total()).sum()
