@@ -426,32 +426,54 @@ pub fn parse_out_spec(spec: &str) -> Result<Sink, String> {
         "native" => Ok(Format::Native),
         o => Err(format!("unknown stdout format {o:?} (csv, jsonl, native)")),
     };
+    let path = |what: &str| -> Result<std::path::PathBuf, String> {
+        if rest.trim().is_empty() {
+            Err(format!(
+                "{what}: needs a path, e.g. {what}:out.{}",
+                match what {
+                    "csv" => "csv",
+                    "jsonl" => "jsonl",
+                    _ => "log",
+                }
+            ))
+        } else {
+            Ok(rest.into())
+        }
+    };
+    // Host names (`localhost:7700`) are resolved here, once; an IPv4 address is preferred.
+    let addr = |what: &str| -> Result<std::net::SocketAddr, String> {
+        use std::net::ToSocketAddrs;
+        let all: Vec<std::net::SocketAddr> = rest
+            .to_socket_addrs()
+            .map_err(|e| format!("bad {what} address {rest:?} (HOST:PORT): {e}"))?
+            .collect();
+        all.iter()
+            .find(|a| a.is_ipv4())
+            .or(all.first())
+            .copied()
+            .ok_or_else(|| format!("{what} address {rest:?} resolves to nothing"))
+    };
     match kind {
         "stdout" | "-" => Ok(Sink::Stdout { format: fmt(rest)? }),
         "file" | "log" => Ok(Sink::File {
-            path: rest.into(),
+            path: path(kind)?,
             format: Format::Native,
         }),
         "csv" => Ok(Sink::File {
-            path: rest.into(),
+            path: path("csv")?,
             format: Format::Csv,
         }),
         "jsonl" => Ok(Sink::File {
-            path: rest.into(),
+            path: path("jsonl")?,
             format: Format::Jsonl,
         }),
         "tcp" => Ok(Sink::Tcp {
-            bind: rest
-                .parse()
-                .map_err(|_| format!("bad tcp address {rest:?}"))?,
+            bind: addr("tcp")?,
             format: Format::Native,
             queue: 256,
         }),
         "udp" => Ok(Sink::Udp {
-            targets: vec![
-                rest.parse()
-                    .map_err(|_| format!("bad udp address {rest:?}"))?,
-            ],
+            targets: vec![addr("udp")?],
             format: Format::Native,
         }),
         "inline" => Ok(Sink::Inline {
@@ -465,5 +487,27 @@ pub fn parse_out_spec(spec: &str) -> Result<Sink, String> {
         _ => Err(format!(
             "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR, inline:PATH (the input's own protocol, to a serial device or file), pty: (the same on a new pseudo-terminal, its path printed)"
         )),
+    }
+}
+
+#[cfg(test)]
+mod out_spec_tests {
+    use super::*;
+
+    #[test]
+    fn tcp_localhost_is_accepted() {
+        let Ok(Sink::Tcp { bind, .. }) = parse_out_spec("tcp:localhost:7700") else {
+            panic!("tcp:localhost:7700 refused")
+        };
+        assert!(bind.ip().is_loopback());
+        assert_eq!(bind.port(), 7700);
+    }
+
+    #[test]
+    fn file_outputs_without_a_path_are_clear_errors() {
+        for spec in ["csv:", "jsonl:", "file:", "csv"] {
+            let e = parse_out_spec(spec).unwrap_err();
+            assert!(e.contains("needs a path"), "{spec}: {e}");
+        }
     }
 }
