@@ -267,11 +267,13 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
             baud,
             retry_initial_ms,
             retry_max_ms,
-        } => tokio::spawn(source::serial_with(
+            stall_ms,
+        } => tokio::spawn(source::serial_watched(
             port.clone(),
             *baud,
             Duration::from_millis(*retry_initial_ms),
             Duration::from_millis(*retry_max_ms),
+            (*stall_ms > 0).then(|| Duration::from_millis(*stall_ms)),
             proto,
             side,
             tx,
@@ -318,6 +320,10 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
                     tracing::warn!("source outage #{outages}: {reason}");
                 }
                 Some(SourceEvent::Connected { name }) => tracing::info!("source connected: {name}"),
+                Some(SourceEvent::Stall { reason, stalls }) => {
+                    health.source_stalls = stalls;
+                    tracing::warn!("source stall #{stalls}: {reason}");
+                }
                 Some(SourceEvent::End(stats)) => {
                     health.decoder = stats;
                     health.ended_by = "end of input".into();
