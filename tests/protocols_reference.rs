@@ -194,7 +194,7 @@ fn mavlink_inline_keeps_every_message_and_unsigned_bytes() {
 #[test]
 fn ulog_real_files_equal_pyulog() {
     let Some(dir) = common::real_data("px4_ulog") else {
-        eprintln!("SKIPPED: ulog_real_files_equal_pyulog (../shared/data/real/px4_ulog absent)");
+        common::skipped("ulog_real_files_equal_pyulog (../shared/data/real/px4_ulog absent)");
         return;
     };
     let want = rows(ULOG_EXPECTED);
