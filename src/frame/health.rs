@@ -160,7 +160,7 @@ pub fn encode_health(h: &HealthFrame, seq: u32, buf: &mut BytesMut) {
 /// Parse a health payload: `None` when it is shorter than this build's fields or not a whole
 /// number of counters.
 pub(crate) fn parse_health(p: &[u8]) -> Option<HealthFrame> {
-    if p.len() < HealthFrame::PAYLOAD || p.len() % 8 != 0 {
+    if p.len() < HealthFrame::PAYLOAD || !p.len().is_multiple_of(8) {
         return None;
     }
     let mut v = [0u64; 26];
