@@ -36,6 +36,9 @@ pub enum SourceConfig {
         /// Longest reconnect delay, ms.
         #[serde(default = "default_retry_max_ms")]
         retry_max_ms: u64,
+        /// A port open but silent this long is reported (a stall) and reopened, ms (0 = never).
+        #[serde(default = "default_stall_ms")]
+        stall_ms: u64,
     },
     /// A recorded log (file header + frames).
     Replay {
@@ -53,6 +56,9 @@ fn default_baud() -> u32 {
 }
 fn default_retry_initial_ms() -> u64 {
     100
+}
+fn default_stall_ms() -> u64 {
+    2_000
 }
 fn default_retry_max_ms() -> u64 {
     5_000
@@ -340,6 +346,7 @@ fn validate_source(s: &SourceConfig, _base: &Path, errs: &mut Errors) {
             baud,
             retry_initial_ms,
             retry_max_ms,
+            ..
         } => {
             errs.check(!port.is_empty(), "source.port", "must name a device");
             errs.check(*baud > 0, "source.baud", "must be > 0");

@@ -39,14 +39,19 @@ enum Cmd {
     },
     /// Run the daemon's pipeline on a recorded log and print a health summary.
     Replay {
+        /// Recorded log (native, UBX, MAVLink or ULog; detected).
         log: PathBuf,
+        /// Config file (default: the embedded config/default.toml).
         #[arg(long)]
         config: Option<PathBuf>,
+        /// Outputs, repeatable: stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH,
+        /// tcp:HOST:PORT, udp:HOST:PORT, inline:PATH, pty:.
         #[arg(long = "out")]
         out: Vec<String>,
-        /// Pace by sensor time at this speed factor (0 = as fast as possible).
+        /// Pace by sensor time at this speed factor, × real time (0 = as fast as possible).
         #[arg(long, default_value_t = 0.0)]
         speed: f64,
+        /// Also write the final health summary as JSON to this file.
         #[arg(long)]
         summary_json: Option<PathBuf>,
         #[command(flatten)]
@@ -55,18 +60,23 @@ enum Cmd {
     /// Convert a recording into a replay log: CSV (canonical or vendor layout, optionally .gz),
     /// or UBX / MAVLink / ULog (with --protocol, or any file that is not .csv: detected).
     Import {
+        /// Input recording: CSV (.csv, .csv.gz) or a protocol file.
         input: PathBuf,
         #[command(flatten)]
         proto: imuprep::frame::detect::ProtocolArgs,
+        /// Output replay log (native).
         #[arg(short, long)]
         output: PathBuf,
         /// Column mapping, repeatable: --col gx=gyro_x_dps (keys: t gx gy gz ax ay az temp).
         #[arg(long = "col")]
         cols: Vec<String>,
+        /// Unit of the gyro columns (default: read from the column name; canonical = rad/s).
         #[arg(long, value_enum)]
         gyro_unit: Option<GyroUnit>,
+        /// Unit of the accel columns (default: read from the column name; canonical = m/s2).
         #[arg(long, value_enum)]
         accel_unit: Option<AccelUnit>,
+        /// Unit of the time column (default: read from the column name, else s).
         #[arg(long, value_enum)]
         time_unit: Option<TimeUnit>,
         /// Ignore the time column; time = row index / RATE (Hz).
@@ -84,7 +94,9 @@ enum Cmd {
     },
     /// Simulate a MEMS IMU (scenario TOML, see docs/scenario.md) into a replay log + truth sidecar.
     Simulate {
+        /// Scenario TOML (docs/scenario.md).
         scenario: PathBuf,
+        /// Output replay log (native).
         #[arg(short, long)]
         output: PathBuf,
         /// Truth sidecar CSV (gzip when it ends in .gz).
@@ -101,14 +113,15 @@ enum Cmd {
     /// the AR bias model per channel (bias stage; Burg, Yule-Walker, covariance or linear FOS)
     /// → DIR/bias.toml.
     Fit {
+        /// Recorded log to fit on.
         log: PathBuf,
         /// Directory for the model files (created if needed).
         #[arg(long, default_value = "models")]
         out_dir: PathBuf,
-        /// Seconds of data used for identification (the paper's training span).
+        /// Data used for identification, s (the paper's training span).
         #[arg(long, default_value_t = 180.0)]
         train_s: f64,
-        /// Skip this many seconds at the start (start-up transients).
+        /// Skip this much at the start (start-up transients), s.
         #[arg(long, default_value_t = 0.0)]
         skip_s: f64,
         /// Fitting method of the bias model. `fos`: fast orthogonal search over a constant and
@@ -131,12 +144,16 @@ enum Cmd {
     /// Score the configured pipeline against a calibration-only baseline on a simulated scenario
     /// (truth known): RMS of 1-s mean error, 60-s heading drift, manoeuvre integrals (gyros).
     Evaluate {
+        /// Scenario TOML to simulate (truth known).
         #[arg(long)]
         scenario: PathBuf,
+        /// Seed (default: the scenario's `seed`, else 0).
         #[arg(long)]
         seed: Option<u64>,
+        /// Config whose pipeline is scored (default: embedded).
         #[arg(long)]
         config: Option<PathBuf>,
+        /// Write the report as JSON here.
         #[arg(long)]
         json: Option<PathBuf>,
         /// Override a scenario key, repeatable: --set errors.gross.rate_per_sample=2e-3
@@ -148,14 +165,15 @@ enum Cmd {
     /// significant effect, refit, repeat; report before/after, plots, and a bias model with the
     /// learned effects (DIR/bias.toml) that the daemon's [bias] model can load.
     Diagnose {
+        /// Recorded log.
         log: PathBuf,
         /// Channels (gx gy gz ax ay az); repeatable; default all.
         #[arg(long = "channel")]
         channels: Vec<String>,
-        /// Analyse only from this time (s from the start of the log)...
+        /// Analyse only from this time, s from the start of the log...
         #[arg(long, default_value_t = 0.0)]
         from_s: f64,
-        /// ...to this time (s; default: the end). Use it to pick a still stretch of a moving log.
+        /// ...to this time, s (default: the end). Use it to pick a still stretch of a moving log.
         #[arg(long)]
         to_s: Option<f64>,
         /// Output directory: report.txt, report.json, bias.toml, plots/*.svg.
@@ -187,6 +205,7 @@ enum Cmd {
         /// Override a scenario key, repeatable: --set errors.gross.rate_per_sample=2e-3
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
+        /// Seed of the simulation (default: the scenario's `seed`, else 0).
         #[arg(long)]
         seed: Option<u64>,
         /// Config whose [gross_error.settings] the online stage uses (default: embedded).
@@ -195,7 +214,7 @@ enum Cmd {
         /// Channels for the bias comparison (gx gy gz ax ay az); repeatable; default all.
         #[arg(long = "channel")]
         channels: Vec<String>,
-        /// Skip this many seconds at the start (start-up transients).
+        /// Skip this much at the start (start-up transients), s.
         #[arg(long, default_value_t = 0.0)]
         skip_s: f64,
         /// Use the temperature channel as an exogenous FOS input.
@@ -246,7 +265,9 @@ enum Cmd {
     /// Write a recording's samples as canonical CSV plus seq and flags, or (--to) as a native
     /// log, UBX ESF-RAW, MAVLink HIGHRES_IMU or ULog sensor_combined stream.
     Export {
+        /// Recording to export (native log or a protocol file; detected).
         log: PathBuf,
+        /// Output file.
         #[arg(short, long)]
         output: PathBuf,
         /// Output format.
@@ -264,10 +285,16 @@ fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
+        // Colour codes only for a terminal: a log file or a pipe gets plain text.
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .with_target(false)
         .init();
     match run(cli.cmd) {
         Ok(code) => code,
+        Err(e) if e.downcast_ref::<report::InputProblem>().is_some() => {
+            eprintln!("imuprep: ERROR: {e:#}");
+            ExitCode::from(report::INPUT_PROBLEM_EXIT)
+        }
         Err(e) => {
             eprintln!("imuprep: error: {e:#}");
             ExitCode::FAILURE
@@ -498,5 +525,13 @@ fn daemon(cfg: Config, summary_json: Option<PathBuf>) -> Result<ExitCode> {
     let health = report::daemon::run(&cfg)?;
     eprint!("{}", health.text());
     report::daemon::write_summary(&health, summary_json.as_deref())?;
+    // An input that ended by itself (a replayed log, stdin) with nothing or mostly garbage in
+    // it is a failed run, said loudly; a live daemon stopped by a signal only warns.
+    if let Some(problem) = health.input_problem() {
+        eprintln!("imuprep: ERROR: {problem}");
+        if health.ended_by == "end of input" {
+            return Ok(ExitCode::from(report::INPUT_PROBLEM_EXIT));
+        }
+    }
     Ok(ExitCode::SUCCESS)
 }

@@ -2,6 +2,7 @@
 //! offer the result to every sink — and publish health beside the data.
 
 use crate::config::{Config, Sink, SourceConfig};
+use crate::frame::health::HealthFrame;
 use crate::frame::{DecoderStats, Descriptor};
 use crate::io::sink::{self, SinkHandle, SinkItem, SinkReport};
 use crate::io::source::{self, SourceEvent};
@@ -35,6 +36,14 @@ pub struct Health {
     pub source_outages: u64,
     /// The cleaning stages the pipeline runs, in order; empty = samples are published raw.
     pub cleaning_stages: Vec<String>,
+    /// Times the source stayed open but silent for its stall time (serial) and was reopened.
+    pub source_stalls: u64,
+    /// Sensor time of the last sample published, ns.
+    pub last_t_ns: u64,
+    /// Whether the last sample published was flagged warming up.
+    pub warming_up_now: bool,
+    /// Health reports published beside the samples.
+    pub health_reports: u64,
     pub stages: Vec<(String, u64)>,
     pub sinks: Vec<SinkReport>,
     /// Why the run ended: "end of input", "signal", ...
@@ -46,6 +55,8 @@ pub struct Health {
 impl Health {
     fn count(&mut self, s: &Sample) {
         self.samples_out += 1;
+        self.last_t_ns = s.t_ns;
+        self.warming_up_now = s.flags & flags::WARMING_UP != 0;
         let f = s.flags;
         self.flagged_replaced += u64::from(f & flags::REPLACED != 0);
         self.flagged_suspect += u64::from(f & flags::SUSPECT_ANY != 0);
@@ -140,12 +151,27 @@ impl Health {
         if !nz.is_empty() {
             let _ = writeln!(o, "  stages     : {}", nz.join(" "));
         }
+        if self.source_stalls > 0 {
+            let _ = writeln!(
+                o,
+                "  source     : {} stalls (open but silent; reopened)",
+                self.source_stalls
+            );
+        }
         for s in &self.sinks {
             let _ = writeln!(
                 o,
-                "  sink       : {} — {} out, {} dropped, {} errors",
-                s.name, s.samples_out, s.dropped, s.errors
+                "  sink       : {} — {} out, {} dropped, {} errors, {} health reports",
+                s.name, s.samples_out, s.dropped, s.errors, s.health_out
             );
+            let g = &s.clients_gone;
+            if g.clients > 0 {
+                let _ = writeln!(
+                    o,
+                    "               {} clients gone — {} sent, {} dropped (lag)",
+                    g.clients, g.samples_sent, g.samples_dropped
+                );
+            }
             for c in &s.clients {
                 let _ = writeln!(
                     o,
@@ -160,15 +186,54 @@ impl Health {
         o
     }
 
+    /// What an offline user must be told about the input, if anything: it decoded to nothing,
+    /// or most of it was garbage (see [`DecoderStats::input_problem`]).
+    pub fn input_problem(&self) -> Option<String> {
+        self.decoder.input_problem(self.samples_in)
+    }
+
+    /// Samples lost by every sink and TCP client (present and gone).
+    pub fn sink_dropped(&self) -> u64 {
+        self.sinks.iter().map(|s| s.dropped_total()).sum()
+    }
+
+    /// The counters as published beside the samples (native health frame, JSON line).
+    pub fn frame(&self, n_stages: usize) -> HealthFrame {
+        let d = &self.decoder;
+        HealthFrame {
+            elapsed_ms: (self.elapsed_s * 1e3) as u64,
+            last_t_ns: self.last_t_ns,
+            samples_in: self.samples_in,
+            samples_out: self.samples_out,
+            bytes_in: d.bytes_in,
+            frames_ok: d.frames_ok,
+            crc_errors: d.crc_errors,
+            header_errors: d.header_errors,
+            garbage_bytes: d.garbage_bytes,
+            resyncs: d.resyncs,
+            gaps: d.gaps,
+            missing_frames: d.missing_frames,
+            duplicates: d.duplicates,
+            flagged_replaced: self.flagged_replaced,
+            flagged_suspect: self.flagged_suspect,
+            flagged_non_finite: self.flagged_non_finite,
+            flagged_saturated: self.flagged_saturated,
+            flagged_warming_up: self.flagged_warming_up,
+            flagged_bias_removed: self.flagged_bias_removed,
+            source_outages: self.source_outages,
+            source_stalls: self.source_stalls,
+            sink_dropped: self.sink_dropped(),
+            sink_errors: self.sinks.iter().map(|s| s.errors).sum(),
+            tcp_clients: self.sinks.iter().map(|s| s.clients.len() as u64).sum(),
+            stages: n_stages as u64,
+            warming_up: u64::from(self.warming_up_now),
+        }
+    }
+
     /// One-line form for interval logging.
     fn line(&self) -> String {
-        let dropped: u64 = self
-            .sinks
-            .iter()
-            .map(|s| s.dropped + s.clients.iter().map(|c| c.samples_dropped).sum::<u64>())
-            .sum();
         let line = format!(
-            "in={} out={} crc_err={} resyncs={} gaps={} dup={} nan={} sat={} replaced={} outages={} sink_dropped={}",
+            "in={} out={} crc_err={} resyncs={} gaps={} dup={} nan={} sat={} replaced={} outages={} stalls={} sink_dropped={}",
             self.samples_in,
             self.samples_out,
             self.decoder.crc_errors,
@@ -179,7 +244,8 @@ impl Health {
             self.flagged_saturated,
             self.flagged_replaced,
             self.source_outages,
-            dropped
+            self.source_stalls,
+            self.sink_dropped()
         );
         if self.cleaning_stages.is_empty() {
             line + " cleaning=NONE"
@@ -221,11 +287,13 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
             baud,
             retry_initial_ms,
             retry_max_ms,
-        } => tokio::spawn(source::serial_with(
+            stall_ms,
+        } => tokio::spawn(source::serial_watched(
             port.clone(),
             *baud,
             Duration::from_millis(*retry_initial_ms),
             Duration::from_millis(*retry_max_ms),
+            (*stall_ms > 0).then(|| Duration::from_millis(*stall_ms)),
             proto,
             side,
             tx,
@@ -275,6 +343,10 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
                     tracing::warn!("source outage #{outages}: {reason}");
                 }
                 Some(SourceEvent::Connected { name }) => tracing::info!("source connected: {name}"),
+                Some(SourceEvent::Stall { reason, stalls }) => {
+                    health.source_stalls = stalls;
+                    tracing::warn!("source stall #{stalls}: {reason}");
+                }
                 Some(SourceEvent::End(stats)) => {
                     health.decoder = stats;
                     health.ended_by = "end of input".into();
@@ -288,6 +360,12 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
             _ = tick.tick(), if interval > 0.0 => {
                 fill(&mut health, &pipeline, &sinks, started);
                 tracing::info!("health: {}", health.line());
+                // Health as data: beside the samples, on every sink whose format carries it.
+                let frame = health.frame(pipeline.stage_names().len());
+                health.health_reports += 1;
+                for k in &sinks {
+                    k.offer(SinkItem::Health(frame)).await;
+                }
             }
             sig = &mut shutdown => {
                 health.ended_by = format!("signal {sig}");
@@ -300,6 +378,13 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     let mut held = Vec::new();
     pipeline.flush(&mut held);
     publish(held, &mut health, &sinks).await;
+    // A last health report closes every stream that carries them.
+    fill(&mut health, &pipeline, &sinks, started);
+    let frame = health.frame(pipeline.stage_names().len());
+    health.health_reports += 1;
+    for k in &sinks {
+        k.offer(SinkItem::Health(frame)).await;
+    }
     // Dropping each sink's sender closes its queue; the task flushes and ends.
     let mut closing: Vec<_> = sinks
         .into_iter()
@@ -372,32 +457,54 @@ pub fn parse_out_spec(spec: &str) -> Result<Sink, String> {
         "native" => Ok(Format::Native),
         o => Err(format!("unknown stdout format {o:?} (csv, jsonl, native)")),
     };
+    let path = |what: &str| -> Result<std::path::PathBuf, String> {
+        if rest.trim().is_empty() {
+            Err(format!(
+                "{what}: needs a path, e.g. {what}:out.{}",
+                match what {
+                    "csv" => "csv",
+                    "jsonl" => "jsonl",
+                    _ => "log",
+                }
+            ))
+        } else {
+            Ok(rest.into())
+        }
+    };
+    // Host names (`localhost:7700`) are resolved here, once; an IPv4 address is preferred.
+    let addr = |what: &str| -> Result<std::net::SocketAddr, String> {
+        use std::net::ToSocketAddrs;
+        let all: Vec<std::net::SocketAddr> = rest
+            .to_socket_addrs()
+            .map_err(|e| format!("bad {what} address {rest:?} (HOST:PORT): {e}"))?
+            .collect();
+        all.iter()
+            .find(|a| a.is_ipv4())
+            .or(all.first())
+            .copied()
+            .ok_or_else(|| format!("{what} address {rest:?} resolves to nothing"))
+    };
     match kind {
         "stdout" | "-" => Ok(Sink::Stdout { format: fmt(rest)? }),
         "file" | "log" => Ok(Sink::File {
-            path: rest.into(),
+            path: path(kind)?,
             format: Format::Native,
         }),
         "csv" => Ok(Sink::File {
-            path: rest.into(),
+            path: path("csv")?,
             format: Format::Csv,
         }),
         "jsonl" => Ok(Sink::File {
-            path: rest.into(),
+            path: path("jsonl")?,
             format: Format::Jsonl,
         }),
         "tcp" => Ok(Sink::Tcp {
-            bind: rest
-                .parse()
-                .map_err(|_| format!("bad tcp address {rest:?}"))?,
+            bind: addr("tcp")?,
             format: Format::Native,
             queue: 256,
         }),
         "udp" => Ok(Sink::Udp {
-            targets: vec![
-                rest.parse()
-                    .map_err(|_| format!("bad udp address {rest:?}"))?,
-            ],
+            targets: vec![addr("udp")?],
             format: Format::Native,
         }),
         "inline" => Ok(Sink::Inline {
@@ -417,5 +524,27 @@ pub fn parse_out_spec(spec: &str) -> Result<Sink, String> {
         _ => Err(format!(
             "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR, inline:PATH (the input's own protocol, to a serial device or file), pty: (the same on a new pseudo-terminal, its path printed), mcap:PATH (ROS 2 bag, sensor_msgs/msg/Imu)"
         )),
+    }
+}
+
+#[cfg(test)]
+mod out_spec_tests {
+    use super::*;
+
+    #[test]
+    fn tcp_localhost_is_accepted() {
+        let Ok(Sink::Tcp { bind, .. }) = parse_out_spec("tcp:localhost:7700") else {
+            panic!("tcp:localhost:7700 refused")
+        };
+        assert!(bind.ip().is_loopback());
+        assert_eq!(bind.port(), 7700);
+    }
+
+    #[test]
+    fn file_outputs_without_a_path_are_clear_errors() {
+        for spec in ["csv:", "jsonl:", "file:", "csv"] {
+            let e = parse_out_spec(spec).unwrap_err();
+            assert!(e.contains("needs a path"), "{spec}: {e}");
+        }
     }
 }

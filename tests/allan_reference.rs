@@ -17,7 +17,10 @@ fn report_of(rel: &str) -> Option<AllanReport> {
         .join("../shared/data/real")
         .join(rel);
     if !p.exists() {
-        eprintln!(
+        // Raw stderr write: the test harness captures eprintln!, so a skip would be invisible.
+        use std::io::Write;
+        let _ = writeln!(
+            std::io::stderr(),
             "SKIPPED: {} not found (../shared/data/real is absent here)",
             p.display()
         );

@@ -15,7 +15,13 @@ fn real(path: &str) -> Option<String> {
     match std::fs::read_to_string(&p) {
         Ok(t) => Some(t),
         Err(_) => {
-            eprintln!("SKIP: real recording {} not found", p.display());
+            // Raw stderr write: the test harness captures eprintln!, so a skip would be invisible.
+            use std::io::Write;
+            let _ = writeln!(
+                std::io::stderr(),
+                "SKIPPED: real recording {} not found",
+                p.display()
+            );
             None
         }
     }

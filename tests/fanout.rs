@@ -55,7 +55,8 @@ async fn slow_tcp_client_falls_behind_and_never_stalls_the_other() {
             }
             prog.store(seqs.len(), std::sync::atomic::Ordering::Release);
         }
-        seqs
+        // Keep the connection open: a client that leaves is folded into the sink's totals.
+        (seqs, reader)
     });
     let all = common::samples(total, 3);
     for (i, b) in all.chunks(per).enumerate() {
@@ -66,19 +67,20 @@ async fn slow_tcp_client_falls_behind_and_never_stalls_the_other() {
         }
         h.offer(SinkItem::Samples(Arc::new(b.to_vec()))).await;
     }
-    let seqs = match tokio::time::timeout(std::time::Duration::from_secs(30), read_task).await {
-        Ok(r) => r.unwrap(),
-        Err(_) => panic!(
-            "reader did not get every frame: {:?}",
-            h.stats.clients.lock().unwrap()
-        ),
-    };
+    let (seqs, _reader) =
+        match tokio::time::timeout(std::time::Duration::from_secs(30), read_task).await {
+            Ok(r) => r.unwrap(),
+            Err(_) => panic!(
+                "reader did not get every frame: {:?}",
+                h.stats.report("tcp").clients
+            ),
+        };
     assert_eq!(
         seqs,
         (0..total as u32).collect::<Vec<_>>(),
         "reader got every frame, in order"
     );
-    let clients = h.stats.clients.lock().unwrap().clone();
+    let clients = h.stats.report("tcp").clients;
     let stalled = &clients[0];
     let good = &clients[1];
     assert_eq!(good.samples_dropped, 0, "{clients:?}");
@@ -86,5 +88,10 @@ async fn slow_tcp_client_falls_behind_and_never_stalls_the_other() {
         stalled.samples_dropped > 0,
         "lag counter must rise: {clients:?}"
     );
-    assert_eq!(stalled.samples_sent + stalled.samples_dropped, total as u64);
+    // "sent" counts what reached the stalled client's socket: what still waits in its queue is
+    // neither sent nor dropped yet.
+    assert!(
+        stalled.samples_sent + stalled.samples_dropped <= total as u64,
+        "{clients:?}"
+    );
 }

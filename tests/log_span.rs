@@ -37,6 +37,7 @@ fn decode_whole(
         match m {
             Message::Sample(s) => out.push(s),
             Message::Descriptor(d) => desc = desc.or(Some(d)),
+            Message::Health(_) => {}
         }
     }
     (desc, out, dec.stats())

@@ -234,7 +234,7 @@ fn mavlink_raw_imu_inline_writes_cleaned_values_back_in_counts_with_the_configur
 #[test]
 fn ulog_real_files_equal_pyulog() {
     let Some(dir) = common::real_data("px4_ulog") else {
-        eprintln!("SKIPPED: ulog_real_files_equal_pyulog (../shared/data/real/px4_ulog absent)");
+        common::skipped("ulog_real_files_equal_pyulog (../shared/data/real/px4_ulog absent)");
         return;
     };
     let want = rows(ULOG_EXPECTED);

@@ -138,3 +138,60 @@ async fn a_serial_port_that_does_not_exist_is_retried_not_fatal() {
     assert!(!task.is_finished());
     task.abort();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_silent_open_port_is_reported_as_a_stall_and_reopened() {
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("ttyIMU");
+    let mut master = pty_at(&link);
+    let (tx, mut rx) = mpsc::channel(64);
+    let task = tokio::spawn(source::serial_watched(
+        link.to_string_lossy().into_owned(),
+        115_200,
+        Duration::from_millis(20),
+        Duration::from_millis(200),
+        Some(Duration::from_millis(300)),
+        imuprep::frame::detect::ProtocolConfig::default(),
+        false,
+        tx,
+    ));
+    let mut connects = 0;
+    let mut got = Vec::new();
+    let mut stalls = 0;
+    // Frames, then silence with the port left open: a stall is reported and the port reopened.
+    while stalls == 0 {
+        match tokio::time::timeout(Duration::from_secs(10), rx.recv())
+            .await
+            .expect("no stall reported within 10 s of silence")
+        {
+            Some(SourceEvent::Connected { .. }) => {
+                connects += 1;
+                if connects == 1 {
+                    master.write_all(&frames(0..50)).await.unwrap();
+                }
+            }
+            Some(SourceEvent::Samples(b, _)) => got.extend(b),
+            Some(SourceEvent::Stall { stalls: n, .. }) => stalls = n,
+            Some(_) => {}
+            None => panic!("source ended"),
+        }
+    }
+    assert_eq!(got.len(), 50);
+    assert_eq!(stalls, 1);
+    // Reopened, and data flows again.
+    loop {
+        match tokio::time::timeout(Duration::from_secs(10), rx.recv())
+            .await
+            .unwrap()
+        {
+            Some(SourceEvent::Connected { .. }) => break,
+            Some(_) => {}
+            None => panic!("source ended"),
+        }
+    }
+    master.write_all(&frames(50..60)).await.unwrap();
+    let mut outages = 0;
+    collect(&mut rx, 60, &mut got, &mut outages).await;
+    assert_eq!(got[59].seq, 59);
+    task.abort();
+}

@@ -58,6 +58,38 @@ pub struct DecoderStats {
     /// Messages passed through whose checksum could not be verified (MAVLink message ids
     /// without a known CRC-extra).
     pub unverified: u64,
+    /// Health reports ([`MSG_HEALTH`] frames) met in the stream: not samples, skipped by the
+    /// sample path.
+    pub health_frames: u64,
+}
+
+/// Share of the input bytes that may be garbage before a run is called mostly garbage.
+pub const GARBAGE_LIMIT: f64 = 0.5;
+
+impl DecoderStats {
+    /// What is wrong with an input that produced `samples` samples, if anything an offline
+    /// command must not pass over in silence: nothing decoded at all, or most of the bytes
+    /// garbage (more than [`GARBAGE_LIMIT`] of them skipped while searching for frames, or lost
+    /// in frames that failed their checks).
+    pub fn input_problem(&self, samples: u64) -> Option<String> {
+        let lost = self.garbage_bytes;
+        if samples == 0 {
+            return Some(format!(
+                "no samples decoded from {} bytes of input ({} garbage bytes, {} CRC errors, {} header errors, {} truncated frames): nothing was published",
+                self.bytes_in, lost, self.crc_errors, self.header_errors, self.truncated
+            ));
+        }
+        if self.bytes_in > 0 && lost as f64 > GARBAGE_LIMIT * self.bytes_in as f64 {
+            return Some(format!(
+                "most of the input was garbage: {} of {} bytes ({:.0} %) skipped; only {} samples decoded",
+                lost,
+                self.bytes_in,
+                100.0 * lost as f64 / self.bytes_in as f64,
+                samples
+            ));
+        }
+        None
+    }
 }
 
 /// Backward sequence jumps up to this many frames are late duplicates; larger ones a restart.
@@ -221,6 +253,16 @@ impl FrameDecoder {
                     self.stats.samples += 1;
                     Some(Message::Sample(s))
                 }
+                (MSG_HEALTH, _) => match health::parse_health(payload) {
+                    Some(h) => {
+                        self.stats.health_frames += 1;
+                        Some(Message::Health(h))
+                    }
+                    None => {
+                        self.stats.bad_payload += 1;
+                        None
+                    }
+                },
                 (MSG_DESCRIPTOR | MSG_SAMPLE | MSG_CLEAN_SAMPLE, _) => {
                     self.stats.bad_payload += 1;
                     None

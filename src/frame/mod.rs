@@ -4,7 +4,7 @@
 //! offset size  field
 //!  0     2     sync word 0xA5 0x5A
 //!  2     1     format version (1)
-//!  3     1     message type (1 descriptor, 2 sample, 3 clean sample)
+//!  3     1     message type (1 descriptor, 2 sample, 3 clean sample, 4 health)
 //!  4     2     payload length N, u16 little-endian (≤ MAX_PAYLOAD)
 //!  6     4     sequence counter, u32 LE (samples; descriptors carry 0)
 //! 10     2     header check: CRC-16/IBM-3740 of bytes 0..10, LE
@@ -18,6 +18,7 @@
 
 pub mod codec;
 pub mod detect;
+pub mod health;
 pub mod inline;
 pub mod mavlink;
 mod mavlink_crc;
@@ -52,6 +53,8 @@ pub const MSG_DESCRIPTOR: u8 = 1;
 pub const MSG_SAMPLE: u8 = 2;
 /// Message type: a sample with the bias estimate and its uncertainty (output of the bias stage).
 pub const MSG_CLEAN_SAMPLE: u8 = 3;
+/// Message type: the daemon's health counters ([`health::HealthFrame`]), at the health interval.
+pub const MSG_HEALTH: u8 = 4;
 
 /// Payload sizes per message type.
 pub const DESCRIPTOR_PAYLOAD: usize = 24;
@@ -123,6 +126,8 @@ pub struct Descriptor {
 pub enum Message {
     Descriptor(Descriptor),
     Sample(Sample),
+    /// A health report published beside the samples (see [`health`]).
+    Health(health::HealthFrame),
 }
 
 fn put_header(buf: &mut BytesMut, msg_type: u8, payload_len: usize, seq: u32) {

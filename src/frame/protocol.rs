@@ -135,16 +135,24 @@ impl ProtocolDecoder for super::FrameDecoder {
     }
     fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
         use tokio_util::codec::Decoder;
-        match Decoder::decode(self, buf).ok().flatten()? {
-            Message::Descriptor(d) => Some(Decoded::Descriptor(d)),
-            Message::Sample(s) => Some(Decoded::Sample(s, None)),
+        // Health reports are data for consumers, not input: skip them (counted) and go on.
+        loop {
+            match Decoder::decode(self, buf).ok().flatten()? {
+                Message::Descriptor(d) => return Some(Decoded::Descriptor(d)),
+                Message::Sample(s) => return Some(Decoded::Sample(s, None)),
+                Message::Health(_) => continue,
+            }
         }
     }
     fn decode_item_eof(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
         use tokio_util::codec::Decoder;
-        match Decoder::decode_eof(self, buf).ok().flatten()? {
-            Message::Descriptor(d) => Some(Decoded::Descriptor(d)),
-            Message::Sample(s) => Some(Decoded::Sample(s, None)),
+        // Health reports are data for consumers, not input: skip them (counted) and go on.
+        loop {
+            match Decoder::decode_eof(self, buf).ok().flatten()? {
+                Message::Descriptor(d) => return Some(Decoded::Descriptor(d)),
+                Message::Sample(s) => return Some(Decoded::Sample(s, None)),
+                Message::Health(_) => continue,
+            }
         }
     }
     fn discard_tail(&mut self, buf: &mut BytesMut) {

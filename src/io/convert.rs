@@ -45,10 +45,7 @@ pub fn encode_stream(
     let mut out = BytesMut::with_capacity(samples.len() * 64 + 1024);
     match to {
         ExportFormat::Csv | ExportFormat::Native => {
-            crate::frame::encode_log_header(d, &mut out);
-            for s in samples {
-                crate::frame::encode_sample(s, &mut out);
-            }
+            crate::io::log::encode_log(d, samples, &mut out);
         }
         ExportFormat::Ubx => {
             // Sensor time tag: 24 bits of 39.0625 µs (the decoder's default).

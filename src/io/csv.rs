@@ -4,13 +4,14 @@
 //! or missing; extra columns are ignored. Other layouts are matched by column name (e.g.
 //! `gyro_x_dps`, `Accelerometer X (g)`), with units read from the name or given as options.
 
-use crate::frame::{Descriptor, FrameDecoder, Message, encode_log_header, encode_sample};
+use crate::frame::Descriptor;
 use crate::io::format::{CSV_HEADER, write_csv_row};
+/// The log reader and writer live in [`crate::io::log`]; re-exported here for older callers.
+pub use crate::io::log::{read_descriptor, read_log, read_log_span, write_log};
+use crate::io::timing::{TimeFaults, derive_sequence};
 use crate::sample::Sample;
-use bytes::BytesMut;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
-use tokio_util::codec::Decoder;
 
 /// Standard gravity, m/s² per g.
 pub const G0: f64 = 9.80665;
@@ -94,11 +95,6 @@ pub enum CsvError {
         path: PathBuf,
         line: usize,
         msg: String,
-    },
-    #[error("{path}: {err}")]
-    Log {
-        path: PathBuf,
-        err: crate::frame::LogHeaderError,
     },
 }
 
@@ -248,8 +244,34 @@ fn open_text(path: &Path) -> Result<Box<dyn BufRead>, CsvError> {
     Ok(Box::new(BufReader::with_capacity(1 << 16, r)))
 }
 
-/// Read a CSV into samples (seq = row index) and the descriptor it implies.
+/// What an import found besides the samples.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct ImportReport {
+    /// Rows read (= samples).
+    pub rows: u64,
+    /// Sequence and time faults derived from the time stamps (all zero with `--rate`).
+    pub time: TimeFaults,
+}
+
+impl std::fmt::Display for ImportReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} rows; {}", self.rows, self.time)
+    }
+}
+
+/// Read a CSV into samples and the descriptor it implies (see [`read_csv_report`]).
 pub fn read_csv(path: &Path, o: &ImportOptions) -> Result<(Descriptor, Vec<Sample>), CsvError> {
+    read_csv_report(path, o).map(|(d, s, _)| (d, s))
+}
+
+/// Read a CSV into samples, the descriptor it implies, and what the import found: sequence
+/// numbers and time faults (gaps, duplicate time stamps, steps backwards) are derived from the
+/// time stamps and the median interval ([`crate::io::timing`]) and flagged on the samples;
+/// with `--rate` (time from the row index) the sequence is the row index.
+pub fn read_csv_report(
+    path: &Path,
+    o: &ImportOptions,
+) -> Result<(Descriptor, Vec<Sample>, ImportReport), CsvError> {
     let mut lines = open_text(path)?.lines();
     let io = |err| CsvError::Io {
         path: path.into(),
@@ -340,16 +362,16 @@ pub fn read_csv(path: &Path, o: &ImportOptions) -> Result<(Descriptor, Vec<Sampl
         s.temp_c = get(7)?;
         out.push(s);
     }
-    // Nominal rate from the mean interval: robust to bursty host time stamps, where the median
-    // interval describes the bursts, not the sensor.
-    let span_ns = match (out.first(), out.last()) {
-        (Some(a), Some(b)) => b.t_ns.saturating_sub(a.t_ns),
-        _ => 0,
+    let mut report = ImportReport {
+        rows: out.len() as u64,
+        ..ImportReport::default()
     };
     let rate = match o.time_from_index_hz {
         Some(hz) => hz,
-        None if span_ns > 0 => (out.len() - 1) as f64 * 1e9 / span_ns as f64,
-        None => 0.0,
+        None => {
+            report.time = derive_sequence(&mut out);
+            report.time.nominal_rate_hz
+        }
     };
     let d = Descriptor {
         sample_rate_hz: rate,
@@ -358,138 +380,7 @@ pub fn read_csv(path: &Path, o: &ImportOptions) -> Result<(Descriptor, Vec<Sampl
         axes: Default::default(),
         device_id: o.device_id,
     };
-    Ok((d, out))
-}
-
-/// Write a recorded log: file header, descriptor, sample frames.
-pub fn write_log(path: &Path, d: &Descriptor, samples: &[Sample]) -> Result<(), CsvError> {
-    let mut buf = BytesMut::with_capacity(64 + samples.len() * crate::frame::SAMPLE_FRAME_LEN);
-    encode_log_header(d, &mut buf);
-    for s in samples {
-        encode_sample(s, &mut buf);
-    }
-    std::fs::write(path, &buf).map_err(|err| CsvError::Io {
-        path: path.into(),
-        err,
-    })
-}
-
-/// Read a recorded log: the first descriptor, every sample, decoder statistics.
-///
-/// Streams the file (see [`read_log_span`]); memory is the samples only.
-pub fn read_log(
-    path: &Path,
-) -> Result<(Option<Descriptor>, Vec<Sample>, crate::frame::DecoderStats), CsvError> {
-    read_log_span(path, 0.0, None)
-}
-
-/// Read the samples of a recorded log from `skip_s` after its start, at most `span_s` of them
-/// (all to the end if `None`); with the first descriptor and the decoder statistics of what was
-/// read.
-///
-/// The file is decoded in 64 KiB reads, never held whole, and reading stops once the span is
-/// complete, so the cost of reading the first minutes of a long log does not grow with its
-/// length. Times are counted in samples at the descriptor's rate (samples seen before the
-/// first descriptor are held until it arrives); a log without a descriptor is read whole.
-pub fn read_log_span(
-    path: &Path,
-    skip_s: f64,
-    span_s: Option<f64>,
-) -> Result<(Option<Descriptor>, Vec<Sample>, crate::frame::DecoderStats), CsvError> {
-    let io = |err| CsvError::Io {
-        path: path.into(),
-        err,
-    };
-    let mut f = std::fs::File::open(path).map_err(io)?;
-    let file_len = f.metadata().map_err(io)?.len();
-    let mut head = [0u8; crate::frame::LOG_HEADER_LEN];
-    let got = read_full(&mut f, &mut head).map_err(io)?;
-    crate::frame::check_log_header(&head[..got]).map_err(|err| CsvError::Log {
-        path: path.into(),
-        err,
-    })?;
-    const CHUNK: usize = 64 * 1024;
-    let mut buf = BytesMut::with_capacity(2 * CHUNK);
-    let mut dec = FrameDecoder::new();
-    let mut desc: Option<Descriptor> = None;
-    // Before the descriptor: held samples. After: (to skip, to keep).
-    let mut held: Vec<Sample> = Vec::new();
-    let mut window: Option<(usize, usize)> = None;
-    let mut out: Vec<Sample> = Vec::new();
-    let keep = |out: &mut Vec<Sample>, w: &mut (usize, usize), s: Sample| -> bool {
-        if w.0 > 0 {
-            w.0 -= 1;
-        } else if w.1 > 0 {
-            out.push(s);
-            w.1 -= 1;
-        }
-        w.1 > 0
-    };
-    let mut eof = false;
-    'read: loop {
-        let m = if eof {
-            dec.decode_eof(&mut buf).map_err(io)?
-        } else {
-            dec.decode(&mut buf).map_err(io)?
-        };
-        match m {
-            Some(Message::Descriptor(d)) => {
-                if desc.is_none() {
-                    desc = Some(d);
-                    let rate = d.sample_rate_hz;
-                    let to_samples = |t: f64| (t * rate).round().max(0.0) as usize;
-                    let skip = to_samples(skip_s);
-                    let take = span_s.map_or(usize::MAX, to_samples);
-                    // Reserve once instead of doubling: at most this many plain sample frames.
-                    let frames = (file_len / crate::frame::SAMPLE_FRAME_LEN as u64) as usize;
-                    out.reserve(take.min(frames.saturating_sub(skip)) + held.len());
-                    let mut w = (skip, take);
-                    let mut more = w.1 > 0;
-                    for s in held.drain(..) {
-                        more = keep(&mut out, &mut w, s);
-                    }
-                    window = Some(w);
-                    if !more {
-                        break 'read;
-                    }
-                }
-            }
-            Some(Message::Sample(s)) => match window.as_mut() {
-                Some(w) => {
-                    if !keep(&mut out, w, s) {
-                        break 'read;
-                    }
-                }
-                None => held.push(s),
-            },
-            None if eof => break 'read,
-            None => {
-                let len = buf.len();
-                buf.resize(len + CHUNK, 0);
-                let n = read_full(&mut f, &mut buf[len..]).map_err(io)?;
-                buf.truncate(len + n);
-                eof = n == 0;
-            }
-        }
-    }
-    if desc.is_none() {
-        out = held;
-    }
-    Ok((desc, out, dec.stats()))
-}
-
-/// Read until `buf` is full or the file ends; the number of bytes read.
-fn read_full(f: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
-    let mut n = 0;
-    while n < buf.len() {
-        match f.read(&mut buf[n..]) {
-            Ok(0) => break,
-            Ok(k) => n += k,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(n)
+    Ok((d, out, report))
 }
 
 /// Write samples as canonical CSV plus `seq` and `flags`.
@@ -508,30 +399,4 @@ pub fn write_csv(path: &Path, samples: &[Sample]) -> Result<(), CsvError> {
         w.write_all(line.as_bytes()).map_err(io)?;
     }
     w.flush().map_err(io)
-}
-
-/// The descriptor at the start of a recorded log (reads only the first frames).
-pub fn read_descriptor(path: &Path) -> Result<Option<Descriptor>, CsvError> {
-    let mut f = std::fs::File::open(path).map_err(|err| CsvError::Io {
-        path: path.into(),
-        err,
-    })?;
-    let mut head = vec![0u8; 4096];
-    let n = f.read(&mut head).map_err(|err| CsvError::Io {
-        path: path.into(),
-        err,
-    })?;
-    head.truncate(n);
-    crate::frame::check_log_header(&head).map_err(|err| CsvError::Log {
-        path: path.into(),
-        err,
-    })?;
-    let mut buf = BytesMut::from(&head[crate::frame::LOG_HEADER_LEN..]);
-    let mut dec = FrameDecoder::new();
-    while let Ok(Some(m)) = dec.decode(&mut buf) {
-        if let Message::Descriptor(d) = m {
-            return Ok(Some(d));
-        }
-    }
-    Ok(None)
 }

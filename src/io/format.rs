@@ -1,6 +1,7 @@
 //! Text and binary encodings of output samples, shared by every sink and by `export`.
 
 use crate::config::Format;
+use crate::frame::health::{HealthFrame, encode_health, write_health_json};
 use crate::frame::{Descriptor, encode_descriptor, encode_log_header, encode_sample};
 use crate::sample::Sample;
 use bytes::{BufMut, BytesMut};
@@ -64,6 +65,8 @@ pub fn write_json_row(s: &Sample, out: &mut String) {
 pub struct Encoder {
     format: Format,
     text: String,
+    /// Number of the next health frame (native format).
+    health_seq: u32,
 }
 
 impl Encoder {
@@ -71,6 +74,7 @@ impl Encoder {
         Encoder {
             format,
             text: String::new(),
+            health_seq: 0,
         }
     }
 
@@ -91,6 +95,25 @@ impl Encoder {
     pub fn descriptor(&self, d: &Descriptor, buf: &mut BytesMut) {
         if self.format == Format::Native {
             encode_descriptor(d, buf);
+        }
+    }
+
+    /// A health report, in the formats that carry one (native frame, JSON line); returns
+    /// whether anything was written (CSV has no place for it).
+    pub fn health(&mut self, h: &HealthFrame, buf: &mut BytesMut) -> bool {
+        match self.format {
+            Format::Native => {
+                encode_health(h, self.health_seq, buf);
+                self.health_seq = self.health_seq.wrapping_add(1);
+                true
+            }
+            Format::Jsonl => {
+                self.text.clear();
+                write_health_json(h, &mut self.text);
+                buf.put_slice(self.text.as_bytes());
+                true
+            }
+            Format::Csv => false,
         }
     }
 

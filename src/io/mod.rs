@@ -4,7 +4,9 @@
 pub mod convert;
 pub mod csv;
 pub mod format;
+pub mod log;
 #[cfg(feature = "ros2")]
 pub mod mcap_sink;
 pub mod sink;
 pub mod source;
+pub mod timing;

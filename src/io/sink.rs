@@ -1,19 +1,30 @@
 //! Sinks: stdout, file, TCP server, UDP, inline (the input's own protocol to a serial device,
 //! file or pseudo-terminal). Each runs as its own task behind a bounded queue.
 //!
-//! The runtime hands every sink the same `Arc` batch. Lossless sinks (stdout, file: local, and
-//! wanted complete) are awaited; network sinks are offered the batch with `try_send`, and a full
-//! queue drops the batch for that consumer only, counted — the stream never waits for them. The
-//! TCP server repeats that per client: each client has its own bounded queue and lag counter.
+//! The runtime hands every sink the same `Arc` batch and never waits long for any of them:
+//!
+//! * Network sinks (TCP, UDP) are offered the batch with `try_send`; a full queue drops the
+//!   batch for that consumer only, counted. The TCP server repeats that per client: each client
+//!   has its own bounded queue and lag counter; what a client was sent counts bytes written to
+//!   its socket, not bytes queued; a client that leaves is folded into the sink's totals.
+//! * Local sinks (stdout, file, inline) are wanted complete, so a full queue is waited for — but
+//!   only up to the sink's stall time ([`DEFAULT_STALL`]). A sink whose queue stays full that long
+//!   is *stuck* (a `| (sleep 20; cat)` pipe, a full disk, a FIFO nobody reads): from then on it
+//!   is offered like a network sink — batches it cannot take are dropped and counted — until
+//!   its queue has drained to half, when it is waited for again. A stuck consumer therefore
+//!   costs the stream one stall time, once, and never freezes the daemon or its health reports.
+//!   (Inline sinks stay waited for: their samples must meet the carriers queued ahead of them.)
 
 use crate::config::{Format, Sink};
 use crate::frame::Descriptor;
+use crate::frame::health::HealthFrame;
 use crate::io::format::Encoder;
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
 use serde::Serialize;
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
+use std::time::Duration;
 use tokio::io::AsyncWriteExt;
 use tokio::sync::mpsc;
 use tokio::task::JoinHandle;
@@ -25,29 +36,70 @@ pub enum SinkItem {
     Samples(Arc<Vec<Sample>>),
     /// Carriers and pass-through messages, ahead of their samples (inline sinks only).
     Side(Arc<Vec<crate::io::source::SideItem>>),
+    /// A health report, written beside the samples by sinks whose format carries it (native
+    /// frames, JSON lines); CSV and inline sinks skip it.
+    Health(HealthFrame),
 }
+
+/// How long a local sink's full queue is waited for before the sink counts as stuck.
+pub const DEFAULT_STALL: Duration = Duration::from_millis(500);
 
 /// One TCP client's view.
 #[derive(Debug, Clone, Default, Serialize, PartialEq)]
 pub struct ClientStats {
     pub peer: String,
-    /// Samples queued to this client.
+    /// Samples written to this client's socket.
     pub samples_sent: u64,
     /// Samples this client missed because its queue was full (it fell behind).
     pub samples_dropped: u64,
     pub connected: bool,
 }
 
+/// Live counters of one TCP client (updated by the server and the client's writer task).
+#[derive(Debug, Default)]
+pub struct ClientCounters {
+    pub peer: String,
+    pub sent: AtomicU64,
+    pub dropped: AtomicU64,
+    /// Set while the client is behind (its queue full), to log the start of a lag once.
+    lagging: AtomicBool,
+}
+
+impl ClientCounters {
+    fn snapshot(&self) -> ClientStats {
+        ClientStats {
+            peer: self.peer.clone(),
+            samples_sent: self.sent.load(Relaxed),
+            samples_dropped: self.dropped.load(Relaxed),
+            connected: true,
+        }
+    }
+}
+
+/// The TCP clients that have left, folded together (their per-client entries are freed).
+#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq, Eq)]
+pub struct GoneClients {
+    pub clients: u64,
+    pub samples_sent: u64,
+    pub samples_dropped: u64,
+}
+
 /// Counters of one sink, shared with the runtime's health report.
 #[derive(Debug, Default)]
 pub struct SinkStats {
-    /// Samples handed to the consumer (written, or queued to clients/datagrams).
+    /// Samples handed to the consumer (written to stdout/file, datagrams sent, or queued to
+    /// the TCP clients; each client's own count is what was written to it).
     pub samples_out: AtomicU64,
     /// Samples this sink (as a whole) missed because its queue was full.
     pub dropped: AtomicU64,
+    /// Health reports written.
+    pub health_out: AtomicU64,
     /// Write/send errors.
     pub errors: AtomicU64,
-    pub clients: Mutex<Vec<ClientStats>>,
+    /// TCP clients connected now.
+    pub clients: Mutex<Vec<Arc<ClientCounters>>>,
+    /// TCP clients that have left.
+    pub gone: Mutex<GoneClients>,
 }
 
 /// Snapshot of a sink for reports.
@@ -56,21 +108,41 @@ pub struct SinkReport {
     pub name: String,
     pub samples_out: u64,
     pub dropped: u64,
+    pub health_out: u64,
     pub errors: u64,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub clients: Vec<ClientStats>,
+    #[serde(skip_serializing_if = "is_zero_gone")]
+    pub clients_gone: GoneClients,
+}
+
+fn is_zero_gone(g: &GoneClients) -> bool {
+    g.clients == 0
+}
+
+impl SinkReport {
+    /// Samples this sink lost, including every client's lag (present and gone).
+    pub fn dropped_total(&self) -> u64 {
+        self.dropped
+            + self.clients.iter().map(|c| c.samples_dropped).sum::<u64>()
+            + self.clients_gone.samples_dropped
+    }
 }
 
 /// A running sink.
 pub struct SinkHandle {
     pub name: String,
     pub tx: mpsc::Sender<SinkItem>,
-    /// Awaited by the runtime (never drops) when true.
+    /// Waited for (up to `stall`) when true; see the module docs.
     pub lossless: bool,
     /// Wants the side stream ([`SinkItem::Side`]): inline sinks.
     pub wants_side: bool,
     pub stats: Arc<SinkStats>,
     pub task: JoinHandle<()>,
+    /// How long a full queue is waited for before the sink counts as stuck.
+    pub stall: Duration,
+    /// Set while the sink is stuck (dropping instead of waiting).
+    stuck: AtomicBool,
 }
 
 impl SinkStats {
@@ -79,22 +151,78 @@ impl SinkStats {
             name: name.to_string(),
             samples_out: self.samples_out.load(Relaxed),
             dropped: self.dropped.load(Relaxed),
+            health_out: self.health_out.load(Relaxed),
             errors: self.errors.load(Relaxed),
-            clients: self.clients.lock().map(|c| c.clone()).unwrap_or_default(),
+            clients: self
+                .clients
+                .lock()
+                .map(|c| c.iter().map(|k| k.snapshot()).collect())
+                .unwrap_or_default(),
+            clients_gone: self.gone.lock().map(|g| *g).unwrap_or_default(),
+        }
+    }
+
+    /// A client has left: free its entry, keep its counts in the totals.
+    fn client_left(&self, c: &Arc<ClientCounters>) {
+        if let Ok(mut live) = self.clients.lock() {
+            let before = live.len();
+            live.retain(|k| !Arc::ptr_eq(k, c));
+            if live.len() < before
+                && let Ok(mut g) = self.gone.lock()
+            {
+                g.clients += 1;
+                g.samples_sent += c.sent.load(Relaxed);
+                g.samples_dropped += c.dropped.load(Relaxed);
+            }
         }
     }
 }
 
 impl SinkHandle {
-    /// Offer an item: awaited if lossless, else dropped (and counted) when the queue is full.
+    /// Offer an item. Network sinks: dropped (and counted) when the queue is full. Local sinks:
+    /// waited for up to `stall`, then dropped while the sink is stuck (see the module docs).
     pub async fn offer(&self, item: SinkItem) {
-        if self.lossless {
+        let item = match self.tx.try_send(item) {
+            Ok(()) => {
+                return;
+            }
+            Err(mpsc::error::TrySendError::Closed(_)) => return,
+            Err(mpsc::error::TrySendError::Full(item)) => item,
+        };
+        if self.lossless && self.wants_side {
+            // Inline: carriers and samples must stay paired, so never drop.
             let _ = self.tx.send(item).await;
-        } else if let Err(mpsc::error::TrySendError::Full(SinkItem::Samples(b))) =
-            self.tx.try_send(item)
-        {
+            return;
+        }
+        if self.lossless && self.stuck.load(Relaxed) && self.tx.capacity() * 2 >= SINK_QUEUE {
+            self.stuck.store(false, Relaxed);
+            tracing::info!(sink = %self.name, "sink caught up; no longer dropping");
+        }
+        let item = if self.lossless && !self.stuck.load(Relaxed) {
+            match self.tx.send_timeout(item, self.stall).await {
+                Ok(()) => return,
+                Err(mpsc::error::SendTimeoutError::Closed(_)) => return,
+                Err(mpsc::error::SendTimeoutError::Timeout(item)) => {
+                    self.stuck.store(true, Relaxed);
+                    tracing::warn!(
+                        sink = %self.name,
+                        stall_ms = self.stall.as_millis() as u64,
+                        "sink stuck (its consumer took nothing for the stall time): dropping what it cannot take, counted"
+                    );
+                    item
+                }
+            }
+        } else {
+            item
+        };
+        if let SinkItem::Samples(b) = item {
             self.stats.dropped.fetch_add(b.len() as u64, Relaxed);
         }
+    }
+
+    /// True while a local sink is stuck and dropping.
+    pub fn is_stuck(&self) -> bool {
+        self.stuck.load(Relaxed)
     }
 }
 
@@ -186,6 +314,8 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
                 wants_side: true,
                 stats,
                 task,
+                stall: DEFAULT_STALL,
+                stuck: AtomicBool::new(false),
             });
         }
     };
@@ -196,6 +326,8 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
         wants_side: false,
         stats,
         task,
+        stall: DEFAULT_STALL,
+        stuck: AtomicBool::new(false),
     })
 }
 
@@ -216,6 +348,12 @@ async fn write_stream<W: tokio::io::AsyncWrite + Unpin>(
             SinkItem::Descriptor(d) if !started => enc.preamble(d, as_file, &mut buf),
             SinkItem::Descriptor(d) => enc.descriptor(d, &mut buf),
             SinkItem::Side(_) => continue,
+            SinkItem::Health(h) => {
+                if !started || !enc.health(h, &mut buf) {
+                    // Nothing to say before the stream's preamble, or a format without health.
+                    continue;
+                }
+            }
             SinkItem::Samples(b) => {
                 if !started {
                     enc.preamble(&Descriptor::default(), as_file, &mut buf);
@@ -231,16 +369,22 @@ async fn write_stream<W: tokio::io::AsyncWrite + Unpin>(
             // A closed stdout (e.g. `| head`) ends this sink only; the others go on.
             break;
         }
-        if let SinkItem::Samples(b) = &item {
-            stats.samples_out.fetch_add(b.len() as u64, Relaxed);
+        match &item {
+            SinkItem::Samples(b) => {
+                stats.samples_out.fetch_add(b.len() as u64, Relaxed);
+            }
+            SinkItem::Health(_) => {
+                stats.health_out.fetch_add(1, Relaxed);
+            }
+            _ => {}
         }
     }
     let _ = w.flush().await;
 }
 
 struct Client {
-    tx: mpsc::Sender<Bytes>,
-    index: usize,
+    tx: mpsc::Sender<(Bytes, u64)>,
+    counters: Arc<ClientCounters>,
 }
 
 async fn tcp_server(
@@ -262,18 +406,15 @@ async fn tcp_server(
                     continue;
                 };
                 let _ = sock.set_nodelay(true);
-                let (ctx, crx) = mpsc::channel::<Bytes>(queue);
+                let (ctx, crx) = mpsc::channel::<(Bytes, u64)>(queue);
                 let mut pre = BytesMut::new();
                 enc.preamble(&descriptor, false, &mut pre);
-                let _ = ctx.try_send(pre.freeze());
-                let index = {
-                    let mut c = stats.clients.lock().expect("stats lock");
-                    c.push(ClientStats { peer: peer.to_string(), connected: true, ..Default::default() });
-                    c.len() - 1
-                };
-                tokio::spawn(tcp_client(sock, crx, stats.clone(), index));
+                let _ = ctx.try_send((pre.freeze(), 0));
+                let counters = Arc::new(ClientCounters { peer: peer.to_string(), ..Default::default() });
+                stats.clients.lock().expect("stats lock").push(counters.clone());
+                tokio::spawn(tcp_client(sock, crx, stats.clone(), counters.clone()));
                 tracing::info!(%peer, "tcp client connected");
-                clients.push(Client { tx: ctx, index });
+                clients.push(Client { tx: ctx, counters });
             }
             item = rx.recv() => {
                 let Some(item) = item else { break };
@@ -282,35 +423,70 @@ async fn tcp_server(
                     SinkItem::Descriptor(d) => { descriptor = *d; enc.descriptor(d, &mut buf); 0 }
                     SinkItem::Samples(b) => { for s in b.iter() { enc.sample(s, &mut buf); } b.len() as u64 }
                     SinkItem::Side(_) => 0,
+                    SinkItem::Health(h) => { enc.health(h, &mut buf); 0 }
                 };
                 if buf.is_empty() { continue; }
                 let bytes = buf.split().freeze();
-                let mut cs = stats.clients.lock().expect("stats lock");
-                clients.retain(|c| match c.tx.try_send(bytes.clone()) {
-                    Ok(()) => { cs[c.index].samples_sent += n; true }
-                    Err(mpsc::error::TrySendError::Full(_)) => { cs[c.index].samples_dropped += n; true }
-                    Err(mpsc::error::TrySendError::Closed(_)) => { cs[c.index].connected = false; false }
+                clients.retain(|c| match c.tx.try_send((bytes.clone(), n)) {
+                    Ok(()) => {
+                        if c.counters.lagging.swap(false, Relaxed) {
+                            tracing::info!(peer = %c.counters.peer, "tcp client caught up");
+                        }
+                        true
+                    }
+                    Err(mpsc::error::TrySendError::Full(_)) => {
+                        c.counters.dropped.fetch_add(n, Relaxed);
+                        if n > 0 && !c.counters.lagging.swap(true, Relaxed) {
+                            tracing::warn!(peer = %c.counters.peer, "tcp client behind: dropping its batches, counted");
+                        }
+                        true
+                    }
+                    Err(mpsc::error::TrySendError::Closed(_)) => false,
                 });
+                if matches!(item, SinkItem::Health(_)) {
+                    stats.health_out.fetch_add(1, Relaxed);
+                }
                 stats.samples_out.fetch_add(n, Relaxed);
             }
         }
     }
 }
 
+/// One client's writer: counts what reached its socket; on leaving, its entry is freed and its
+/// counts folded into the sink's totals.
 async fn tcp_client(
     mut sock: tokio::net::TcpStream,
-    mut rx: mpsc::Receiver<Bytes>,
+    mut rx: mpsc::Receiver<(Bytes, u64)>,
     stats: Arc<SinkStats>,
-    index: usize,
+    counters: Arc<ClientCounters>,
 ) {
-    while let Some(b) = rx.recv().await {
-        if sock.write_all(&b).await.is_err() {
-            break;
+    use tokio::io::AsyncReadExt;
+    let (mut rd, mut wr) = sock.split();
+    let mut scratch = [0u8; 256];
+    loop {
+        tokio::select! {
+            item = rx.recv() => {
+                let Some((b, n)) = item else { break };
+                if wr.write_all(&b).await.is_err() {
+                    break;
+                }
+                counters.sent.fetch_add(n, Relaxed);
+            }
+            // A client that hangs up is noticed at once, not at the next failed write.
+            r = rd.read(&mut scratch) => {
+                if matches!(r, Ok(0) | Err(_)) {
+                    break;
+                }
+            }
         }
     }
-    if let Ok(mut c) = stats.clients.lock() {
-        c[index].connected = false;
+    // Whatever was still queued was never written: lost to this client.
+    rx.close();
+    while let Ok((_, n)) = rx.try_recv() {
+        counters.dropped.fetch_add(n, Relaxed);
     }
+    stats.client_left(&counters);
+    tracing::info!(peer = %counters.peer, "tcp client left");
 }
 
 async fn udp_sender(
@@ -323,6 +499,18 @@ async fn udp_sender(
     let mut enc = Encoder::new(format);
     let mut buf = BytesMut::new();
     while let Some(item) = rx.recv().await {
+        if let SinkItem::Health(h) = &item {
+            buf.clear();
+            if enc.health(h, &mut buf) {
+                for t in &targets {
+                    if sock.send_to(&buf, t).await.is_err() {
+                        stats.errors.fetch_add(1, Relaxed);
+                    }
+                }
+                stats.health_out.fetch_add(1, Relaxed);
+            }
+            continue;
+        }
         let SinkItem::Samples(b) = item else { continue };
         for s in b.iter() {
             buf.clear();
@@ -416,7 +604,7 @@ async fn inline_writer<W: tokio::io::AsyncWrite + Unpin, K: Send + 'static>(
     while let Some(item) = rx.recv().await {
         buf.clear();
         match item {
-            SinkItem::Descriptor(_) => continue,
+            SinkItem::Descriptor(_) | SinkItem::Health(_) => continue,
             SinkItem::Side(items) => queue.extend(items.iter().cloned()),
             SinkItem::Samples(b) => {
                 for s in b.iter() {

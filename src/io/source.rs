@@ -29,6 +29,11 @@ pub enum SourceEvent {
         reason: String,
         outages: u64,
     },
+    /// The device stayed open but sent nothing for the stall time; it is being reopened.
+    Stall {
+        reason: String,
+        stalls: u64,
+    },
     /// The device is (back) up.
     Connected {
         name: String,
@@ -66,30 +71,13 @@ pub enum SourceError {
 }
 
 /// Open a recorded log and check its file header; the returned reader starts at the first frame.
+/// (The one log reader is [`crate::io::log`]; this maps its errors to the source's.)
 pub async fn open_log(path: &Path) -> Result<tokio::fs::File, SourceError> {
-    let mut f = tokio::fs::File::open(path)
-        .await
-        .map_err(|err| SourceError::Open {
-            path: path.into(),
-            err,
-        })?;
-    let mut h = [0u8; LOG_HEADER_LEN];
-    let mut n = 0;
-    while n < LOG_HEADER_LEN {
-        let k = f.read(&mut h[n..]).await.map_err(|err| SourceError::Open {
-            path: path.into(),
-            err,
-        })?;
-        if k == 0 {
-            break;
-        }
-        n += k;
-    }
-    check_log_header(&h[..n]).map_err(|err| SourceError::Header {
-        path: path.into(),
-        err,
-    })?;
-    Ok(f)
+    use crate::io::log::LogError;
+    crate::io::log::open_log(path).await.map_err(|e| match e {
+        LogError::Io { path, err } => SourceError::Open { path, err },
+        LogError::Header { path, err } => SourceError::Header { path, err },
+    })
 }
 
 /// Pump one byte stream through the decoder to the runtime. Returns the decoder (so a serial
@@ -349,6 +337,69 @@ pub async fn serial_with(
     side: bool,
     tx: mpsc::Sender<SourceEvent>,
 ) {
+    serial_watched(port, baud, retry_initial, retry_max, None, c, side, tx).await
+}
+
+/// A reader that fails with [`std::io::ErrorKind::TimedOut`] when no byte has come for `stall`.
+struct StallGuard<R> {
+    inner: R,
+    stall: Duration,
+    timer: std::pin::Pin<Box<tokio::time::Sleep>>,
+}
+
+impl<R> StallGuard<R> {
+    fn new(inner: R, stall: Duration) -> Self {
+        StallGuard {
+            inner,
+            stall,
+            timer: Box::pin(tokio::time::sleep(stall)),
+        }
+    }
+}
+
+impl<R: AsyncRead + Unpin> AsyncRead for StallGuard<R> {
+    fn poll_read(
+        mut self: std::pin::Pin<&mut Self>,
+        cx: &mut std::task::Context<'_>,
+        buf: &mut tokio::io::ReadBuf<'_>,
+    ) -> std::task::Poll<std::io::Result<()>> {
+        use std::future::Future;
+        use std::task::Poll;
+        let before = buf.filled().len();
+        match std::pin::Pin::new(&mut self.inner).poll_read(cx, buf) {
+            Poll::Ready(r) => {
+                if buf.filled().len() > before {
+                    let next = tokio::time::Instant::now() + self.stall;
+                    self.timer.as_mut().reset(next);
+                }
+                Poll::Ready(r)
+            }
+            Poll::Pending => match self.timer.as_mut().poll(cx) {
+                Poll::Ready(()) => Poll::Ready(Err(std::io::Error::new(
+                    std::io::ErrorKind::TimedOut,
+                    format!("no byte for {:.1} s", self.stall.as_secs_f64()),
+                ))),
+                Poll::Pending => Poll::Pending,
+            },
+        }
+    }
+}
+
+/// [`serial_with`] with a stall watch: a port that stays open but sends nothing for `stall` is
+/// reported ([`SourceEvent::Stall`], counted) and reopened, keeping the decoder so the gap is
+/// flagged.
+#[allow(clippy::too_many_arguments)]
+pub async fn serial_watched(
+    port: String,
+    baud: u32,
+    retry_initial: Duration,
+    retry_max: Duration,
+    stall: Option<Duration>,
+    c: ProtocolConfig,
+    side: bool,
+    tx: mpsc::Sender<SourceEvent>,
+) {
+    let mut stalls = 0u64;
     use tokio_serial::SerialPortBuilderExt;
     let mut decoder: Option<Codec> = None;
     let mut outages = 0u64;
@@ -383,10 +434,30 @@ pub async fn serial_with(
                     }
                 };
                 let reader = std::io::Cursor::new(head).chain(stream);
-                let (dec, err, alive) = pump(reader, codec, &tx, None, side).await;
+                let (dec, err, alive) = match stall {
+                    Some(d) => pump(StallGuard::new(reader, d), codec, &tx, None, side).await,
+                    None => pump(reader, codec, &tx, None, side).await,
+                };
                 decoder = Some(dec);
                 if !alive {
                     return;
+                }
+                if let Some(e) = err
+                    .as_ref()
+                    .filter(|e| e.kind() == std::io::ErrorKind::TimedOut)
+                {
+                    stalls += 1;
+                    let reason = format!("port open but silent ({e}); reopening");
+                    tracing::warn!(port = %port, stalls, "serial {reason}");
+                    if tx
+                        .send(SourceEvent::Stall { reason, stalls })
+                        .await
+                        .is_err()
+                    {
+                        return;
+                    }
+                    tokio::time::sleep(delay).await;
+                    continue;
                 }
                 outages += 1;
                 let reason = match err {

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, ensure};
 use serde::Serialize;
 
+use super::{InputProblem, check_input};
 use crate::frame::detect::{ProtocolArgs, ProtocolConfig};
 use crate::io::convert::{ExportFormat, encode_stream, read_any};
 use crate::io::csv::{self as csvio, ImportOptions};
@@ -32,6 +33,8 @@ pub struct ImportReport {
     pub output: PathBuf,
     /// `"<protocol> input: <what was found>"` when the input went through a protocol decoder.
     pub decoded: Option<String>,
+    /// What a CSV import found in the time stamps (rate, gaps, duplicates, steps backwards).
+    pub timing: Option<String>,
     pub samples: usize,
     pub duration_s: f64,
     pub sample_rate_hz: f64,
@@ -51,13 +54,21 @@ pub fn import(
         let n = input.to_string_lossy().to_ascii_lowercase();
         n.ends_with(".csv") || n.ends_with(".csv.gz")
     };
-    let (d, samples, decoded) = if is_csv && proto.protocol.is_none() {
-        let (d, s) = csvio::read_csv(input, o)?;
-        (d, s, None)
+    let (d, samples, decoded, timing) = if is_csv && proto.protocol.is_none() {
+        let (d, s, report) = csvio::read_csv_report(input, o)?;
+        if s.is_empty() {
+            return Err(InputProblem(format!(
+                "{}: no data rows after the header: nothing to import",
+                input.display()
+            ))
+            .into());
+        }
+        (d, s, None, Some(report.to_string()))
     } else {
         let mut pc = ProtocolConfig::auto();
         proto.apply(&mut pc);
         let f = read_any(input, &pc)?;
+        check_input(input, f.samples.len() as u64, &f.stats)?;
         let mut d = f.descriptor.unwrap_or_default();
         d.gyro_range_rad_s = o.gyro_range_rad_s;
         d.accel_range_m_s2 = o.accel_range_m_s2;
@@ -65,6 +76,7 @@ pub fn import(
             d,
             f.samples,
             Some(format!("{} input: {}", f.protocol, f.found)),
+            None,
         )
     };
     csvio::write_log(output, &d, &samples)?;
@@ -72,6 +84,7 @@ pub fn import(
         input: input.to_path_buf(),
         output: output.to_path_buf(),
         decoded,
+        timing,
         samples: samples.len(),
         duration_s: samples.last().map_or(0.0, |s| s.t_s() - samples[0].t_s()),
         sample_rate_hz: d.sample_rate_hz,
@@ -82,6 +95,9 @@ impl fmt::Display for ImportReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if let Some(d) = &self.decoded {
             writeln!(f, "{d}")?;
+        }
+        if let Some(t) = &self.timing {
+            writeln!(f, "import: {t}")?;
         }
         writeln!(
             f,
@@ -114,6 +130,7 @@ pub fn export(
     let mut pc = ProtocolConfig::auto();
     proto.apply(&mut pc);
     let f = read_any(log, &pc)?;
+    check_input(log, f.samples.len() as u64, &f.stats)?;
     if to == ExportFormat::Csv {
         csvio::write_csv(output, &f.samples)?;
     } else {

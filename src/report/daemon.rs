@@ -50,7 +50,10 @@ pub fn run(cfg: &Config) -> Result<Health> {
         .build()?;
     let pipeline = cfg.stages.build().map_err(|e| anyhow!(e))?;
     tracing::info!(stages = ?pipeline.stage_names(), "pipeline ready");
-    rt.block_on(crate::runtime::run(cfg, pipeline))
+    let health = rt.block_on(crate::runtime::run(cfg, pipeline));
+    // A stuck sink may still sit in a blocking write (stdout nobody reads): do not wait for it.
+    rt.shutdown_timeout(std::time::Duration::from_secs(1));
+    health
 }
 
 /// Write the health summary as JSON when asked.

@@ -22,6 +22,31 @@ use anyhow::{Context, Result, ensure};
 use crate::sample::Sample;
 
 /// Samples of a log after `skip_s`, with the log's sample rate.
+/// Exit status of an offline command whose input decoded to nothing or was mostly garbage.
+pub const INPUT_PROBLEM_EXIT: u8 = 3;
+
+/// An input that decoded to nothing or was mostly garbage: the command failed, loudly, with
+/// exit status [`INPUT_PROBLEM_EXIT`].
+#[derive(Debug)]
+pub struct InputProblem(pub String);
+
+impl std::fmt::Display for InputProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for InputProblem {}
+
+/// Fail with [`InputProblem`] when `samples` decoded from `what` with `stats` say the input
+/// held nothing usable.
+pub fn check_input(what: &Path, samples: u64, stats: &crate::frame::DecoderStats) -> Result<()> {
+    match stats.input_problem(samples) {
+        Some(problem) => Err(InputProblem(format!("{}: {problem}", what.display())).into()),
+        None => Ok(()),
+    }
+}
+
 pub fn load_span(log: &Path, skip_s: f64) -> Result<(f64, Vec<Sample>)> {
     load_span_to(log, skip_s, None)
 }

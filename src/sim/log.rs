@@ -1,9 +1,8 @@
 //! Writing a simulation as a replay log (+ truth sidecar): the glue behind `imuprep simulate`.
 
 use super::{Emission, Scenario, SimError, Simulator, truth::TruthWriter};
-use crate::frame::{Descriptor, encode_log_header, encode_sample};
-use bytes::BytesMut;
-use std::io::Write;
+use crate::frame::Descriptor;
+use crate::io::log::LogWriter;
 use std::path::Path;
 
 /// What a simulation run wrote.
@@ -42,9 +41,8 @@ pub fn write_sim_log(
         Some(p) => Some(TruthWriter::create(p, &sim.truth_header())?),
         None => None,
     };
-    let mut out = std::io::BufWriter::with_capacity(1 << 16, std::fs::File::create(log)?);
-    let mut buf = BytesMut::with_capacity(1 << 16);
-    encode_log_header(&descriptor(&sim), &mut buf);
+    let out = std::io::BufWriter::with_capacity(1 << 16, std::fs::File::create(log)?);
+    let mut lw = LogWriter::new(out, &descriptor(&sim));
     let mut sum = SimLogSummary::default();
     while let Some(r) = sim.next_record() {
         sum.instants += 1;
@@ -60,21 +58,14 @@ pub fn write_sim_log(
             }
         };
         for _ in 0..copies {
-            encode_sample(&r.sample, &mut buf);
+            lw.sample(&r.sample)?;
             sum.frames += 1;
         }
         if let Some(w) = tw.as_mut() {
             w.write_row(&r.truth)?;
         }
-        if buf.len() > 1 << 15 {
-            out.write_all(&buf)?;
-            sum.bytes += buf.len() as u64;
-            buf.clear();
-        }
     }
-    out.write_all(&buf)?;
-    sum.bytes += buf.len() as u64;
-    out.flush()?;
+    sum.bytes = lw.finish()?.1;
     if let Some(w) = tw {
         w.finish()?;
     }

@@ -15,12 +15,20 @@ pub fn real_data(rel: &str) -> Option<PathBuf> {
     if p.exists() {
         Some(p)
     } else {
-        eprintln!(
-            "SKIP: real recording {} not found (../shared/data/real is absent here)",
+        skipped(&format!(
+            "real recording {} not found (../shared/data/real is absent here)",
             p.display()
-        );
+        ));
         None
     }
+}
+
+/// Say that a test skipped, where `cargo test` shows it: written to the process's stderr
+/// directly, because the test harness captures `eprintln!` (shown only on failure or with
+/// `--nocapture`) but not raw writes to the stderr handle.
+pub fn skipped(why: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "SKIPPED: {why}");
 }
 
 /// A seeded stream of plausible samples at 200 Hz.

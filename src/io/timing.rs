@@ -1,0 +1,224 @@
+//! Sequence numbers and time faults of an imported recording, derived from its time stamps.
+//!
+//! A CSV has no frame counter, so the sequence is rebuilt from time: the nominal interval `P` is
+//! the median of the positive intervals (a single long gap cannot move a median, where it moves
+//! the mean: 10 s missing from 100 s at 100 Hz gives a mean rate of 90 Hz), and each interval `dt`
+//! advances the sequence by `round(dt / P)`. So
+//!
+//! * `dt > 1.5 P` — a **gap**: `round(dt/P) − 1` samples missing, the sample after it flagged
+//!   [`flags::GAP`];
+//! * `dt = 0` — a **duplicate** time stamp: same sequence number, flagged [`flags::DUPLICATE`];
+//! * `dt < 0` — time ran **backwards**: within [`BACKWARD_WINDOW`] intervals a late repeat (same
+//!   sequence number, flagged duplicate), further back a **restart** (flagged gap, time base
+//!   taken afresh).
+//!
+//! The replay decoder re-derives the same gap and duplicate flags from these sequence numbers, so
+//! the faults survive the round trip through a log.
+//!
+//! Bursty host time stamps (a logger that stamps samples when a USB packet arrives: many within
+//! a millisecond, then a pause) break the median: it measures the spacing inside a burst, not the
+//! sensor. They are recognised when median-spaced samples would cover less than half of the
+//! recording's span ([`BURSTY_COVERAGE`]); the interval is then the mean, and only pauses longer
+//! than [`BURSTY_GAP_FACTOR`] mean intervals count as gaps (a pause between bursts is not one).
+
+use crate::sample::{Sample, flags};
+use serde::Serialize;
+
+/// Backward steps up to this many nominal intervals are late repeats; longer ones restarts.
+pub const BACKWARD_WINDOW: f64 = 1024.0;
+/// Median-spaced samples covering less than this fraction of the span mean bursty time stamps.
+pub const BURSTY_COVERAGE: f64 = 0.5;
+/// With bursty time stamps, a pause counts as a gap beyond this many mean intervals.
+pub const BURSTY_GAP_FACTOR: f64 = 10.0;
+
+/// What [`derive_sequence`] found.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct TimeFaults {
+    pub samples: u64,
+    /// Nominal rate, Hz (0 when fewer than two distinct time stamps).
+    pub nominal_rate_hz: f64,
+    /// Median and mean of the positive intervals, s.
+    pub median_interval_s: f64,
+    pub mean_interval_s: f64,
+    /// The time stamps come in bursts (see the module docs): rate from the mean interval.
+    pub bursty: bool,
+    pub gaps: u64,
+    pub missing: u64,
+    pub duplicates: u64,
+    pub backwards: u64,
+    pub restarts: u64,
+}
+
+impl TimeFaults {
+    /// Any fault at all.
+    pub fn any(&self) -> bool {
+        self.gaps + self.duplicates + self.backwards + self.restarts > 0
+    }
+}
+
+impl std::fmt::Display for TimeFaults {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "time: {:.3} Hz nominal from the {} interval ({:.3} ms; median {:.3} ms, mean {:.3} ms){}; {} gaps ({} samples missing), {} duplicate time stamps, {} steps backwards ({} restarts)",
+            self.nominal_rate_hz,
+            if self.bursty { "mean" } else { "median" },
+            if self.bursty {
+                self.mean_interval_s
+            } else {
+                self.median_interval_s
+            } * 1e3,
+            self.median_interval_s * 1e3,
+            self.mean_interval_s * 1e3,
+            if self.bursty {
+                format!(
+                    ", bursty time stamps: only pauses over {BURSTY_GAP_FACTOR} intervals count as gaps"
+                )
+            } else {
+                String::new()
+            },
+            self.gaps,
+            self.missing,
+            self.duplicates,
+            self.backwards,
+            self.restarts
+        )
+    }
+}
+
+/// Set every sample's `seq` from its time stamp and flag the time faults (see the module docs).
+pub fn derive_sequence(samples: &mut [Sample]) -> TimeFaults {
+    let mut tf = TimeFaults {
+        samples: samples.len() as u64,
+        ..TimeFaults::default()
+    };
+    let mut pos: Vec<u64> = samples
+        .windows(2)
+        .filter(|w| w[1].t_ns > w[0].t_ns)
+        .map(|w| w[1].t_ns - w[0].t_ns)
+        .collect();
+    if pos.is_empty() {
+        // No time base: sequence by row; every repeat of a time stamp is still a duplicate.
+        for (i, s) in samples.iter_mut().enumerate() {
+            s.seq = 0;
+            if i > 0 {
+                s.flags |= flags::DUPLICATE;
+                tf.duplicates += 1;
+            }
+        }
+        return tf;
+    }
+    let mean = pos.iter().map(|&d| d as f64).sum::<f64>() / pos.len() as f64;
+    let mid = pos.len() / 2;
+    let median = *pos.select_nth_unstable(mid).1 as f64;
+    // Span covered by forward time, and how much of it median-spaced samples would fill.
+    let span: f64 = pos.iter().map(|&d| d as f64).sum();
+    let coverage = median * pos.len() as f64 / span;
+    tf.bursty = coverage < BURSTY_COVERAGE;
+    tf.median_interval_s = median * 1e-9;
+    tf.mean_interval_s = mean * 1e-9;
+    let (period, gap_at) = if tf.bursty {
+        (mean, BURSTY_GAP_FACTOR * mean)
+    } else {
+        (median, 1.5 * median)
+    };
+    tf.nominal_rate_hz = 1e9 / period;
+
+    let mut seq: u32 = 0;
+    let mut last = samples[0].t_ns;
+    samples[0].seq = 0;
+    for s in samples.iter_mut().skip(1) {
+        let t = s.t_ns;
+        if t == last {
+            s.flags |= flags::DUPLICATE;
+            tf.duplicates += 1;
+        } else if t < last {
+            tf.backwards += 1;
+            if ((last - t) as f64) < BACKWARD_WINDOW * period {
+                s.flags |= flags::DUPLICATE;
+                tf.duplicates += 1;
+            } else {
+                s.flags |= flags::GAP;
+                tf.restarts += 1;
+                // A restart: a clear jump in the sequence, which the decoder reads as a gap too.
+                seq = seq.wrapping_add(2);
+                last = t;
+            }
+        } else {
+            let dt = (t - last) as f64;
+            let mut step = 1u64;
+            if dt > gap_at {
+                step = ((dt / period).round() as u64).max(2);
+                s.flags |= flags::GAP;
+                tf.gaps += 1;
+                tf.missing += step - 1;
+            }
+            seq = seq.wrapping_add(step.min(u32::MAX as u64 / 2) as u32);
+            last = t;
+        }
+        s.seq = seq;
+    }
+    tf
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at(ms: &[u64]) -> Vec<Sample> {
+        ms.iter()
+            .map(|&m| Sample {
+                t_ns: m * 1_000_000,
+                ..Sample::default()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn gap_duplicate_and_backward_step_are_flagged_and_sequenced() {
+        let mut v = at(&[0, 10, 20, 20, 30, 60, 50, 70, 80, 90, 100, 110, 120]);
+        let tf = derive_sequence(&mut v);
+        let seqs: Vec<u32> = v.iter().map(|s| s.seq).collect();
+        // 60 after 30: two missing; 50 after 60: a late repeat (kept at 6).
+        assert_eq!(seqs, vec![0, 1, 2, 2, 3, 6, 6, 7, 8, 9, 10, 11, 12]);
+        assert!(v[3].has(flags::DUPLICATE));
+        assert!(v[5].has(flags::GAP));
+        assert!(v[6].has(flags::DUPLICATE));
+        assert_eq!(
+            (tf.gaps, tf.missing, tf.duplicates, tf.backwards),
+            (1, 2, 2, 1)
+        );
+        assert_eq!(tf.nominal_rate_hz, 100.0);
+    }
+
+    #[test]
+    fn one_long_gap_does_not_move_the_nominal_rate() {
+        // 100 s at 100 Hz with 10 s missing: the mean would say 90 Hz.
+        let ms: Vec<u64> = (0..10_000u64)
+            .filter(|i| !(5_000..6_000).contains(i))
+            .map(|i| i * 10)
+            .collect();
+        let mut v = at(&ms);
+        let tf = derive_sequence(&mut v);
+        assert_eq!(tf.nominal_rate_hz, 100.0);
+        assert_eq!((tf.gaps, tf.missing), (1, 1000));
+        assert!(!tf.bursty);
+    }
+
+    #[test]
+    fn bursty_host_stamps_take_the_mean_and_ignore_burst_pauses() {
+        // Bursts of 5 samples 1 ms apart every 50 ms (a 100-Hz sensor read in packets), and one
+        // real 2-s outage.
+        let mut ms = Vec::new();
+        for b in 0..200u64 {
+            let t0 = b * 50 + if b >= 100 { 2000 } else { 0 };
+            ms.extend((0..5).map(|k| t0 + k));
+        }
+        let mut v = at(&ms);
+        let tf = derive_sequence(&mut v);
+        assert!(tf.bursty);
+        // Mean interval over the whole span: (199 × 50 + 2000 + 4) ms / 999 intervals.
+        assert!((tf.nominal_rate_hz - 999.0 / 11.954).abs() < 1e-6, "{tf:?}");
+        assert_eq!(tf.gaps, 1, "{tf:?}");
+    }
+}

@@ -1,0 +1,110 @@
+//! Time faults on import (issue 13, item 4): duplicate rows, time running backwards and gaps in a
+//! CSV are flagged on the samples and counted, and the nominal rate is the median interval's.
+mod common;
+
+use imuprep::io::csv::{ImportOptions, read_csv_report};
+use imuprep::sample::flags;
+use std::io::Write;
+
+#[test]
+fn csv_gap_duplicates_and_backward_time_are_flagged_and_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("faults.csv");
+    let mut f = std::fs::File::create(&p).unwrap();
+    writeln!(f, "t,gx,gy,gz,ax,ay,az,temp").unwrap();
+    // 40 s at 100 Hz with a 10-s hole (rows 1500..2500 missing), row 100 written twice, and
+    // a late row stamped 50 ms back (time 6.95 s written after 7.00 s).
+    let mut rows: Vec<u64> = (0..4000u64).filter(|i| !(1500..2500).contains(i)).collect();
+    rows.insert(101, 100);
+    let k = rows.iter().position(|&r| r == 700).unwrap();
+    rows.insert(k + 1, 695);
+    for r in &rows {
+        writeln!(f, "{:.2},0.01,0.02,0.03,0.1,0.2,9.8,", *r as f64 / 100.0).unwrap();
+    }
+    drop(f);
+    let (d, s, rep) = read_csv_report(&p, &ImportOptions::default()).unwrap();
+    assert_eq!(s.len(), rows.len());
+    // The mean interval would give about 3000 rows / 40 s ≈ 75 Hz.
+    assert!((d.sample_rate_hz - 100.0).abs() < 1e-6, "{rep}");
+    let t = rep.time;
+    assert_eq!((t.gaps, t.missing), (1, 1000), "{rep}");
+    // The repeated row and the late row (behind by 5 intervals: a late repeat) are duplicates.
+    assert_eq!((t.duplicates, t.backwards), (2, 1), "{rep}");
+    let flagged = |b: u32| s.iter().filter(|x| x.has(b)).count();
+    assert_eq!(flagged(flags::GAP), 1);
+    assert_eq!(flagged(flags::DUPLICATE), 2);
+    // Sequence numbers carry the hole: the sample after it is 1000 numbers on.
+    let after = s.iter().position(|x| x.has(flags::GAP)).unwrap();
+    assert_eq!(s[after].seq - s[after - 1].seq, 1001);
+    // ... and the replay decoder sees the same faults in the written log.
+    let log = dir.path().join("faults.log");
+    imuprep::io::log::write_log(&log, &d, &s).unwrap();
+    let (_, back, st) = imuprep::io::log::read_log(&log).unwrap();
+    assert_eq!(back.len(), s.len());
+    assert_eq!((st.gaps, st.missing_frames, st.duplicates), (1, 1000, 2));
+}
+
+/// What the real recordings hold. The counts are what the import reports today; they pin the
+/// median-interval rule (a change in them is a change in behaviour to look at).
+#[test]
+fn real_recordings_time_faults() {
+    let cases: [(&str, f64, bool, u64, u64); 7] = [
+        // (file, nominal Hz, bursty, gaps, missing)
+        (
+            "adis16405_static/adis_16405_imu1.csv.gz",
+            100.0,
+            false,
+            0,
+            0,
+        ),
+        (
+            "mpu6050_static_10min_temp/mpu6050_static.csv",
+            99.317,
+            true,
+            9,
+            184,
+        ),
+        (
+            "rtklibexplorer_drive_walk/drive_0708_imu.csv",
+            99.999,
+            false,
+            0,
+            0,
+        ),
+        (
+            "rtklibexplorer_drive_walk/walk_0827_imu.csv",
+            166.663,
+            false,
+            11,
+            11,
+        ),
+        ("comma2k19_car_segment/imu.csv", 104.351, false, 0, 0),
+        (
+            "ximu3_fusion_example/sensor_data.csv",
+            99.212,
+            false,
+            10,
+            20,
+        ),
+        (
+            "px4_sensor_combined_sample/sensor_combined.csv",
+            250.0,
+            false,
+            8,
+            51,
+        ),
+    ];
+    for (rel, hz, bursty, gaps, missing) in cases {
+        let Some(p) = common::real_data(rel) else {
+            return;
+        };
+        let (_, _, rep) = read_csv_report(&p, &ImportOptions::default()).unwrap();
+        let t = rep.time;
+        eprintln!("{rel}: {rep}");
+        // Rates to 1 mHz: the printed precision of the counts above.
+        assert!((t.nominal_rate_hz - hz).abs() < 1e-3, "{rel}: {rep}");
+        assert_eq!(t.bursty, bursty, "{rel}: {rep}");
+        assert_eq!((t.gaps, t.missing), (gaps, missing), "{rel}: {rep}");
+        assert_eq!(t.duplicates + t.backwards, 0, "{rel}: {rep}");
+    }
+}

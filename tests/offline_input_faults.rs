@@ -1,0 +1,97 @@
+//! Inputs that decode to nothing, or mostly to garbage (issue 13, item 8): offline commands say
+//! so loudly and exit non-zero instead of publishing nothing with status 0.
+mod common;
+
+use imuprep::rng::Rng;
+use std::path::Path;
+
+/// Run imuprep; its exit code and stderr.
+fn run(args: &[&str]) -> (i32, String) {
+    let out = std::process::Command::new(common::bin())
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn header() -> Vec<u8> {
+    let mut h = b"IMUPLOG\0".to_vec();
+    h.extend_from_slice(&1u16.to_le_bytes());
+    h.extend_from_slice(&0u16.to_le_bytes());
+    h
+}
+
+fn garbage(n: usize, seed: u64) -> Vec<u8> {
+    let mut r = Rng::new(seed);
+    (0..n).map(|_| r.next_u64() as u8).collect()
+}
+
+fn write(p: &Path, b: &[u8]) -> String {
+    std::fs::write(p, b).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+#[test]
+fn header_only_log_fails_replay_and_export_loudly() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = write(&dir.path().join("h.log"), &header());
+    let out = dir.path().join("o.csv");
+    for args in [
+        vec!["replay", &log],
+        vec!["export", &log, "-o", out.to_str().unwrap()],
+    ] {
+        let (code, err) = run(&args);
+        assert_eq!(code, 3, "{args:?}: {err}");
+        assert!(err.contains("ERROR") && err.contains("no samples"), "{err}");
+    }
+}
+
+#[test]
+fn garbage_log_fails_replay_export_and_import_loudly() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut b = header();
+    b.extend(garbage(100_000, 13));
+    let log = write(&dir.path().join("g.log"), &b);
+    let out = dir.path().join("o.log");
+    for args in [
+        vec!["replay", &log],
+        vec!["export", &log, "-o", out.to_str().unwrap()],
+        vec!["import", &log, "-o", out.to_str().unwrap()],
+    ] {
+        let (code, err) = run(&args);
+        assert_eq!(code, 3, "{args:?}: {err}");
+        assert!(err.contains("ERROR"), "{err}");
+    }
+}
+
+#[test]
+fn mostly_garbage_fails_and_a_clean_log_passes() {
+    let dir = tempfile::tempdir().unwrap();
+    let samples = common::samples(500, 4);
+    let mut clean = bytes::BytesMut::new();
+    imuprep::io::log::encode_log(&common::descriptor(), &samples, &mut clean);
+    let good = write(&dir.path().join("good.log"), &clean);
+    let (code, err) = run(&["replay", &good]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("ERROR"), "{err}");
+    // The same 500 samples (28 kB) followed by 100 kB of garbage: most of the input is garbage.
+    let mut bad = clean.to_vec();
+    bad.extend(garbage(100_000, 21));
+    let bad = write(&dir.path().join("bad.log"), &bad);
+    let (code, err) = run(&["replay", &bad]);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("most of the input was garbage"), "{err}");
+}
+
+#[test]
+fn csv_with_only_a_header_fails_import() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = write(&dir.path().join("h.csv"), b"t,gx,gy,gz,ax,ay,az,temp\n");
+    let out = dir.path().join("o.log");
+    let (code, err) = run(&["import", &csv, "-o", out.to_str().unwrap()]);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("no data rows"), "{err}");
+}

@@ -1,0 +1,261 @@
+//! Sinks under faults (issue 13, items 2 and 9, and health as data): a stuck local consumer
+//! never freezes the stream, TCP clients that leave are freed, "sent" means written, and health
+//! reports travel beside the samples on every sink whose format carries them.
+#![cfg(unix)]
+mod common;
+
+use imuprep::config::{Config, Format, Sink, SourceConfig};
+use imuprep::frame::{FrameDecoder, Message};
+use imuprep::io::sink::{self, SinkItem};
+use imuprep::stage::Pipeline;
+use std::os::unix::fs::OpenOptionsExt;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Duration;
+use tokio_util::codec::Decoder;
+
+/// A FIFO whose read end is open (so a writer can open it) but never read: the writer blocks
+/// once the pipe's buffer (64 KiB on Linux) is full — a consumer that is stuck for good.
+fn stuck_fifo(path: &Path) -> std::fs::File {
+    let c = std::ffi::CString::new(path.as_os_str().as_encoded_bytes()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo");
+    std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)
+        .unwrap()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn stuck_file_sink_drops_counted_and_never_blocks_the_stream() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("stuck.csv");
+    let reader = stuck_fifo(&fifo);
+    let mut h = sink::start(&Sink::File {
+        path: fifo.clone(),
+        format: Format::Csv,
+    })
+    .await
+    .unwrap();
+    h.stall = Duration::from_millis(100);
+    // 300 batches × 100 samples of CSV (~30 MB of text... far beyond the 64 KiB pipe and the
+    // sink's 64-batch queue): on a blocking fan-out this never finishes.
+    let all = common::samples(30_000, 5);
+    let offered = tokio::time::timeout(Duration::from_secs(20), async {
+        for b in all.chunks(100) {
+            h.offer(SinkItem::Samples(Arc::new(b.to_vec()))).await;
+        }
+    })
+    .await;
+    assert!(
+        offered.is_ok(),
+        "offering to a stuck file sink blocked the stream"
+    );
+    assert!(h.is_stuck(), "the sink must know it is stuck");
+    let r = h.stats.report(&h.name);
+    assert!(r.dropped > 0, "drops must be counted: {r:?}");
+    assert!(r.samples_out + r.dropped <= all.len() as u64, "{r:?}");
+    // Unblock the sink's pending write so the runtime can shut down.
+    drop(reader);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn tcp_clients_that_leave_are_freed_and_folded_into_totals() {
+    let h = sink::start(&Sink::Tcp {
+        bind: "127.0.0.1:0".parse().unwrap(),
+        format: Format::Native,
+        queue: 8,
+    })
+    .await
+    .unwrap();
+    let addr: std::net::SocketAddr = h.name.trim_start_matches("tcp:").parse().unwrap();
+    let batch = Arc::new(common::samples(10, 1));
+    for _ in 0..50 {
+        let c = tokio::net::TcpStream::connect(addr).await.unwrap();
+        h.offer(SinkItem::Samples(batch.clone())).await;
+        drop(c);
+    }
+    // Each leaving client is noticed by its writer task (EOF on its socket) and folded in.
+    let mut r = h.stats.report(&h.name);
+    for _ in 0..1000 {
+        r = h.stats.report(&h.name);
+        if r.clients_gone.clients == 50 {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    assert!(
+        r.clients.is_empty(),
+        "per-client entries must be freed: {r:?}"
+    );
+    assert_eq!(r.clients_gone.clients, 50, "{r:?}");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn tcp_sent_counts_what_was_written_not_what_was_queued() {
+    let h = sink::start(&Sink::Tcp {
+        bind: "127.0.0.1:0".parse().unwrap(),
+        format: Format::Native,
+        queue: 8,
+    })
+    .await
+    .unwrap();
+    let addr: std::net::SocketAddr = h.name.trim_start_matches("tcp:").parse().unwrap();
+    let stalled = tokio::net::TcpStream::connect(addr).await.unwrap(); // reads nothing yet
+    for _ in 0..200 {
+        if h.stats.report(&h.name).clients.len() == 1 {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    // 1000 batches × 512 frames × 56 B ≈ 29 MB, offered slowly enough for the sink's own
+    // queue: far more than loopback socket buffers hold (a few MB with autotuning), so the
+    // writer blocks and the client's queue fills and stays full.
+    let per = 512;
+    let total = 1000 * per;
+    let all = common::samples(total, 2);
+    for (i, b) in all.chunks(per).enumerate() {
+        h.offer(SinkItem::Samples(Arc::new(b.to_vec()))).await;
+        if i % 4 == 0 {
+            tokio::time::sleep(Duration::from_millis(1)).await;
+        }
+    }
+    // Wait until the counters settle (the writer is blocked on the full socket).
+    let mut last = (u64::MAX, u64::MAX);
+    for _ in 0..100 {
+        tokio::time::sleep(Duration::from_millis(50)).await;
+        let c = h.stats.report(&h.name).clients[0].clone();
+        let now = (c.samples_sent, c.samples_dropped);
+        if now == last {
+            break;
+        }
+        last = now;
+    }
+    let r = h.stats.report(&h.name);
+    // Batches the sink's own queue could not take never reached the client's queue.
+    let total = total as u64 - r.dropped;
+    let c = r.clients[0].clone();
+    let r = r.clone();
+    assert!(c.samples_dropped > 0, "{c:?}");
+    // What still waits in the client's queue is neither sent nor dropped.
+    assert!(
+        c.samples_sent + c.samples_dropped < total,
+        "queued samples were counted as sent: {c:?} total {total} {r:?}"
+    );
+    // Now read everything: the client receives exactly what "sent" counts.
+    let mut stalled = stalled;
+    let mut dec = FrameDecoder::new();
+    let mut buf = bytes::BytesMut::new();
+    let mut got = 0u64;
+    let want_done = |g: u64, h: &sink::SinkHandle| {
+        let c = h.stats.report(&h.name).clients[0].clone();
+        c.samples_sent + c.samples_dropped == total && g == c.samples_sent
+    };
+    let done = tokio::time::timeout(Duration::from_secs(20), async {
+        use tokio::io::AsyncReadExt;
+        let mut chunk = vec![0u8; 1 << 16];
+        while !want_done(got, &h) {
+            let n = match tokio::time::timeout(Duration::from_millis(200), stalled.read(&mut chunk))
+                .await
+            {
+                Ok(r) => r.unwrap(),
+                Err(_) => continue,
+            };
+            buf.extend_from_slice(&chunk[..n]);
+            while let Some(m) = dec.decode(&mut buf).unwrap() {
+                if let Message::Sample(_) = m {
+                    got += 1;
+                }
+            }
+        }
+    })
+    .await;
+    let c = h.stats.report(&h.name).clients[0].clone();
+    assert!(done.is_ok(), "received {got}, counters {c:?}");
+    assert_eq!(got, c.samples_sent);
+}
+
+/// The daemon's loop with a stuck consumer beside a healthy one: the run ends, the healthy sink
+/// gets every sample and the health reports, the stuck one's drops are counted.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn stuck_consumer_never_freezes_the_run_and_health_travels_with_the_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("in.log");
+    let n = 4000; // 20 s at 200 Hz, replayed at 20× ≈ 1 s
+    imuprep::io::log::write_log(&log, &common::descriptor(), &common::samples(n, 9)).unwrap();
+    let fifo = dir.path().join("stuck.csv");
+    let reader = stuck_fifo(&fifo);
+    let jsonl = dir.path().join("out.jsonl");
+    let native = dir.path().join("out.log");
+    let mut cfg = Config::default_embedded().unwrap();
+    cfg.source = SourceConfig::Replay {
+        path: log,
+        speed: 20.0,
+    };
+    cfg.sinks = vec![
+        Sink::File {
+            path: fifo,
+            format: Format::Csv,
+        },
+        Sink::File {
+            path: jsonl.clone(),
+            format: Format::Jsonl,
+        },
+        Sink::File {
+            path: native.clone(),
+            format: Format::Native,
+        },
+    ];
+    cfg.health.interval_s = 0.1;
+    let health = tokio::time::timeout(
+        Duration::from_secs(30),
+        imuprep::runtime::run(&cfg, Pipeline::pass_through()),
+    )
+    .await
+    .expect("a stuck sink froze the run")
+    .unwrap();
+    drop(reader);
+    assert_eq!(health.samples_out, n as u64);
+    assert!(health.sinks[0].dropped > 0, "{:?}", health.sinks[0]);
+    assert_eq!(health.sinks[1].dropped, 0, "{:?}", health.sinks[1]);
+
+    // JSON lines: every sample, and health records beside them. The run lasts ≥ 1 s of wall
+    // time (paced replay) with a 0.1-s interval; ≥ 3 reports leaves room for a loaded machine.
+    let text = std::fs::read_to_string(&jsonl).unwrap();
+    let mut samples = 0;
+    let mut reports = Vec::new();
+    for line in text.lines() {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap();
+        if v.get("type").and_then(|t| t.as_str()) == Some("health") {
+            reports.push(v);
+        } else {
+            samples += 1;
+        }
+    }
+    assert_eq!(samples, n);
+    assert!(reports.len() >= 3, "{} health records", reports.len());
+    let last = reports.last().unwrap();
+    assert_eq!(last["samples_out"], n as u64);
+    assert!(
+        reports.iter().any(|r| r["sink_dropped"].as_u64() > Some(0)),
+        "the stuck sink's drops must show in the published health"
+    );
+
+    // Native log: health frames among the sample frames; the log reader still reads every
+    // sample and skips the reports.
+    let bytes = std::fs::read(&native).unwrap();
+    let mut dec = FrameDecoder::new();
+    let mut buf = bytes::BytesMut::from(&bytes[imuprep::frame::LOG_HEADER_LEN..]);
+    let mut frames = Vec::new();
+    while let Some(m) = dec.decode_eof(&mut buf).unwrap() {
+        if let Message::Health(h) = m {
+            frames.push(h);
+        }
+    }
+    assert!(frames.len() >= 3);
+    assert_eq!(frames.last().unwrap().samples_out, n as u64);
+    let (_, s, st) = imuprep::io::log::read_log(&native).unwrap();
+    assert_eq!(s.len(), n);
+    assert_eq!(st.health_frames as usize, frames.len());
+    assert_eq!(st.unknown_type + st.crc_errors + st.bad_payload, 0);
+}
