@@ -63,7 +63,11 @@ impl JumpGuard {
         }
         if self.last.is_finite() {
             let d = v - self.last;
-            let old = if self.n == GUARD_N { self.sq[self.head] } else { 0.0 };
+            let old = if self.n == GUARD_N {
+                self.sq[self.head]
+            } else {
+                0.0
+            };
             self.sq[self.head] = d * d;
             self.sum += d * d - old;
             self.head = (self.head + 1) % GUARD_N;
