@@ -2,3 +2,4 @@
 //! (`Display` for people, `Serialize` for machines).
 
 pub mod audit;
+pub mod navtest;
