@@ -720,7 +720,7 @@ pub fn run_bench(
 ) -> Result<Vec<DriftRow>, String> {
     let (desc, raw) = load_recording(path)?;
     let rate = desc.sample_rate_hz;
-    if !(rate > 0.0) {
+    if rate.is_nan() || rate <= 0.0 {
         return Err(format!("{}: no sample rate", path.display()));
     }
     let cleaned = clean(cfg, &desc, &raw)?;
