@@ -79,13 +79,8 @@ fn drive_raw_30s_outages_agree_with_the_reference_filter() {
     // filter's own (+0.033, −0.068, −0.171 °/s, docs/navigation.md): within 0.01 °/s — a
     // tenth of the smallest of them; both learn it from the same zero-rate updates.
     let want = [0.033, -0.068, -0.171];
-    for a in 0..3 {
-        let d = run.median_gyro_bias_dps[a] - want[a];
-        assert!(
-            d.abs() < 0.01,
-            "axis {a}: {} °/s",
-            run.median_gyro_bias_dps[a]
-        );
+    for (a, (got, want)) in run.median_gyro_bias_dps.iter().zip(want).enumerate() {
+        assert!((got - want).abs() < 0.01, "axis {a}: {got} °/s");
     }
     assert!(run.stats.zupt_updates > 50, "{:?}", run.stats);
 }
