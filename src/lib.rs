@@ -18,6 +18,7 @@ pub mod config;
 pub mod frame;
 pub mod io;
 pub mod model;
+pub mod nav;
 pub mod report;
 pub mod rng;
 pub mod runtime;

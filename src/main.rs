@@ -262,6 +262,23 @@ enum Cmd {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Navigation test: imuprep's GNSS/INS filter on the rtklibexplorer drive and walk with
+    /// simulated 10/30/60-s GNSS outages, fed the raw IMU, the cleaned IMU, and the raw IMU with
+    /// an Allan-derived Gauss–Markov bias model; plus free-inertial drift on the static benches.
+    Navtest {
+        /// Folder of the real recordings.
+        #[arg(long, default_value = "../shared/data/real")]
+        data: PathBuf,
+        /// Pipeline config for the cleaned variant (default: the embedded one).
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Also write the report as JSON here.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Skip the static-bench drift (ADIS16405, MPU6050).
+        #[arg(long)]
+        no_static: bool,
+    },
     /// Write a recording's samples as canonical CSV plus seq and flags, or (--to) as a native
     /// log, UBX ESF-RAW, MAVLink HIGHRES_IMU or ULog sensor_combined stream.
     Export {
@@ -489,6 +506,22 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             maybe_json(json, &r.report)?;
             print!("{r}");
             Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Navtest {
+            data,
+            config,
+            json,
+            no_static,
+        } => {
+            let cfg = load_config(&config)?;
+            let rep = report::navtest::navtest(&data, &cfg, !no_static);
+            print!("{rep}");
+            maybe_json(json, &rep)?;
+            Ok(if rep.records.is_empty() {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            })
         }
         Cmd::Export {
             log,

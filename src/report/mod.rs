@@ -14,6 +14,7 @@ pub mod evaluate;
 pub mod fit;
 pub mod flag_review;
 pub mod gate_sweep;
+pub mod navtest;
 
 use std::path::Path;
 
@@ -21,7 +22,6 @@ use anyhow::{Context, Result, ensure};
 
 use crate::sample::Sample;
 
-/// Samples of a log after `skip_s`, with the log's sample rate.
 /// Exit status of an offline command whose input decoded to nothing or was mostly garbage.
 pub const INPUT_PROBLEM_EXIT: u8 = 3;
 
@@ -47,6 +47,7 @@ pub fn check_input(what: &Path, samples: u64, stats: &crate::frame::DecoderStats
     }
 }
 
+/// Samples of a log after `skip_s`, with the log's sample rate.
 pub fn load_span(log: &Path, skip_s: f64) -> Result<(f64, Vec<Sample>)> {
     load_span_to(log, skip_s, None)
 }

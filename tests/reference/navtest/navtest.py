@@ -16,6 +16,7 @@ Run from the repository root:  python3 tests/reference/navtest/navtest.py [--qui
 """
 
 import argparse
+import json
 import filecmp
 import shutil
 import subprocess
@@ -61,6 +62,9 @@ def parse_args(argv=None):
                    help="scheme (i) only (the tool's own outages), no extra consistency runs")
     p.add_argument("--jobs", type=int, default=1, help="filter runs in parallel processes")
     p.add_argument("--out-md", help="write the markdown tables to this file")
+    p.add_argument("--errors-json",
+                   help="write scheme (ii)'s per-outage end errors here (for the comparison with "
+                        "imuprep's own filter, `imuprep navtest`)")
     p.add_argument("--work-dir", help="keep the temporary files here (default: a temp dir, "
                                       "removed at the end)")
     return p.parse_args(argv)
@@ -386,6 +390,7 @@ def main(argv=None):
         execute([t for ts in all_tasks.values() for t in ts], tool, folders, work, args.jobs)
 
         sections = []
+        per_outage = []
         for log in logs:
             tasks, rtk = all_tasks[log.name], rtks[log.name]
             s1 = score_scheme_i(tasks, rtk, spans[log.name])
@@ -394,11 +399,18 @@ def main(argv=None):
             if not args.quick:
                 ref = next(t for t in tasks if t.purpose == "no_outage")
                 s2 = score_scheme_ii(tasks, rtk, spans[log.name], ref)
+                for (variant, length), rows in s2.items():
+                    for r in rows:
+                        per_outage.append({"log": log.name, "variant": variant, "length_s": length,
+                                           "start_rel_s": r[0], "horiz_m": r[1], "vert_m": r[2],
+                                           "heading_deg": r[3], "tilt_deg": r[4]})
             sections.append(report.log_section(log, rtk, spans[log.name], s1, s2,
                                                summaries[log.name], filter_diagnostics(tasks),
                                                checks))
         elapsed = time.time() - t_start
         n_runs = sum(len(ts) for ts in all_tasks.values())
+        if args.errors_json:
+            Path(args.errors_json).write_text(json.dumps(per_outage, indent=1))
         md = report.document(args, imp.version, git_context(), sections, n_runs, t_prep, elapsed)
         print(md)
         if args.out_md:

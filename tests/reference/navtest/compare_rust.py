@@ -1,0 +1,53 @@
+"""Compare `imuprep navtest --json` (imuprep's own filter) with the reference filter's per-outage
+errors (`navtest.py --errors-json`), raw IMU, same outage schedule.
+
+    python3 tests/reference/navtest/navtest.py --variants raw --jobs 2 --errors-json ref.json
+    target/release/imuprep navtest --no-static --json rust.json
+    python3 tests/reference/navtest/compare_rust.py ref.json rust.json
+
+Prints, per recording and outage length: medians and 95th percentiles (numpy's linear
+interpolation) of the horizontal and vertical error at the outage end, their ratio Rust /
+reference, and the rank correlation of the per-outage horizontal errors.
+"""
+import json
+import sys
+
+import numpy as np
+from scipy.stats import spearmanr
+
+
+def main(ref_path, rust_path):
+    ref = json.load(open(ref_path))
+    rust = json.load(open(rust_path))
+    print("| record | outage s | n | ref. horiz. median / p95 m | Rust median / p95 m | ratio median / p95 "
+          "| ref. vert. median m | Rust vert. median m | rank corr. (per outage) |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for rec in rust["records"]:
+        for length in (10.0, 30.0, 60.0):
+            r = sorted((e["start_rel_s"], e["horiz_m"], e["vert_m"]) for e in ref
+                       if e["log"] == rec["name"] and e["variant"] == "raw" and e["length_s"] == length)
+            o = sorted((e["start_rel_s"], e["horiz_m"], e["vert_m"]) for v, e in rec["outages"]
+                       if v == "(a) raw" and e["length_s"] == length)
+            if len(r) != len(o) or any(abs(a[0] - b[0]) > 0.2 for a, b in zip(r, o)):
+                raise SystemExit("%s %g s: the outage schedules differ" % (rec["name"], length))
+            rh, oh = np.array([x[1] for x in r]), np.array([x[1] for x in o])
+            rv, ov = np.array([x[2] for x in r]), np.array([x[2] for x in o])
+            rm, rp, om, op = np.median(rh), np.percentile(rh, 95), np.median(oh), np.percentile(oh, 95)
+            rho = spearmanr(rh, oh).correlation
+            print("| %s | %.0f | %d | %.2f / %.2f | %.2f / %.2f | %.2f / %.2f | %.2f | %.2f | %.2f |"
+                  % (rec["name"], length, len(r), rm, rp, om, op, om / rm, op / rp,
+                     np.median(rv), np.median(ov), rho))
+    print()
+    print("Per outage, horizontal m (reference / Rust):")
+    for rec in rust["records"]:
+        for length in (10.0, 30.0, 60.0):
+            r = sorted((e["start_rel_s"], e["horiz_m"]) for e in ref
+                       if e["log"] == rec["name"] and e["variant"] == "raw" and e["length_s"] == length)
+            o = sorted((e["start_rel_s"], e["horiz_m"]) for v, e in rec["outages"]
+                       if v == "(a) raw" and e["length_s"] == length)
+            print("%s %.0f s: " % (rec["name"], length)
+                  + ", ".join("%.1f: %.1f/%.1f" % (a[0], a[1], b[1]) for a, b in zip(r, o)))
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:3])
