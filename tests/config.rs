@@ -347,7 +347,18 @@ fn default_toml_lists_every_setting_and_every_documented_value_parses() {
         ("protocol tables", uncomment("# [source.ubx]", "\n[health]")),
         ("sinks", uncomment("# [[sinks]]", "# Gross errors")),
     ] {
-        Config::from_toml_str(&text, Path::new("."))
-            .unwrap_or_else(|e| panic!("{name}: {e}\n{text}"));
+        match Config::from_toml_str(&text, Path::new(".")) {
+            Ok(_) => {}
+            // Without the `ros2` feature the documented mcap sink is refused, and only it.
+            Err(e) if name == "sinks" && !cfg!(feature = "ros2") => {
+                let e = e.to_string();
+                assert!(
+                    e.contains("1 configuration error")
+                        && e.contains("kind: mcap needs a build with ROS 2 support"),
+                    "{name}: {e}\n{text}"
+                );
+            }
+            Err(e) => panic!("{name}: {e}\n{text}"),
+        }
     }
 }
