@@ -18,28 +18,11 @@ const MAV_EXPECTED: &str = include_str!("reference/mavlink_expected.csv");
 const ULOG_EXPECTED: &str = include_str!("reference/ulog_expected.csv");
 
 fn run(d: &mut dyn ProtocolDecoder, bytes: &[u8], chunk: usize) -> (Vec<Decoded>, DecoderStats) {
-    let mut buf = BytesMut::new();
-    let mut out = Vec::new();
-    for c in bytes.chunks(chunk.max(1)) {
-        buf.extend_from_slice(c);
-        while let Some(x) = d.decode_item(&mut buf) {
-            out.push(x);
-        }
-    }
-    while let Some(x) = d.decode_item_eof(&mut buf) {
-        out.push(x);
-    }
-    (out, d.stats())
+    imuprep::frame::protocol::decode_chunked(d, bytes, chunk)
 }
 
 fn samples(items: &[Decoded]) -> Vec<Sample> {
-    items
-        .iter()
-        .filter_map(|d| match d {
-            Decoded::Sample(s, _) => Some(*s),
-            _ => None,
-        })
-        .collect()
+    imuprep::frame::protocol::samples_of(items)
 }
 
 fn rows(csv: &str) -> Vec<Vec<String>> {

@@ -19,28 +19,11 @@ const SINK_BAG: &str = "tests/reference/mcap_sink_bag.mcap";
 const SINK_ROSBAGS: &str = include_str!("reference/mcap_sink_rosbags.csv");
 
 fn run(d: &mut dyn ProtocolDecoder, bytes: &[u8], chunk: usize) -> (Vec<Decoded>, DecoderStats) {
-    let mut buf = BytesMut::new();
-    let mut out = Vec::new();
-    for c in bytes.chunks(chunk.max(1)) {
-        buf.extend_from_slice(c);
-        while let Some(x) = d.decode_item(&mut buf) {
-            out.push(x);
-        }
-    }
-    while let Some(x) = d.decode_item_eof(&mut buf) {
-        out.push(x);
-    }
-    (out, d.stats())
+    imuprep::frame::protocol::decode_chunked(d, bytes, chunk)
 }
 
 fn samples(items: &[Decoded]) -> Vec<Sample> {
-    items
-        .iter()
-        .filter_map(|d| match d {
-            Decoded::Sample(s, _) => Some(*s),
-            _ => None,
-        })
-        .collect()
+    imuprep::frame::protocol::samples_of(items)
 }
 
 struct Row {

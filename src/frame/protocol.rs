@@ -115,6 +115,39 @@ pub trait ProtocolDecoder: Send {
     }
 }
 
+/// Feed `bytes` to `d` in pieces of `chunk` bytes (as a port delivers them), then end the
+/// stream: every item decoded, and the decoder's counters. For tests, tools and benches that
+/// decode a whole buffer.
+pub fn decode_chunked(
+    d: &mut dyn ProtocolDecoder,
+    bytes: &[u8],
+    chunk: usize,
+) -> (Vec<Decoded>, DecoderStats) {
+    let mut buf = BytesMut::new();
+    let mut out = Vec::new();
+    for c in bytes.chunks(chunk.max(1)) {
+        buf.extend_from_slice(c);
+        while let Some(x) = d.decode_item(&mut buf) {
+            out.push(x);
+        }
+    }
+    while let Some(x) = d.decode_item_eof(&mut buf) {
+        out.push(x);
+    }
+    (out, d.stats())
+}
+
+/// The samples among decoded items, in order.
+pub fn samples_of(items: &[Decoded]) -> Vec<Sample> {
+    items
+        .iter()
+        .filter_map(|d| match d {
+            Decoded::Sample(s, _) => Some(*s),
+            _ => None,
+        })
+        .collect()
+}
+
 /// Adapter: any [`ProtocolDecoder`] as a `tokio_util` codec (for `FramedRead`).
 pub struct Codec(pub Box<dyn ProtocolDecoder>);
 

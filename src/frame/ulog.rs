@@ -666,19 +666,7 @@ mod tests {
     use super::*;
 
     fn decode_all(bytes: &[u8], chunk: usize) -> (Vec<Decoded>, DecoderStats) {
-        let mut d = UlogDecoder::default();
-        let mut buf = BytesMut::new();
-        let mut out = Vec::new();
-        for c in bytes.chunks(chunk.max(1)) {
-            buf.extend_from_slice(c);
-            while let Some(x) = d.decode_item(&mut buf) {
-                out.push(x);
-            }
-        }
-        while let Some(x) = d.decode_item_eof(&mut buf) {
-            out.push(x);
-        }
-        (out, d.stats())
+        crate::frame::protocol::decode_chunked(&mut UlogDecoder::default(), bytes, chunk)
     }
 
     #[test]
