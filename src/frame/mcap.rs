@@ -456,18 +456,6 @@ impl ProtocolDecoder for McapDecoder {
         }
         self.step(buf)
     }
-    fn decode_item_eof(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        if let Some(d) = self.decode_item(buf) {
-            return Some(d);
-        }
-        while !buf.is_empty() {
-            self.discard_tail(buf);
-            if let Some(d) = self.decode_item(buf) {
-                return Some(d);
-            }
-        }
-        None
-    }
     fn discard_tail(&mut self, buf: &mut BytesMut) {
         if !buf.is_empty() {
             // A record cut short: count it once, then look for records after its first byte.

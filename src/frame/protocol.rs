@@ -96,12 +96,20 @@ pub enum Decoded {
 pub trait ProtocolDecoder: Send {
     fn protocol(&self) -> Protocol;
     fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded>;
+    /// At end of input: what can still be decoded, then the tail that cannot complete is
+    /// counted and dropped ([`Self::discard_tail`]) and decoding resumes after it, until the
+    /// buffer is empty.
     fn decode_item_eof(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        let d = self.decode_item(buf);
-        if d.is_none() && !buf.is_empty() {
-            self.discard_tail(buf);
+        if let Some(d) = self.decode_item(buf) {
+            return Some(d);
         }
-        d
+        while !buf.is_empty() {
+            self.discard_tail(buf);
+            if let Some(d) = self.decode_item(buf) {
+                return Some(d);
+            }
+        }
+        None
     }
     /// Bytes that can never complete a message at end of input: count and drop them.
     fn discard_tail(&mut self, buf: &mut BytesMut);
