@@ -14,7 +14,7 @@ use std::path::Path;
 use imuprep::nav::{earth, pos};
 use imuprep::report::audit::load_recording;
 use imuprep::report::navtest::{
-    default_records, filter_config, percentile, run_filter, schedule, to_body,
+    self, default_records, filter_config, percentile, run_filter, schedule, to_body,
 };
 
 #[derive(serde::Deserialize)]
@@ -83,4 +83,55 @@ fn drive_raw_30s_outages_agree_with_the_reference_filter() {
         assert!((got - want).abs() < 0.01, "axis {a}: {got} °/s");
     }
     assert!(run.stats.zupt_updates > 50, "{:?}", run.stats);
+}
+
+/// Variant (c): `imuprep fit`'s models from the drive's first 180 s. With `fit`'s default
+/// `--min-still-s 60` the bias model is NOT FITTED (the longest still stretch is 18.6 s) and
+/// (c) must say so; with 10 s it is fitted on that stretch. The drive's fitted bias model
+/// (100 Hz) must be refused by the walk's pipeline (152 Hz), and only outages outside the
+/// fitted stretch count as held out.
+#[test]
+fn fitted_models_for_variant_c_say_not_fitted_and_are_refused_at_another_rate() {
+    let data = Path::new("../shared/data/real/rtklibexplorer_drive_walk");
+    if !data.exists() {
+        eprintln!(
+            "SKIPPED: {} is absent (real recordings live beside the repo)",
+            data.display()
+        );
+        return;
+    }
+    let specs = default_records(data);
+    let drive = navtest::load(&specs[0]).unwrap();
+    let walk = navtest::load(&specs[1]).unwrap();
+    let cfg = imuprep::config::Config::default_embedded().unwrap();
+
+    let m60 = navtest::fit_models(&drive.spec, &drive.desc, &drive.raw, 60.0).unwrap();
+    assert!(m60.bias.is_none());
+    let why = m60.bias_skipped.as_deref().unwrap();
+    assert!(why.contains("no still stretch of 60 s"), "{why}");
+    assert!(m60.label("drive").contains("bias NOT FITTED"));
+    // Tolerance: `fit`'s stillness detector on 100-Hz samples; the stretch is 18.6 s
+    // (docs/navigation.md), ±1 s.
+    assert!((m60.still_s - 18.6).abs() < 1.0, "{}", m60.still_s);
+
+    let m10 = navtest::fit_models(&drive.spec, &drive.desc, &drive.raw, 10.0).unwrap();
+    let bias = m10.bias.as_ref().unwrap();
+    assert_eq!(bias.channels.len(), 6);
+    assert!(m10.label("drive").contains("bias fitted"));
+    // Held out: the drive's outages start 40 s after the first GNSS epoch; those inside the
+    // first 180 s of the IMU (+1 s) are not.
+    let gnss = &drive.gnss;
+    let outages = schedule(gnss, &drive.spec, 30.0);
+    let kept: Vec<f64> = outages
+        .iter()
+        .filter(|o| navtest::held_out(&m10, o.start, o.end))
+        .map(|o| o.start)
+        .collect();
+    assert!(!kept.is_empty() && kept.len() < outages.len());
+    assert!(kept.iter().all(|&s| s > m10.span_gpst.1 + 1.0));
+    // Another recording's bias model at another rate: refused by the pipeline, not run.
+    let e = navtest::clean(&m10.config(&cfg), &walk.desc, &walk.raw).unwrap_err();
+    assert!(e.contains("differs from the stage's"), "{e}");
+    // Without a bias model only the ARIMA model travels: the walk's pipeline takes it.
+    assert!(navtest::clean(&m60.config(&cfg), &walk.desc, &walk.raw).is_ok());
 }

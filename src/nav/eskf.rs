@@ -64,17 +64,72 @@ pub struct ImuNoise {
 }
 
 /// A first-order Gauss–Markov process: stationary σ and correlation time.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct GaussMarkov {
     pub sigma: f64,
     pub tc_s: f64,
 }
 
-/// Bias augmentation: a Gauss–Markov part per axis on top of the random-walk bias.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
+/// Shortest correlation time a Gauss–Markov bias part may have, s. GNSS arrives every 0.25 s
+/// (4 Hz): a part that decorrelates within a few GNSS intervals cannot be told from the white
+/// noise the filter already carries (angle / velocity random walk), and its transition
+/// `Φ = 1 − Δt/T_c` needs `T_c ≫ Δt` (T_c → 0 makes it diverge). 1 s = 4 GNSS intervals, 100
+/// IMU epochs at 100 Hz. A shorter T_c comes from a bad fit (an Allan curve without a minimum,
+/// an AR pole near zero), not from the sensor.
+pub const MIN_GM_TC_S: f64 = 1.0;
+
+impl GaussMarkov {
+    /// `Err(why)` when the part cannot be a bias process: σ not finite and positive, or T_c not
+    /// finite or below [`MIN_GM_TC_S`].
+    pub fn check(&self) -> Result<(), String> {
+        if !(self.sigma.is_finite() && self.sigma > 0.0) {
+            return Err(format!("σ {:e} is not finite and positive", self.sigma));
+        }
+        if !(self.tc_s.is_finite() && self.tc_s >= MIN_GM_TC_S) {
+            return Err(format!(
+                "T_c {:e} s is not a finite correlation time of at least {MIN_GM_TC_S} s",
+                self.tc_s
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Bias augmentation: a Gauss–Markov part per axis on top of the random-walk bias. `None` on
+/// an axis: no Gauss–Markov part there — its state is held at zero (no initial σ, no noise),
+/// so that axis's bias is the random walk alone.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct BiasAugmentation {
-    pub accel: [GaussMarkov; 3],
-    pub gyro: [GaussMarkov; 3],
+    pub accel: [Option<GaussMarkov>; 3],
+    pub gyro: [Option<GaussMarkov>; 3],
+}
+
+impl BiasAugmentation {
+    /// Every part that fails [`GaussMarkov::check`] replaced by `None` (random walk only);
+    /// returns the refused parts as (axis name, why), axes `ax ay az gx gy gz` (filter axes).
+    pub fn guarded(&self) -> (BiasAugmentation, Vec<(String, String)>) {
+        let mut out = *self;
+        let mut refused = vec![];
+        for (kind, parts) in [("a", &mut out.accel), ("g", &mut out.gyro)] {
+            for (i, part) in parts.iter_mut().enumerate() {
+                if let Some(gm) = part
+                    && let Err(why) = gm.check()
+                {
+                    refused.push((format!("{kind}{}", ["x", "y", "z"][i]), why));
+                    *part = None;
+                }
+            }
+        }
+        (out, refused)
+    }
+
+    /// True when no axis keeps a Gauss–Markov part.
+    pub fn is_empty(&self) -> bool {
+        self.accel
+            .iter()
+            .chain(self.gyro.iter())
+            .all(Option::is_none)
+    }
 }
 
 /// Zero-velocity / zero-rate update settings.
@@ -121,6 +176,9 @@ pub struct EskfConfig {
     pub yaw_align_speed: Option<f64>,
     /// σ of the yaw after the alignment, rad.
     pub yaw_align_sd: f64,
+    /// Gauss–Markov bias parts; the filter applies [`BiasAugmentation::guarded`] itself (an
+    /// implausible part falls back to the random walk, counted in [`EskfStats`]), and runs with
+    /// 15 states when no part is left.
     pub augmentation: Option<BiasAugmentation>,
 }
 
@@ -215,6 +273,8 @@ pub struct EskfStats {
     pub gnss_updates: usize,
     pub zupt_updates: usize,
     pub yaw_aligned_at_update: Option<usize>,
+    /// Gauss–Markov bias parts of the configuration the filter refused ([`GaussMarkov::check`]).
+    pub gm_parts_refused: usize,
 }
 
 /// The filter (module docs).
@@ -243,7 +303,13 @@ pub struct Eskf {
 
 impl Eskf {
     /// A filter at `nav` with zero bias estimates and the configured initial uncertainty.
-    pub fn new(cfg: EskfConfig, nav: NavState) -> Self {
+    pub fn new(mut cfg: EskfConfig, nav: NavState) -> Self {
+        let mut refused = 0;
+        if let Some(a) = cfg.augmentation {
+            let (g, r) = a.guarded();
+            refused = r.len();
+            cfg.augmentation = (!g.is_empty()).then_some(g);
+        }
         let n = if cfg.augmentation.is_some() { 21 } else { 15 };
         let mut p = DMatrix::zeros(n, n);
         for i in 0..3 {
@@ -255,8 +321,8 @@ impl Eskf {
         }
         if let Some(a) = &cfg.augmentation {
             for i in 0..3 {
-                p[(idx::MA + i, idx::MA + i)] = a.accel[i].sigma.powi(2);
-                p[(idx::MG + i, idx::MG + i)] = a.gyro[i].sigma.powi(2);
+                p[(idx::MA + i, idx::MA + i)] = a.accel[i].map_or(0.0, |g| g.sigma.powi(2));
+                p[(idx::MG + i, idx::MG + i)] = a.gyro[i].map_or(0.0, |g| g.sigma.powi(2));
             }
         }
         let smooth = cfg.zupt.map_or(1, |z| z.smooth.max(1));
@@ -275,7 +341,10 @@ impl Eskf {
             hist_pos: 0,
             hist_sum: (Vector3::zeros(), Vector3::zeros()),
             yaw_aligned: cfg.yaw_align_speed.is_none(),
-            stats: EskfStats::default(),
+            stats: EskfStats {
+                gm_parts_refused: refused,
+                ..Default::default()
+            },
             cfg,
         }
     }
@@ -367,8 +436,8 @@ impl Eskf {
             let mut da = Matrix3::zeros();
             let mut dg = Matrix3::zeros();
             for i in 0..3 {
-                da[(i, i)] = -1.0 / a.accel[i].tc_s;
-                dg[(i, i)] = -1.0 / a.gyro[i].tc_s;
+                da[(i, i)] = a.accel[i].map_or(0.0, |g| -1.0 / g.tc_s);
+                dg[(i, i)] = a.gyro[i].map_or(0.0, |g| -1.0 / g.tc_s);
             }
             put(idx::MA, idx::MA, &da);
             put(idx::MG, idx::MG, &dg);
@@ -382,11 +451,11 @@ impl Eskf {
             p[(idx::BG + i, idx::BG + i)] += nz.gyro_bias_rw.powi(2) * dt;
         }
         if let Some(a) = &self.cfg.augmentation {
+            let q =
+                |g: &Option<GaussMarkov>| g.map_or(0.0, |g| 2.0 * g.sigma.powi(2) / g.tc_s * dt);
             for i in 0..3 {
-                p[(idx::MA + i, idx::MA + i)] +=
-                    2.0 * a.accel[i].sigma.powi(2) / a.accel[i].tc_s * dt;
-                p[(idx::MG + i, idx::MG + i)] +=
-                    2.0 * a.gyro[i].sigma.powi(2) / a.gyro[i].tc_s * dt;
+                p[(idx::MA + i, idx::MA + i)] += q(&a.accel[i]);
+                p[(idx::MG + i, idx::MG + i)] += q(&a.gyro[i]);
             }
         }
         self.p = 0.5 * (&p + p.transpose());
@@ -538,9 +607,10 @@ impl Eskf {
     /// Propagate the Gauss–Markov bias estimates' mean over `dt` (they decay towards zero).
     fn decay_gauss_markov(&mut self, dt: f64) {
         if let Some(a) = &self.cfg.augmentation {
+            let k = |g: &Option<GaussMarkov>| g.map_or(0.0, |g| (-dt / g.tc_s).exp());
             for i in 0..3 {
-                self.ma[i] *= (-dt / a.accel[i].tc_s).exp();
-                self.mg[i] *= (-dt / a.gyro[i].tc_s).exp();
+                self.ma[i] *= k(&a.accel[i]);
+                self.mg[i] *= k(&a.gyro[i]);
             }
         }
     }

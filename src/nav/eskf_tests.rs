@@ -247,3 +247,76 @@ fn outage_growth_matches_half_b_t_squared() {
         }
     }
 }
+
+#[test]
+fn implausible_gauss_markov_parts_fall_back_to_the_random_walk() {
+    // A bad Allan/AR fit can give T_c ≈ 0 (or σ NaN). Such a part must be refused — the axis
+    // keeps the random walk only — and with every part refused the 21-state filter must give
+    // exactly the 15-state filter's solution (the refused states are never created or are
+    // held at zero), not a diverging one.
+    let good = GaussMarkov {
+        sigma: 0.01f64.to_radians(),
+        tc_s: 300.0,
+    };
+    let tiny = GaussMarkov {
+        sigma: 0.01f64.to_radians(),
+        tc_s: 1e-4,
+    };
+    let nan = GaussMarkov {
+        sigma: f64::NAN,
+        tc_s: 50.0,
+    };
+    assert!(good.check().is_ok());
+    assert!(tiny.check().is_err());
+    assert!(nan.check().is_err());
+    let mixed = BiasAugmentation {
+        accel: [Some(nan), None, Some(good)],
+        gyro: [Some(tiny), Some(good), Some(tiny)],
+    };
+    let (g, refused) = mixed.guarded();
+    let names: Vec<&str> = refused.iter().map(|r| r.0.as_str()).collect();
+    assert_eq!(names, ["ax", "gx", "gz"]);
+    assert_eq!(g.accel, [None, None, Some(good)]);
+    assert_eq!(g.gyro, [None, Some(good), None]);
+
+    // All parts implausible: the filter refuses them and runs as the plain 15-state filter.
+    let all_bad = BiasAugmentation {
+        accel: [Some(tiny); 3],
+        gyro: [Some(tiny); 3],
+    };
+    let mut c_aug = cfg(true);
+    c_aug.augmentation = Some(all_bad);
+    let mut plain = Eskf::new(cfg(true), at_rest(0.3));
+    let mut aug = Eskf::new(c_aug, at_rest(0.3));
+    assert_eq!(aug.n_states(), 15);
+    assert_eq!(aug.stats.gm_parts_refused, 6);
+    // Some refused, some kept: 21 states, the refused axes' states stay exactly zero.
+    let mut c_mixed = cfg(true);
+    c_mixed.augmentation = Some(mixed);
+    let mut part = Eskf::new(c_mixed, at_rest(0.3));
+    assert_eq!(part.n_states(), 21);
+    assert_eq!(part.stats.gm_parts_refused, 3);
+    let mut rng = Rng::new(16);
+    let (w0, f0) = rest_imu(&plain.nav.c_bn);
+    let bg = Vector3::new(0.1, -0.08, 0.12).map(f64::to_radians);
+    // White gyro noise at the drive's datasheet density (as the test above).
+    let sg = 0.0038f64.to_radians() / DT.sqrt();
+    for _ in 0..6_000 {
+        let w = w0 + bg + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * sg;
+        for kf in [&mut plain, &mut aug, &mut part] {
+            kf.propagate(DT, &w, &f0);
+        }
+    }
+    assert_eq!(plain.nav, aug.nav);
+    assert_eq!(plain.stats.zupt_updates, aug.stats.zupt_updates);
+    // At rest with ZUPT every 0.5 s (as the test above): the velocity stays at the
+    // update's σ (0.01 m/s); 0.05 m/s allows for the last 0.5 s before an update.
+    for kf in [&plain, &part] {
+        assert!(kf.stats.zupt_updates > 100, "{:?}", kf.stats);
+        assert!(kf.nav.v.norm() < 0.05, "{}", kf.nav.v);
+    }
+    assert_eq!(part.mg[0], 0.0);
+    assert_eq!(part.mg[2], 0.0);
+    assert_eq!(part.ma[0], 0.0);
+    assert_eq!(part.ma[1], 0.0);
+}

@@ -1,0 +1,139 @@
+//! The recordings and the reference filter's settings for them, and the IMU in the body frame.
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::{Matrix3, Vector3};
+use serde::Serialize;
+
+use crate::nav::earth::euler_to_ctm;
+use crate::nav::eskf::*;
+use crate::sample::Sample;
+
+/// Standard gravity the importer uses to turn g into m/s².
+pub(super) const G0: f64 = 9.80665;
+
+/// One recording of the navigation test and the reference filter's settings for it.
+#[derive(Clone, Debug, Serialize)]
+pub struct RecordSpec {
+    pub name: String,
+    pub imu_csv: PathBuf,
+    pub pos: PathBuf,
+    /// IMU → body rotation as roll, pitch, yaw, degrees.
+    pub mount_rpy_deg: [f64; 3],
+    /// IMU → antenna, body (forward, right, down), m.
+    pub lever_arm_b: [f64; 3],
+    /// Added to the IMU time stamps, s.
+    pub t_off: f64,
+    /// First outage start, s after the first GNSS epoch.
+    pub start_coast: f64,
+    /// The tool's `imu_noise_factors` for attitude, velocity, accel bias, gyro bias.
+    pub noise_factors: [f64; 4],
+    /// The stretch variant (c)'s models are fitted on (`imuprep fit --skip-s --train-s`), as the
+    /// Python harness: drive the first 180 s, walk 88 s to the end (its RTK is float there).
+    pub fit_skip_s: f64,
+    pub fit_train_s: f64,
+}
+
+/// The rtklibexplorer drive and walk in `data` (`../shared/data/real/rtklibexplorer_drive_walk`).
+pub fn default_records(data: &Path) -> Vec<RecordSpec> {
+    vec![
+        RecordSpec {
+            name: "drive".into(),
+            imu_csv: data.join("drive_0708_imu.csv"),
+            pos: data.join("drive_0708_gnss_rtk.pos"),
+            mount_rpy_deg: [180.0, -6.79, 185.35],
+            lever_arm_b: [0.0, 0.05, 0.0],
+            t_off: -0.125,
+            start_coast: 40.0,
+            noise_factors: [1.0, 2.0, 4.0, 2.0],
+            fit_skip_s: 0.0,
+            fit_train_s: 180.0,
+        },
+        RecordSpec {
+            name: "walk".into(),
+            imu_csv: data.join("walk_0827_imu.csv"),
+            pos: data.join("walk_0827_gnss_rtk.pos"),
+            mount_rpy_deg: [180.0, 0.0, -90.0],
+            lever_arm_b: [0.0, 0.05, 0.0],
+            t_off: 0.0,
+            start_coast: 25.0,
+            noise_factors: [4.0, 4.0, 4.0, 4.0],
+            fit_skip_s: 88.0,
+            fit_train_s: 50.0,
+        },
+    ]
+}
+
+/// The reference filter's process noise as continuous densities: its datasheet values
+/// (gyro 0.0038 °/s/√Hz, accel 70 µg/√Hz, accel bias 7 µg/√s, gyro bias 3.8e-5 °/s/√s) times
+/// √(its nominal 100 Hz) times its per-state factor — the tool adds `(v·√rate·factor)²·Δt`.
+pub fn reference_noise(f: &[f64; 4]) -> ImuNoise {
+    let root_hz = 10.0;
+    let ug = 1e-6 * G0;
+    ImuNoise {
+        gyro_psd: 0.0038f64.to_radians() * root_hz * f[0],
+        accel_psd: 70.0 * ug * root_hz * f[1],
+        accel_bias_rw: 7.0 * ug * root_hz * f[2],
+        gyro_bias_rw: 3.8e-5f64.to_radians() * root_hz * f[3],
+    }
+}
+
+/// The filter settings for a record (see module docs).
+pub fn filter_config(spec: &RecordSpec, augmentation: Option<BiasAugmentation>) -> EskfConfig {
+    EskfConfig {
+        noise: reference_noise(&spec.noise_factors),
+        init: InitSd {
+            att: [2f64.to_radians(), 2f64.to_radians(), 100f64.to_radians()],
+            vel: [0.05, 0.05, 0.1],
+            pos: [0.05, 0.05, 0.1],
+            accel_bias: 0.2,
+            gyro_bias: 0.2f64.to_radians(),
+        },
+        lever_arm_b: spec.lever_arm_b,
+        zupt: Some(ZuptConfig {
+            window: 50,
+            smooth: 10,
+            accel_thresh: 0.25,
+            gyro_thresh: 0.25f64.to_radians(),
+            vel_sd: 0.01,
+            rate_sd: 0.01f64.to_radians(),
+        }),
+        yaw_align_speed: Some(1.0),
+        yaw_align_sd: 5f64.to_radians(),
+        augmentation,
+    }
+}
+
+/// IMU epochs in the body frame, GPST time (with the record's offset), SI units.
+#[derive(Clone, Debug)]
+pub struct BodyImu {
+    pub t: Vec<f64>,
+    pub w: Vec<Vector3<f64>>,
+    pub f: Vec<Vector3<f64>>,
+}
+
+pub(super) fn mount(spec: &RecordSpec) -> Matrix3<f64> {
+    let r = spec.mount_rpy_deg.map(f64::to_radians);
+    euler_to_ctm(r[0], r[1], r[2])
+}
+
+/// Rotate into the body frame; accelerations were g × 9.80665 (the importer) and become
+/// g × local gravity (the reference filter's reading of the sensor's g).
+pub fn to_body(spec: &RecordSpec, samples: &[Sample], g_local: f64) -> BodyImu {
+    let c = mount(spec);
+    let k = g_local / G0;
+    let mut b = BodyImu {
+        t: Vec::with_capacity(samples.len()),
+        w: Vec::with_capacity(samples.len()),
+        f: Vec::with_capacity(samples.len()),
+    };
+    for s in samples {
+        if !(s.gyro.iter().chain(s.accel.iter()).all(|v| v.is_finite())) {
+            continue;
+        }
+        b.t.push(s.t_s() + spec.t_off);
+        b.w.push(c * s.gyro);
+        b.f.push(c * s.accel * k);
+    }
+    b
+}
