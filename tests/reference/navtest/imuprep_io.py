@@ -89,9 +89,12 @@ def fitted_config(base_config, arima, bias, out_path):
 
 
 def bias_model_means_dps(bias_toml):
-    """The `mean` of each gyro channel of a fitted bias model (rad/s in the file), deg/s."""
+    """The `mean` of each gyro channel of a fitted bias model (rad/s in the file), deg/s; None
+    when `imuprep fit` wrote no channel models (no still stretch of --min-still-s: NOT FITTED)."""
     with open(bias_toml, "rb") as f:
-        chans = {c["channel"]: c for c in tomllib.load(f)["channels"]}
+        chans = {c["channel"]: c for c in tomllib.load(f).get("channels", [])}
+    if not all(c in chans for c in ("gx", "gy", "gz")):
+        return None
     return np.rad2deg([chans[c]["mean"] for c in ("gx", "gy", "gz")])
 
 

@@ -171,6 +171,10 @@ class LogInputs:
         cfg = imuprep_io.fitted_config(base, arima, bias, self.w / "fitted.toml")
         self.make_cleaned("fitted", cfg)
         self.summaries["fitted"]["model_gyro_mean_dps"] = imuprep_io.bias_model_means_dps(bias)
+        fit_out = (self.w / "fit.txt").read_text()
+        if "NOT FITTED" in fit_out:
+            why = fit_out.split("NOT FITTED", 1)[1].splitlines()[0].lstrip(" —-")
+            self.summaries["fitted"]["bias_not_fitted"] = why
 
     def record_gyro_changes(self):
         """What imuprep took off the gyros, IMU axes: mean of (output - input), deg/s."""

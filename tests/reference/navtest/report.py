@@ -204,6 +204,12 @@ def log_section(log, rtk, fit_span, s1, s2, summaries, diag, checks):
         out.append("(c)'s bias model (`imuprep fit`, %s): `mean` of gx, gy, gz = %s °/s." % (
             fit_text.split(":")[0], ", ".join("%+.3f" % x for x in means)))
         out.append("")
+    elif "fitted" in summaries:
+        out.append("(c)'s bias model (`imuprep fit`, %s): NOT FITTED — %s (only the ARIMA model "
+                   "is fitted; the bias stage warms up as by default)." % (
+                       fit_text.split(":")[0],
+                       summaries["fitted"].get("bias_not_fitted", "no channel models written")))
+        out.append("")
     out.append("The filter's z (yaw) gyro-bias estimate, °/s, body axes (last GNSS epoch at or "
                "before each time):")
     out.append("")
