@@ -135,3 +135,45 @@ fn fitted_models_for_variant_c_say_not_fitted_and_are_refused_at_another_rate() 
     // Without a bias model only the ARIMA model travels: the walk's pipeline takes it.
     assert!(navtest::clean(&m60.config(&cfg), &walk.desc, &walk.raw).is_ok());
 }
+
+/// comma2k19 as the third record: its post-processed pose becomes 4-Hz GNSS (ECEF → geodetic),
+/// the 60-s segment holds 20 ten-second outages and no 60-s one, and the raw-IMU filter learns
+/// the uncalibrated z-gyro bias (3.9 °/s by the segment's NOTES; Android's own estimate there is
+/// 3.917 °/s).
+#[test]
+fn comma2k19_runs_as_a_third_record() {
+    let dir = Path::new("../shared/data/real/comma2k19_car_segment");
+    if !dir.exists() {
+        eprintln!(
+            "SKIPPED: {} is absent (real recordings live beside the repo)",
+            dir.display()
+        );
+        return;
+    }
+    let spec = navtest::comma_record(dir);
+    let l = navtest::load(&spec).unwrap();
+    // 1,200 pose rows at 20 Hz, every 5th.
+    assert_eq!(l.gnss.len(), 240);
+    // The segment is on I-280 near San Francisco (NOTES.txt), 37.7° N, 122.5° W.
+    let (lat, lon) = (l.gnss[0].lat.to_degrees(), l.gnss[0].lon.to_degrees());
+    assert!(
+        (lat - 37.72).abs() < 0.01 && (lon + 122.47).abs() < 0.01,
+        "{lat} {lon}"
+    );
+    assert!(schedule(&l.gnss, &spec, 60.0).is_empty());
+    let outages = schedule(&l.gnss, &spec, 10.0);
+    assert_eq!(outages.len(), 20);
+    let g = earth::gravity(l.gnss[0].lat, l.gnss[0].h);
+    let imu = to_body(&spec, &l.raw, g);
+    let run = run_filter(&filter_config(&spec, None), &imu, &l.gnss, &outages, None).unwrap();
+    assert_eq!(run.errors.len(), 20);
+    // Tolerance: 0.2 °/s around the notes' 3.9 °/s — the filter learns it from 4-Hz GNSS in
+    // 60 s of straight driving (no zero-rate updates), so it is looser than on the drive.
+    let bz = run.median_gyro_bias_dps[2];
+    assert!((bz - 3.9).abs() < 0.2, "z gyro bias {bz} °/s");
+    // 10-s outages at highway speed with a known-bias filter: metres, not tens of metres
+    // (the run above gives a median of 0.63 m); 5 m bounds a filter that lost the bias.
+    let mut h: Vec<f64> = run.errors.iter().map(|e| e.horiz_m).collect();
+    let m = percentile(&mut h, 50.0);
+    assert!(m < 5.0, "median {m} m");
+}

@@ -9,7 +9,7 @@ const ROW_HEAD: &str = "| outage s | variant | outages | horiz. median m | horiz
 fn row_table(f: &mut fmt::Formatter<'_>, rows: &[Row]) -> fmt::Result {
     writeln!(f, "{ROW_HEAD}")?;
     for l in LENGTHS {
-        for w in rows.iter().filter(|w| w.length_s == l) {
+        for w in rows.iter().filter(|w| w.length_s == l && w.outages > 0) {
             writeln!(
                 f,
                 "| {:.0} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} |",
@@ -40,10 +40,17 @@ fn record(f: &mut fmt::Formatter<'_>, r: &RecordResult) -> fmt::Result {
         r.name, r.imu_epochs, r.gnss_epochs, r.fixed_epochs, r.duration_s
     )?;
     for (l, n, a, b, s) in &r.schedule {
-        writeln!(
-            f,
-            "- {l:.0} s: {n} outages, starts {a:.1}–{b:.1} s after the first GNSS epoch, {s:.2} s apart"
-        )?;
+        match n {
+            0 => writeln!(f, "- {l:.0} s: none (the record is too short)")?,
+            1 => writeln!(
+                f,
+                "- {l:.0} s: 1 outage, at {a:.1} s after the first GNSS epoch"
+            )?,
+            _ => writeln!(
+                f,
+                "- {l:.0} s: {n} outages, starts {a:.1}–{b:.1} s after the first GNSS epoch, {s:.2} s apart"
+            )?,
+        }
     }
     writeln!(f)?;
     row_table(f, &r.rows)?;
@@ -59,7 +66,7 @@ fn record(f: &mut fmt::Formatter<'_>, r: &RecordResult) -> fmt::Result {
     )?;
     writeln!(f, "|---:|---:|---:|---:|---:|---|---:|---:|---:|---|")?;
     let ok = |b: bool| if b { "met" } else { "**missed**" };
-    for c in &r.harm {
+    for c in r.harm.iter().filter(|c| c.outages > 0) {
         writeln!(
             f,
             "| {:.0} | {} | {:.2} | {:.2} | {:+.3} | {} | {:.2} | {:.2} | {:+.3} | {} |",
@@ -84,13 +91,13 @@ fn record(f: &mut fmt::Formatter<'_>, r: &RecordResult) -> fmt::Result {
         )?;
         writeln!(
             f,
-            "| outage s | start s | (a) m | (b) m | replaced / bias-corrected / samples | gyro: imuprep mean change | gyro: filter bias at start (b) − (a) | gyro: net rate difference | accel: net difference m/s² | tilt at start (b) − (a) ° |"
+            "| outage s | start s | (a) m | (b) m | replaced / bias-corrected / samples | gyro: imuprep mean change (of it: replaced samples) | gyro: filter bias at start (b) − (a) | gyro: net rate difference | accel: net difference m/s² | tilt at start (b) − (a) ° |"
         )?;
         writeln!(f, "|---:|---:|---:|---:|---|---|---|---|---|---:|")?;
         for o in &r.harm_outages {
             writeln!(
                 f,
-                "| {:.0} | {:.1} | {:.2} | {:.2} | {} / {} / {} | {} | {} | {} | {} | {:.4} |",
+                "| {:.0} | {:.1} | {:.2} | {:.2} | {} / {} / {} | {} ({}) | {} | {} | {} | {:.4} |",
                 o.length_s,
                 o.start_rel_s,
                 o.a_m,
@@ -99,6 +106,7 @@ fn record(f: &mut fmt::Formatter<'_>, r: &RecordResult) -> fmt::Result {
                 o.bias_removed,
                 o.samples,
                 v3(&o.mean_change_dps),
+                v3(&o.replaced_change_dps),
                 v3(&o.filter_bias_diff_dps),
                 v3(&o.net_rate_diff_dps),
                 v3(&o.net_accel_diff),

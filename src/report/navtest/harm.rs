@@ -43,6 +43,9 @@ pub struct HarmOutage {
     pub samples: usize,
     /// Mean (out − in) of the gyros over the outage, body axes, °/s.
     pub mean_change_dps: [f64; 3],
+    /// The part of it from the replaced samples (their change summed, over all samples of
+    /// the outage); the rest is the bias stage's correction.
+    pub replaced_change_dps: [f64; 3],
     /// The filter's gyro-bias estimate at the outage start, (b) − (a), body, °/s.
     pub filter_bias_diff_dps: [f64; 3],
     /// What the coasting filter integrates differently under (b): change − estimate
@@ -129,12 +132,21 @@ fn explain(
         }
     }
     let (mut replaced, mut bias_removed, mut samples) = (0, 0, 0);
+    let mut chg_rep = [0.0; 3];
     for s in cleaned {
         let t = s.t_s() + t_off;
         if t >= a.start && t <= a.end {
             samples += 1;
-            replaced += usize::from(s.flags & (flags::REPLACED | flags::REPLACED_ANY) != 0);
+            let rep = s.flags & (flags::REPLACED | flags::REPLACED_ANY) != 0;
+            replaced += usize::from(rep);
             bias_removed += usize::from(s.flags & flags::BIAS_REMOVED != 0);
+            // The body-frame epoch of this sample (same time stamp in both inputs).
+            let i = raw.t.partition_point(|&x| x < t);
+            if rep && i < raw.t.len().min(clean.w.len()) && (raw.t[i] - t).abs() < 1e-6 {
+                for (k, c) in chg_rep.iter_mut().enumerate() {
+                    *c += (clean.w[i][k] - raw.w[i][k]).to_degrees() / n as f64;
+                }
+            }
         }
     }
     let diff = [0, 1, 2].map(|k| b.gyro_bias_start_dps[k] - a.gyro_bias_start_dps[k]);
@@ -147,6 +159,7 @@ fn explain(
         bias_removed,
         samples,
         mean_change_dps: chg,
+        replaced_change_dps: chg_rep,
         filter_bias_diff_dps: diff,
         net_rate_diff_dps: [0, 1, 2].map(|k| chg[k] - diff[k]),
         net_accel_diff: [0, 1, 2]
@@ -233,6 +246,13 @@ mod tests {
             (o.net_rate_diff_dps[2] - 0.06).abs() < 1e-9,
             "{:?}",
             o.net_rate_diff_dps
+        );
+        // The three replaced samples carry 3 × 0.1 °/s of the 101-sample window's change.
+        let want = 0.3 / 101.0;
+        assert!(
+            (o.replaced_change_dps[2] - want).abs() < 1e-9,
+            "{:?}",
+            o.replaced_change_dps
         );
     }
 }

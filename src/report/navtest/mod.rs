@@ -39,6 +39,7 @@
 
 pub mod augment;
 pub mod budget;
+pub mod comma;
 mod display;
 pub mod fitted;
 pub mod harm;
@@ -58,7 +59,10 @@ pub use outages::{
     LENGTHS, MIN_STARTS, Oracle, Outage, OutageError, Row, RunResult, percentile, rows, run_filter,
     run_filter_with, schedule,
 };
-pub use setup::{BodyImu, RecordSpec, default_records, filter_config, reference_noise, to_body};
+pub use setup::{
+    BodyImu, GnssSource, RecordSpec, comma_record, default_records, filter_config, reference_noise,
+    to_body,
+};
 pub use static_drift::{DriftRow, STATIC_ALIGN_S, run_bench, static_drift};
 
 use crate::config::Config;
@@ -79,7 +83,14 @@ pub struct Loaded {
 /// Read a record's IMU and RTK solution.
 pub fn load(spec: &RecordSpec) -> Result<Loaded, String> {
     let (desc, raw) = load_recording(&spec.imu_csv)?;
-    let gnss = pos::read(&spec.pos).map_err(|e| e.to_string())?;
+    let gnss = match spec.gnss {
+        GnssSource::RtkPos => pos::read(&spec.pos).map_err(|e| e.to_string())?,
+        GnssSource::ReferencePose {
+            every,
+            pos_sd,
+            vel_sd,
+        } => comma::read_reference_pose(&spec.pos, every, pos_sd, vel_sd)?,
+    };
     if gnss.is_empty() || raw.is_empty() {
         return Err("no GNSS epochs or no IMU samples".into());
     }
@@ -311,9 +322,10 @@ pub struct NavtestReport {
     pub drift_errors: Vec<(String, String)>,
 }
 
-/// Run everything found under `data` (`../shared/data/real`); a missing recording is listed
-/// in the errors, not fatal. Variant (c) on each record uses the models `fit` made on its own
-/// fit stretch and on the other record's, for each of [`MIN_STILL_CHOICES_S`].
+/// Run everything found under `data` (`../shared/data/real`): the rtklibexplorer drive and
+/// walk and the comma2k19 segment; a missing recording is listed in the errors, not fatal.
+/// Variant (c) on each record uses the models `fit` made on its own fit stretch and on the
+/// other records of the same sensor, for each of [`MIN_STILL_CHOICES_S`].
 pub fn navtest(data: &Path, cfg: &Config, with_static: bool) -> NavtestReport {
     let mut rep = NavtestReport {
         records: vec![],
@@ -322,7 +334,9 @@ pub fn navtest(data: &Path, cfg: &Config, with_static: bool) -> NavtestReport {
         drift_errors: vec![],
     };
     let mut loaded = vec![];
-    for spec in default_records(&data.join("rtklibexplorer_drive_walk")) {
+    let mut specs = default_records(&data.join("rtklibexplorer_drive_walk"));
+    specs.push(comma_record(&data.join("comma2k19_car_segment")));
+    for spec in specs {
         match load(&spec) {
             Ok(l) => loaded.push(l),
             Err(e) => rep.record_errors.push((spec.name.clone(), e)),
@@ -345,7 +359,14 @@ pub fn navtest(data: &Path, cfg: &Config, with_static: bool) -> NavtestReport {
             .filter(|m| m.record == l.spec.name)
             .cloned()
             .collect();
-        mine.extend(models.iter().filter(|m| m.record != l.spec.name).cloned());
+        // Then those of the other records of the same sensor.
+        let same_sensor = |m: &&FittedModels| {
+            m.record != l.spec.name
+                && loaded
+                    .iter()
+                    .any(|o| o.spec.name == m.record && o.spec.sensor == l.spec.sensor)
+        };
+        mine.extend(models.iter().filter(same_sensor).cloned());
         match run_record(l, cfg, &mine) {
             Ok(mut r) => {
                 r.fit_errors = fit_errors
