@@ -23,8 +23,11 @@ pub struct AugmentationSource {
     /// Per IMU channel (gx gy gz ax ay az): correlation time s, σ (rad/s or m/s²), B resolved.
     pub channels: Vec<(String, f64, f64, bool)>,
     /// IMU channels whose part was refused, and why (they keep the random walk only).
-    pub refused: Vec<(String, String)>,
+    pub refused: Refused,
 }
+
+/// Channels whose Gauss–Markov part was refused: (channel, why).
+pub type Refused = Vec<(String, String)>;
 
 /// The filter's Gauss–Markov parts from per-IMU-channel notes (gx gy gz ax ay az) of
 /// `allan_export::bias_model`: each channel's part checked ([`GaussMarkov::check`]; refused
@@ -33,7 +36,7 @@ pub struct AugmentationSource {
 pub fn augmentation_from_notes(
     notes: &[BiasModelNote],
     mount: &nalgebra::Matrix3<f64>,
-) -> Result<(Option<BiasAugmentation>, Vec<(String, String)>), String> {
+) -> Result<(Option<BiasAugmentation>, Refused), String> {
     if notes.len() != 6 {
         return Err(format!("Allan terms for {} of 6 channels", notes.len()));
     }

@@ -220,7 +220,7 @@ mod tests {
             .iter()
             .map(|&ts| Sample {
                 t_ns: (ts * 1e9).round() as u64,
-                flags: if ts >= 45.0 && ts < 45.25 {
+                flags: if (45.0..45.25).contains(&ts) {
                     flags::REPLACED
                 } else {
                     0
