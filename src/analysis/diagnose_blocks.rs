@@ -163,11 +163,15 @@ pub fn held_out_test(
     held: impl Fn(usize) -> bool,
     level: f64,
 ) -> HeldOutTest {
-    held_out_test_floor(family, description, e0, e1, held, level, 0.0)
+    held_out_test_floor(family, description, e0, e1, held, level, 0.0, 0)
 }
 
 /// [`held_out_test`] with σ² at least `min_var` (a line's local noise level when the residual is
-/// coloured: the gain's noise is set by the noise near the line's frequency).
+/// coloured: the gain's noise is set by the noise near the line's frequency), and, with
+/// `hac_lags` > 0, the noise of G from the innovations' autocovariance up to that lag (Bartlett
+/// weights, Newey & West 1987): var G = 4 Σ_h w_h γ̂(h) Σ_k δ_k δ_{k+h}, never below the white
+/// value — for a stochastic model that leaves the innovations somewhat coloured.
+#[allow(clippy::too_many_arguments)]
 pub fn held_out_test_floor(
     family: &str,
     description: String,
@@ -176,6 +180,7 @@ pub fn held_out_test_floor(
     held: impl Fn(usize) -> bool,
     level: f64,
     min_var: f64,
+    hac_lags: usize,
 ) -> HeldOutTest {
     let (mut s0, mut s1, mut dd, mut k) = (0.0, 0.0, 0.0, 0usize);
     for (i, (a, b)) in e0.iter().zip(e1).enumerate() {
@@ -189,11 +194,25 @@ pub fn held_out_test_floor(
     let kf = k.max(1) as f64;
     let sigma = (s1 / kf).max(min_var).sqrt();
     let g = s0 - s1;
-    let z = if dd > 0.0 && sigma > 0.0 {
-        g / (2.0 * sigma * dd.sqrt())
-    } else {
-        0.0
-    };
+    let white = 4.0 * sigma * sigma * dd;
+    let mut var = white;
+    if hac_lags > 0 {
+        let n = e1.len();
+        let mut extra = 0.0;
+        for h in 1..=hac_lags.min(n.saturating_sub(1)) {
+            let (mut gam, mut sd) = (0.0, 0.0);
+            for k in 0..n - h {
+                if held(k) && held(k + h) {
+                    gam += e1[k] * e1[k + h];
+                    sd += (e0[k] - e1[k]) * (e0[k + h] - e1[k + h]);
+                }
+            }
+            let w = 1.0 - h as f64 / (hac_lags + 1) as f64;
+            extra += 2.0 * w * (gam / kf) * sd;
+        }
+        var = (white + 4.0 * extra).max(white);
+    }
+    let z = if var > 0.0 { g / var.sqrt() } else { 0.0 };
     let p = normal_sf(z);
     let kept = p < level && g > 0.0;
     HeldOutTest {

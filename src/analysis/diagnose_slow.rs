@@ -1,6 +1,6 @@
-//! Slow effects over the whole log — bias steps, temperature, g-sensitivity — chosen by forward
-//! selection on the decimated series (1-s means) with a Gauss–Markov / random-walk wander as the
-//! stochastic part (`diagnose_wander`).
+//! Slow effects over the whole log — bias steps, temperature, g-sensitivity — chosen on the
+//! decimated series (1-s means) with a Gauss–Markov / random-walk wander as the stochastic part
+//! (`diagnose_wander`), by rounds of "all candidates in, then backward elimination" ([`select`]).
 //!
 //!   z_k = c + Σ β_j x_{j,k} + g_k + v_k
 //!
@@ -17,13 +17,13 @@
 //! falls between two selection blocks; temperature through a first-order lag (the model file's
 //! form) with the lag of best fit; g-sensitivity when the specific force varies.
 //!
-//! **Test**: each candidate's one-step errors on the held-out points against the current
-//! model's (`diagnose_blocks::held_out_test`), the best passing one added, until none passes.
+//! **Test**: a term's one-step errors on the held-out points against those of the model without
+//! it, both under the same wander (`diagnose_blocks::held_out_test`; see [`select`]).
 //! Also not kept: a step smaller than one LSB, a temperature term whose whole effect over the
 //! range seen is smaller than one LSB (the quantisation floor).
 
 use super::changepoint::{ChangePointSettings, binary_segmentation};
-use super::diagnose_blocks::{HeldOutTest, held_out_test};
+use super::diagnose_blocks::{HeldOutTest, held_out_test_floor};
 use super::diagnose_wander::{WanderFit, WanderParams, fit as wander_fit, innovations};
 use nalgebra::{DMatrix, DVector};
 
@@ -141,29 +141,37 @@ impl SlowCtx<'_> {
         lstsq(&x, &yv).map(|v| v.iter().copied().collect())
     }
 
-    /// Fit the terms on the points where `use_point` (selection, or all for deployment).
-    pub fn fit(&self, terms: &[SlowTerm], use_all: bool) -> Option<SlowFit> {
+    /// GLS of (c, β) under wander `p` on the observed rows (OLS when `p` has no wander).
+    fn gls(&self, cols: &[Vec<f64>], p: &WanderParams, use_all: bool) -> Option<Vec<f64>> {
         let n = self.z.len();
         let obs = |k: usize| use_all || !self.held[k];
         let rows: Vec<usize> = (2..n).filter(|k| obs(*k)).collect();
-        let cols = self.all_columns(terms);
         let mut xc = vec![vec![1.0; n]];
         xc.extend(cols.iter().cloned());
-        let coef = self.fit_rows(&cols, &rows, self.z, &xc)?;
+        if p.q == 0.0 {
+            return self.fit_rows(cols, &rows, self.z, &xc);
+        }
+        let filt = |v: &[f64]| innovations(v, p, &obs).0;
+        let fx: Vec<Vec<f64>> = xc.iter().map(|c| filt(c)).collect();
+        self.fit_rows(cols, &rows, &filt(self.z), &fx)
+    }
+
+    /// Fit the terms on the selection points (or on all, `use_all`, for deployment): OLS, the
+    /// wander, then GLS and the wander again, twice.
+    pub fn fit(&self, terms: &[SlowTerm], use_all: bool) -> Option<SlowFit> {
+        let obs = |k: usize| use_all || !self.held[k];
+        let cols = self.all_columns(terms);
+        let coef = self.gls(&cols, &WanderParams::none(1.0), use_all)?;
         let mut f = SlowFit {
             c: coef[0],
             beta: coef[1..].to_vec(),
             wander: wander_fit(&self.open_loop_with(&cols, coef[0], &coef[1..]), self.dt_s, &obs),
         };
         for _ in 0..2 {
-            let p = f.wander.best;
-            if p.q == 0.0 {
+            if f.wander.best.q == 0.0 {
                 break;
             }
-            let filt = |v: &[f64]| innovations(v, &p, &obs).0;
-            let fz = filt(self.z);
-            let fx: Vec<Vec<f64>> = xc.iter().map(|c| filt(c)).collect();
-            let Some(coef) = self.fit_rows(&cols, &rows, &fz, &fx) else {
+            let Some(coef) = self.gls(&cols, &f.wander.best, use_all) else {
                 break;
             };
             f.c = coef[0];
@@ -171,6 +179,16 @@ impl SlowCtx<'_> {
             f.wander = wander_fit(&self.open_loop_with(&cols, f.c, &f.beta), self.dt_s, &obs);
         }
         Some(f)
+    }
+
+    /// (c, β) of the terms by GLS under a given wander (selection points).
+    pub fn fit_under(&self, terms: &[SlowTerm], wander: &WanderFit) -> Option<SlowFit> {
+        let coef = self.gls(&self.all_columns(terms), &wander.best, false)?;
+        Some(SlowFit {
+            c: coef[0],
+            beta: coef[1..].to_vec(),
+            wander: *wander,
+        })
     }
 
     fn open_loop_with(&self, cols: &[Vec<f64>], c: f64, beta: &[f64]) -> Vec<f64> {
@@ -199,52 +217,29 @@ impl SlowCtx<'_> {
             min_segment_s: 5.0,
             ..ChangePointSettings::default()
         };
-        if let Ok(cps) = binary_segmentation(&da, 1.0 / self.dt_s, 0, &cps)
-            && let Some(cp) = cps
-                .iter()
-                .filter(|c| c.index > 0 && c.index < idx.len())
-                .map(|c| {
-                    let (a, b) = (idx[c.index - 1], idx[c.index]);
-                    (c, if b > a + 1 { (a + 1 + b) / 2 } else { b })
-                })
-                .filter(|(_, k)| {
-                    !terms.iter().any(|t| matches!(t, SlowTerm::Step { k: k0 } if k0.abs_diff(*k) <= min_gap))
-                })
-                .min_by(|a, b| a.0.p_value.total_cmp(&b.0.p_value))
-        {
-            out.push(SlowTerm::Step { k: cp.1 });
+        if let Ok(cps) = binary_segmentation(&da, 1.0 / self.dt_s, 0, &cps) {
+            let mut ks: Vec<usize> = Vec::new();
+            for c in cps.iter().filter(|c| c.index > 0 && c.index < idx.len()) {
+                let (a, b) = (idx[c.index - 1], idx[c.index]);
+                let k = if b > a + 1 { (a + 1 + b) / 2 } else { b };
+                let near = |k0: usize| k0.abs_diff(k) <= min_gap;
+                if !terms.iter().any(|t| matches!(t, SlowTerm::Step { k: k0 } if near(*k0)))
+                    && !ks.iter().any(|k0| near(*k0))
+                {
+                    ks.push(k);
+                }
+            }
+            out.extend(ks.into_iter().map(|k| SlowTerm::Step { k }));
         }
         if let Some(t) = self.temp
             && !terms.iter().any(|x| matches!(x, SlowTerm::Temperature { .. }))
         {
             let ta: Vec<f64> = idx.iter().map(|k| t[*k]).collect();
             let (lo, hi) = ta.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, v| (a.0.min(*v), a.1.max(*v)));
-            if hi - lo >= 0.2 {
-                let mut best: Option<(f64, SlowTerm)> = None;
-                for lag_s in [0.0, 10.0, 20.0, 30.0, 45.0, 60.0, 90.0, 120.0, 180.0, 240.0, 300.0] {
-                    let tl = lagged(t, self.dt_s, lag_s);
-                    let t0 = idx.iter().map(|k| tl[*k]).sum::<f64>() / idx.len() as f64;
-                    let term = SlowTerm::Temperature { lag_s, t0_c: t0 };
-                    let cols = self.columns(&term);
-                    let mut xc = vec![vec![1.0; d.len()]];
-                    xc.extend(cols.iter().cloned());
-                    let Some(coef) = self.fit_rows(&cols, &idx, &d, &xc) else {
-                        continue;
-                    };
-                    let sse: f64 = idx
-                        .iter()
-                        .map(|k| {
-                            let e = d[*k] - coef[0] - coef[1] * cols[0][*k] - coef[2] * cols[1][*k];
-                            e * e
-                        })
-                        .sum();
-                    if best.as_ref().is_none_or(|b| sse < b.0) {
-                        best = Some((sse, term));
-                    }
-                }
-                if let Some((_, t)) = best {
-                    out.push(t);
-                }
+            if hi - lo >= 0.2
+                && let Some(t) = self.temperature_scan(&d, &idx)
+            {
+                out.push(t);
             }
         }
         if let Some(sf) = self.sf
@@ -258,6 +253,54 @@ impl SlowCtx<'_> {
             out.push(SlowTerm::GSensitivity);
         }
         out
+    }
+
+    /// The temperature term (first-order lag of best least-squares fit, centred on the selection
+    /// points' mean) for the residual `d` on the points `idx`.
+    fn temperature_scan(&self, d: &[f64], idx: &[usize]) -> Option<SlowTerm> {
+        let t = self.temp?;
+        let mut best: Option<(f64, SlowTerm)> = None;
+        for lag_s in [0.0, 5.0, 10.0, 20.0, 30.0, 45.0, 60.0, 90.0, 120.0, 180.0, 240.0, 300.0] {
+            let tl = lagged(t, self.dt_s, lag_s);
+            let t0 = idx.iter().map(|k| tl[*k]).sum::<f64>() / idx.len() as f64;
+            let term = SlowTerm::Temperature { lag_s, t0_c: t0 };
+            let cols = self.columns(&term);
+            let mut xc = vec![vec![1.0; d.len()]];
+            xc.extend(cols.iter().cloned());
+            let Some(coef) = self.fit_rows(&cols, idx, d, &xc) else {
+                continue;
+            };
+            let sse: f64 = idx
+                .iter()
+                .map(|k| {
+                    let e = d[*k] - coef[0] - coef[1] * cols[0][*k] - coef[2] * cols[1][*k];
+                    e * e
+                })
+                .sum();
+            if best.as_ref().is_none_or(|b| sse < b.0) {
+                best = Some((sse, term));
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// Re-scan the temperature lag of `terms[i]` with the other terms fitted (selection points).
+    fn polish_temperature(&self, terms: &mut [SlowTerm], f: &SlowFit, i: usize) {
+        let mut j = 0;
+        for t in &terms[..i] {
+            j += self.columns(t).len();
+        }
+        let cols = self.columns(&terms[i]);
+        let mut d = self.open_loop(terms, f);
+        for (ci, c) in cols.iter().enumerate() {
+            for (x, v) in d.iter_mut().zip(c) {
+                *x += f.beta[j + ci] * v;
+            }
+        }
+        let idx: Vec<usize> = (0..d.len()).filter(|k| !self.held[*k]).collect();
+        if let Some(t) = self.temperature_scan(&d, &idx) {
+            terms[i] = t;
+        }
     }
 
     /// Whole effect of a term over the selection points (max − min of its contribution).
@@ -277,7 +320,7 @@ impl SlowCtx<'_> {
     }
 }
 
-/// Result of the forward selection.
+/// Result of the selection.
 pub struct SlowSelection {
     /// Terms kept, in the order added.
     pub terms: Vec<SlowTerm>,
@@ -298,60 +341,125 @@ pub fn describe(t: &SlowTerm, dt_s: f64) -> String {
     }
 }
 
-/// Forward selection (module docs) at level `alpha`, at most `max_terms`; `min_gap` points
-/// between two steps.
+/// Autocovariance lags of the held-out test's noise (decimated points): the wander model is one
+/// GM where a bench has several, so its innovations keep some colour over tens of seconds.
+pub const HAC_LAGS: usize = 30;
+
+/// The held-out test of term `i` of `terms` under the full model `full` (module docs); the
+/// quantisation floor applied.
+fn test_term(ctx: &SlowCtx, terms: &[SlowTerm], full: &SlowFit, i: usize, level: f64) -> Option<HeldOutTest> {
+    let mut without = terms.to_vec();
+    without.remove(i);
+    let f0 = ctx.fit_under(&without, &full.wander)?;
+    let e0 = ctx.one_step(&without, &f0, &full.wander.best);
+    let e1 = ctx.one_step(terms, full, &full.wander.best);
+    let mut t = held_out_test_floor(
+        terms[i].family(),
+        describe(&terms[i], ctx.dt_s),
+        &e0,
+        &e1,
+        |k| ctx.held[k],
+        level,
+        0.0,
+        HAC_LAGS,
+    );
+    if t.kept
+        && let Some(q) = ctx.lsb
+        && !matches!(terms[i], SlowTerm::GSensitivity)
+    {
+        let size = ctx.effect_range(terms, full, i);
+        if size < q {
+            t.kept = false;
+            t.reason = format!("below the quantisation: {size:.3e} < 1 LSB ({q:.3e})");
+        }
+    }
+    Some(t)
+}
+
+/// Selection (module docs): every candidate of a round goes into the model at once; then
+/// backward elimination — each term is tested against the model without it, both under the
+/// full model's wander (fitted with every term in: the least inflated), and the weakest failing
+/// term is dropped, until every term passes at α / terms. Candidates that confound each other (a
+/// warm-up and a step fitted in its place) are so judged together. A new round proposes
+/// candidates on what the survivors leave; at most `max_terms` terms, three rounds.
 pub fn select(ctx: &SlowCtx, alpha: f64, max_terms: usize, min_gap: usize) -> Option<SlowSelection> {
     let mut terms: Vec<SlowTerm> = Vec::new();
     let mut fit = ctx.fit(&terms, false)?;
-    let mut tests = Vec::new();
-    let mut rejected = Vec::new();
-    let held = |k: usize| ctx.held[k];
-    for _ in 0..max_terms {
-        let e0 = ctx.one_step(&terms, &fit, &fit.wander.best);
+    let mut tests: Vec<HeldOutTest> = Vec::new();
+    let mut rejected: Vec<HeldOutTest> = Vec::new();
+    for _ in 0..3 {
         let cands = ctx.candidates(&terms, &fit, min_gap);
-        let level = alpha / cands.len().max(1) as f64;
-        let mut best: Option<(f64, SlowTerm, SlowFit, HeldOutTest)> = None;
-        for c in cands {
-            let mut t2 = terms.clone();
-            t2.push(c.clone());
-            let Some(f1) = ctx.fit(&t2, false) else {
+        if cands.is_empty() {
+            break;
+        }
+        let n_old = terms.len();
+        let mut full = terms.clone();
+        full.extend(cands);
+        full.truncate(max_terms.max(n_old));
+        loop {
+            let Some(f) = ctx.fit(&full, false) else {
+                // Collinear: drop the newest.
+                full.pop();
+                if full.len() <= n_old {
+                    break;
+                }
                 continue;
             };
-            let e1 = ctx.one_step(&t2, &f1, &f1.wander.best);
-            let mut t = held_out_test(c.family(), describe(&c, ctx.dt_s), &e0, &e1, held, level);
-            if t.kept
-                && let Some(q) = ctx.lsb
-            {
-                let size = ctx.effect_range(&t2, &f1, t2.len() - 1);
-                if size < q {
-                    t.kept = false;
-                    t.reason = format!("below the quantisation: {size:.3e} < 1 LSB ({q:.3e})");
+            let level = alpha / full.len().max(1) as f64;
+            let ts: Vec<Option<HeldOutTest>> = (0..full.len()).map(|i| test_term(ctx, &full, &f, i, level)).collect();
+            let worst = ts
+                .iter()
+                .enumerate()
+                .filter(|(_, t)| t.as_ref().is_none_or(|t| !t.kept))
+                .min_by(|a, b| {
+                    let z = |t: &Option<HeldOutTest>| t.as_ref().map_or(f64::NEG_INFINITY, |t| t.z);
+                    z(a.1).total_cmp(&z(b.1))
+                })
+                .map(|(i, _)| i);
+            match worst {
+                Some(i) => {
+                    if let Some(t) = ts[i].clone() {
+                        rejected.push(t);
+                    }
+                    full.remove(i);
+                    if full.is_empty() {
+                        fit = ctx.fit(&full, false)?;
+                        tests.clear();
+                        break;
+                    }
                 }
-            }
-            if t.kept && best.as_ref().is_none_or(|b| t.z > b.0) {
-                if let Some(b) = best.take() {
-                    let mut bt = b.3;
-                    bt.kept = false;
-                    bt.reason = "a stronger candidate was added in its round".into();
-                    rejected.push(bt);
+                None => {
+                    fit = f;
+                    tests = ts.into_iter().flatten().collect();
+                    break;
                 }
-                best = Some((t.z, c, f1, t));
-            } else if t.kept {
-                t.kept = false;
-                t.reason = "a stronger candidate was added in its round".into();
-                rejected.push(t);
-            } else {
-                rejected.push(t);
             }
         }
-        let Some((_, c, f1, t)) = best else {
+        if let Some(i) = full.iter().position(|t| matches!(t, SlowTerm::Temperature { .. })) {
+            let before = full[i].clone();
+            ctx.polish_temperature(&mut full, &fit, i);
+            if full[i] != before {
+                tests.clear();
+            }
+        }
+        if tests.len() != full.len() {
+            fit = ctx.fit(&full, false)?;
+            let level = alpha / full.len().max(1) as f64;
+            tests = (0..full.len()).filter_map(|i| test_term(ctx, &full, &fit, i, level)).collect();
+        }
+        let grew = full.len() > n_old || full.iter().zip(&terms).any(|(a, b)| a != b);
+        terms = full;
+        if terms.is_empty() {
+            fit = ctx.fit(&terms, false)?;
+        }
+        if !grew {
             break;
-        };
-        terms.push(c);
-        fit = f1;
-        tests.push(t);
+        }
     }
-    // A candidate rejected in one round and added later is not "rejected".
+    // Report each rejected candidate once (its last test), and none that was kept in the end.
+    let mut seen = std::collections::HashSet::new();
+    rejected.reverse();
+    rejected.retain(|r| seen.insert(r.description.clone()));
     rejected.retain(|r| !tests.iter().any(|t| t.description == r.description));
     Some(SlowSelection {
         terms,

@@ -8,7 +8,8 @@
 //!    selection blocks (open-loop error at the full rate; its noise is the local level near the
 //!    line).
 //! 2. **Slow effects** (`diagnose_slow`) on 1-s means of what the lines leave: steps,
-//!    temperature, g-sensitivity, by forward selection with a GM/RW wander as the stochastic part
+//!    temperature, g-sensitivity, all candidates in then backward elimination, with a GM/RW wander
+//!    as the stochastic part
 //!    (one-step errors of the decimated series on held-out points).
 //! 3. **Wander** (`diagnose_wander`): Gauss–Markov, random walk or undecided; a random walk that
 //!    passes the held-out test (wander predictor vs none) is written as the rate-random-walk
@@ -24,7 +25,7 @@
 //! passes per candidate line and one AR lattice) and everything slow on the decimated series.
 
 use super::diagnose::ChannelInput;
-use super::diagnose_blocks::{Blocks, HeldOutTest, held_out_test, held_out_test_floor, step_means};
+use super::diagnose_blocks::{Blocks, HeldOutTest, held_out_test_floor, step_means};
 use super::diagnose_lines::{BlockLine, contribution, contribution_in_sample, line_candidates, track};
 use super::diagnose_slow::{SlowCtx, SlowTerm, lagged, select};
 use super::diagnose_wander::{WanderKind, WanderParams, classify, innovations};
@@ -56,7 +57,7 @@ pub struct WholeSettings {
 impl Default for WholeSettings {
     fn default() -> Self {
         WholeSettings {
-            alpha: 0.01,
+            alpha: 0.001,
             blocks_target: 40,
             block_s: (10.0, 120.0),
             dec_s: 1.0,
@@ -289,7 +290,7 @@ pub fn diagnose_whole(
         let pred = contribution(&tr, &blocks, fs);
         let e1: Vec<f64> = d_sel.iter().zip(&pred).map(|(a, b)| a - b).collect();
         let desc = format!("line near {:.4} Hz", c.freq_hz);
-        let t = held_out_test_floor("vibration_line", desc, &d_sel, &e1, held_sample, level, c.noise_var);
+        let t = held_out_test_floor("vibration_line", desc, &d_sel, &e1, held_sample, level, c.noise_var, 0);
         if !t.kept {
             rejected.push(t);
             continue;
@@ -360,7 +361,16 @@ pub fn diagnose_whole(
         let e0 = innovations(&d, &WanderParams::none(wf.best.r), &|_| true).0;
         let e1 = innovations(&d, &wf.best, &|_| true).0;
         let kind = classify(&wf, t_rec);
-        let test = held_out_test("wander", format!("{kind:?}"), &e0, &e1, |k| held[k], s.alpha);
+        let test = held_out_test_floor(
+            "wander",
+            format!("{kind:?}"),
+            &e0,
+            &e1,
+            |k| held[k],
+            s.alpha,
+            0.0,
+            super::diagnose_slow::HAC_LAGS,
+        );
         let gm = wf.gm;
         WanderReport {
             kind,
@@ -389,8 +399,14 @@ pub fn diagnose_whole(
         }
         j += cols.len();
     }
+    // The intercept of the open-loop residual: its selection-block mean (the GLS intercept
+    // under a wander is another estimate of the level; the open-loop error wants the mean).
+    let c_sel = {
+        let v = blocks.selection(&r_sel);
+        v.iter().sum::<f64>() / v.len() as f64
+    };
     for v in &mut r_sel {
-        *v -= slow.fit.c;
+        *v -= c_sel;
     }
     let ar0 = ar_aic(&blocks.selection(&base), s.max_ar_order)?;
     let ar1 = ar_aic(&blocks.selection(&r_sel), s.max_ar_order)?;

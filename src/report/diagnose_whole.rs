@@ -28,7 +28,7 @@ pub struct WholeReport {
     pub channels: Vec<WholeDiagnosis>,
 }
 
-const METHOD: &str = "whole log: effects proposed and fitted on the even blocks, kept only if their held-out gain on the odd blocks beats its noise (z-test at alpha = 0.01 / candidates), then refitted on every block";
+const METHOD: &str = "whole log: effects proposed and fitted on the even blocks, kept only if their held-out gain on the odd blocks beats its noise (z-test at alpha = 0.001 / candidates; for slow effects the noise of the gain from the held-out innovations' autocovariance), then refitted on every block";
 
 impl WholeReport {
     /// The text report.
