@@ -45,9 +45,15 @@ fn bench(c: &mut Criterion) {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../shared/data/real/adis16405_static/adis_16405_imu1.csv.gz");
     let (what, samples) = if p.exists() {
-        ("adis16405", read_csv(&p, &ImportOptions::default()).unwrap().1)
+        (
+            "adis16405",
+            read_csv(&p, &ImportOptions::default()).unwrap().1,
+        )
     } else {
-        eprintln!("SKIPPED: {} not found: synthetic series instead", p.display());
+        eprintln!(
+            "SKIPPED: {} not found: synthetic series instead",
+            p.display()
+        );
         ("synthetic", synthetic(1_000_000))
     };
     let rate = 100.0;

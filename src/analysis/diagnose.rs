@@ -42,8 +42,8 @@
 //! numbers never see it; the parameters gain the test part's data.
 
 use super::allan_check::{AllanFinding, AllanKind, allan_check};
-use super::diagnose_terms::{Ctx, Term, decimate, effects_of, polish_structure, term_contribution};
 use super::changepoint::{ChangePoint, ChangePointSettings, binary_segmentation};
+use super::diagnose_terms::{Ctx, Term, decimate, effects_of, polish_structure, term_contribution};
 use super::exogenous::{
     Exogenous, ExogenousReport, analyse as exo_analyse, lagged_polynomial_scan,
 };
@@ -178,7 +178,6 @@ pub fn split(n: usize, rate_hz: f64, s: &DiagnoseSettings) -> Result<Split, Anal
     })
 }
 
-
 /// A candidate's score on validation.
 #[derive(Clone, Debug, Serialize)]
 pub struct CandidateScore {
@@ -309,7 +308,6 @@ pub struct ChannelDiagnosis {
     #[serde(skip)]
     pub plots: PlotData,
 }
-
 
 fn test_metrics(
     ctx: &Ctx,
@@ -444,7 +442,6 @@ fn rrw_candidate(
     matches!(a.kind, AllanKind::RateRandomWalk | AllanKind::Flicker)
         .then_some((Term::RateRandomWalk, a.kind))
 }
-
 
 /// Run the loop on one channel.
 pub fn diagnose_channel(

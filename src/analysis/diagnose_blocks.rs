@@ -58,12 +58,7 @@ impl Blocks {
                 need: 20 * len.max(64),
             });
         }
-        Ok(Blocks {
-            n,
-            dec,
-            len,
-            count,
-        })
+        Ok(Blocks { n, dec, len, count })
     }
 
     /// Sample range of block `b`; the last block runs to the end of the log.

@@ -155,7 +155,11 @@ pub fn line_candidates(
     let df = rate_hz / l as f64;
     let mut kept: Vec<LineCandidate> = Vec::new();
     for c in out {
-        if kept.len() < max && kept.iter().all(|k| (k.freq_hz - c.freq_hz).abs() > 3.0 * df) {
+        if kept.len() < max
+            && kept
+                .iter()
+                .all(|k| (k.freq_hz - c.freq_hz).abs() > 3.0 * df)
+        {
             kept.push(c);
         }
     }
@@ -214,7 +218,13 @@ fn pair_ls(x: &[f64], mean: f64, w: f64, t0: usize) -> (f64, f64) {
 }
 
 /// The line near `cand` tracked in every block of `y`.
-pub fn track(y: &[f64], blocks: &Blocks, rate_hz: f64, cand: &LineCandidate, alpha: f64) -> Vec<BlockLine> {
+pub fn track(
+    y: &[f64],
+    blocks: &Blocks,
+    rate_hz: f64,
+    cand: &LineCandidate,
+    alpha: f64,
+) -> Vec<BlockLine> {
     let thr = (17.0 * blocks.count as f64 / alpha).ln();
     (0..blocks.count)
         .map(|b| {
@@ -233,7 +243,9 @@ pub fn track(y: &[f64], blocks: &Blocks, rate_hz: f64, cand: &LineCandidate, alp
                     (f, pw(f))
                 })
                 .collect();
-            let jb = (0..17).max_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1)).unwrap_or(8);
+            let jb = (0..17)
+                .max_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
+                .unwrap_or(8);
             let mut f = grid[jb].0;
             if jb > 0 && jb < 16 {
                 let (p0, p1, p2) = (grid[jb - 1].1, grid[jb].1, grid[jb + 1].1);
@@ -335,7 +347,8 @@ mod tests {
         let pred = contribution(&t, &blocks, 100.0);
         let truth = |i: usize| 0.2 * (2.0 * PI * 3.217 * i as f64 / 100.0 + 0.4).sin();
         let r = blocks.range(31);
-        let err: f64 = r.clone().map(|i| (pred[i] - truth(i)).powi(2)).sum::<f64>() / r.len() as f64;
+        let err: f64 =
+            r.clone().map(|i| (pred[i] - truth(i)).powi(2)).sum::<f64>() / r.len() as f64;
         // The held-out prediction is continued from its neighbours: well inside the line's
         // power A²/2 = 0.02.
         assert!(err < 0.004, "{err}");

@@ -2,12 +2,12 @@
 //! columns of the joint model, the effects a fitted model yields, and the re-polishing of a term's
 //! structure (line frequency, temperature lag, step time) on more data.
 
+use super::AnalysisError;
 use super::diagnose::DiagnoseSettings;
+use super::diagnose::Split;
 use super::exogenous::{Exogenous, lagged_polynomial_scan};
 use super::joint_model::{JointFit, LevelSpec, fit as joint_fit, fit_orders, mse};
 use super::spectrum::refine_line;
-use super::AnalysisError;
-use super::diagnose::Split;
 use crate::model::bias_model::Effect;
 use std::f64::consts::PI;
 use std::ops::Range;

@@ -33,13 +33,21 @@ pub struct WanderParams {
 impl WanderParams {
     /// No wander: the predictor is the mean.
     pub fn none(r: f64) -> Self {
-        WanderParams { phi: 0.0, q: 0.0, r }
+        WanderParams {
+            phi: 0.0,
+            q: 0.0,
+            r,
+        }
     }
 }
 
 /// One-step innovations of `d` under `p` (q and r relative: only their ratio matters for ν);
 /// updates only where `observe(k)`. Returns (ν, S/r).
-pub fn innovations(d: &[f64], p: &WanderParams, observe: &dyn Fn(usize) -> bool) -> (Vec<f64>, Vec<f64>) {
+pub fn innovations(
+    d: &[f64],
+    p: &WanderParams,
+    observe: &dyn Fn(usize) -> bool,
+) -> (Vec<f64>, Vec<f64>) {
     let qr = if p.r > 0.0 { p.q / p.r } else { 0.0 };
     let mut nu = Vec::with_capacity(d.len());
     let mut s = Vec::with_capacity(d.len());
@@ -69,17 +77,32 @@ pub fn innovations(d: &[f64], p: &WanderParams, observe: &dyn Fn(usize) -> bool)
     (nu, s)
 }
 
-/// Concentrated log-likelihood over the observed points, with r̂.
+/// Concentrated log-likelihood over the observed points, with r̂ (the filter of
+/// [`innovations`], inline: no allocation, it runs a few hundred times per fit).
 fn loglik(d: &[f64], phi: f64, qr: f64, observe: &dyn Fn(usize) -> bool) -> (f64, f64) {
-    let p = WanderParams { phi, q: qr, r: 1.0 };
-    let (nu, s) = innovations(d, &p, observe);
+    let mut g = 0.0;
+    let mut pp = if phi < 1.0 {
+        qr / (1.0 - phi * phi).max(1e-12)
+    } else {
+        1e4
+    };
     let (mut a, mut l, mut k) = (0.0, 0.0, 0usize);
-    for (i, (e, sk)) in nu.iter().zip(&s).enumerate().skip(2) {
-        if observe(i) {
-            a += e * e / sk;
-            l += sk.ln();
-            k += 1;
-        }
+    for (i, x) in d.iter().enumerate() {
+        let e = x - g;
+        let sk = pp + 1.0;
+        let (g_upd, p_upd) = if observe(i) {
+            if i >= 2 {
+                a += e * e / sk;
+                l += sk.ln();
+                k += 1;
+            }
+            let kg = pp / sk;
+            (g + kg * e, pp * (1.0 - kg))
+        } else {
+            (g, pp)
+        };
+        g = phi * g_upd;
+        pp = phi * phi * p_upd + qr;
     }
     let kf = k.max(1) as f64;
     let r = a / kf;
@@ -108,7 +131,9 @@ pub fn fit(d: &[f64], dt_s: f64, observe: &dyn Fn(usize) -> bool) -> WanderFit {
     let taus: Vec<f64> = (0..14)
         .map(|j| 2.0 * dt_s * (10.0 * t_rec / dt_s).powf(j as f64 / 13.0))
         .collect();
-    let qrs: Vec<f64> = (0..15).map(|j| 1e-6 * 10f64.powf(j as f64 * 7.0 / 14.0)).collect();
+    let qrs: Vec<f64> = (0..15)
+        .map(|j| 1e-6 * 10f64.powf(j as f64 * 7.0 / 14.0))
+        .collect();
     let (ll_none, r0) = loglik(d, 0.0, 0.0, observe);
     let none = WanderParams::none(r0);
     let mut gm = (f64::NEG_INFINITY, none, f64::INFINITY);
@@ -123,7 +148,14 @@ pub fn fit(d: &[f64], dt_s: f64, observe: &dyn Fn(usize) -> bool) -> WanderFit {
         }
         let (l, r) = loglik(d, 1.0, qr, observe);
         if l > rw.0 {
-            rw = (l, WanderParams { phi: 1.0, q: qr * r, r });
+            rw = (
+                l,
+                WanderParams {
+                    phi: 1.0,
+                    q: qr * r,
+                    r,
+                },
+            );
         }
     }
     let best = if ll_none >= gm.0.max(rw.0) {

@@ -26,7 +26,9 @@
 
 use super::diagnose::ChannelInput;
 use super::diagnose_blocks::{Blocks, HeldOutTest, held_out_test_floor, step_means};
-use super::diagnose_lines::{BlockLine, contribution, contribution_in_sample, line_candidates, track};
+use super::diagnose_lines::{
+    BlockLine, contribution, contribution_in_sample, line_candidates, track,
+};
 use super::diagnose_slow::{SlowCtx, SlowTerm, lagged, select};
 use super::diagnose_wander::{WanderKind, WanderParams, classify, innovations};
 use super::quantisation::{Quantisation, quantisation};
@@ -217,7 +219,11 @@ fn full_columns(t: &SlowTerm, at: usize, input: &ChannelInput) -> Vec<Vec<f64>> 
     match t {
         SlowTerm::Step { .. } => vec![(0..n).map(|i| f64::from(u8::from(i >= at))).collect()],
         SlowTerm::Temperature { lag_s, t0_c } => {
-            let tl = lagged(input.exogenous.temperature_c.unwrap_or(&[]), 1.0 / input.rate_hz, *lag_s);
+            let tl = lagged(
+                input.exogenous.temperature_c.unwrap_or(&[]),
+                1.0 / input.rate_hz,
+                *lag_s,
+            );
             let d: Vec<f64> = tl.iter().map(|v| v - t0_c).collect();
             let d2 = d.iter().map(|v| v * v).collect();
             vec![d, d2]
@@ -290,7 +296,16 @@ pub fn diagnose_whole(
         let pred = contribution(&tr, &blocks, fs);
         let e1: Vec<f64> = d_sel.iter().zip(&pred).map(|(a, b)| a - b).collect();
         let desc = format!("line near {:.4} Hz", c.freq_hz);
-        let t = held_out_test_floor("vibration_line", desc, &d_sel, &e1, held_sample, level, c.noise_var, 0);
+        let t = held_out_test_floor(
+            "vibration_line",
+            desc,
+            &d_sel,
+            &e1,
+            held_sample,
+            level,
+            c.noise_var,
+            0,
+        );
         if !t.kept {
             rejected.push(t);
             continue;
@@ -337,13 +352,17 @@ pub fn diagnose_whole(
     let y_sel: Vec<f64> = d_sel.iter().map(|v| v + c_a).collect();
     let z = step_means(&y_sel, dec);
     let zt = exo.temperature_c.map(|t| step_means(t, dec));
-    let zf = exo.specific_force_m_s2.map(|f| f.map(|c| step_means(c, dec)));
+    let zf = exo
+        .specific_force_m_s2
+        .map(|f| f.map(|c| step_means(c, dec)));
     let held = blocks.dec_held_out();
     let dt = dec as f64 / fs;
     let ctx = SlowCtx {
         z: &z,
         temp: zt.as_deref(),
-        sf: zf.as_ref().map(|f| [f[0].as_slice(), f[1].as_slice(), f[2].as_slice()]),
+        sf: zf
+            .as_ref()
+            .map(|f| [f[0].as_slice(), f[1].as_slice(), f[2].as_slice()]),
         dt_s: dt,
         held: &held,
         lsb,
@@ -388,7 +407,11 @@ pub fn diagnose_whole(
     let mut j = 0;
     let mut at: Vec<usize> = Vec::new();
     for t in &slow.terms {
-        let a = if let SlowTerm::Step { k } = t { k * dec } else { 0 };
+        let a = if let SlowTerm::Step { k } = t {
+            k * dec
+        } else {
+            0
+        };
         at.push(a);
         let cols = full_columns(t, a, input);
         for (ci, col) in cols.iter().enumerate() {
@@ -413,7 +436,10 @@ pub fn diagnose_whole(
     let i0 = ar_innovations(&base, &ar0);
     let i1 = ar_innovations(&r_sel, &ar1);
     let held_out = HeldOutErrors {
-        samples: (0..blocks.count).filter(|b| Blocks::held_out(*b)).map(|b| blocks.range(b).len()).sum(),
+        samples: (0..blocks.count)
+            .filter(|b| Blocks::held_out(*b))
+            .map(|b| blocks.range(b).len())
+            .sum(),
         open_loop_before: blocks.held_out_mse(&base),
         open_loop_after: blocks.held_out_mse(&r_sel),
         ar_order_before: ar0.order(),
@@ -430,12 +456,21 @@ pub fn diagnose_whole(
         if let SlowTerm::Step { k } = t {
             // Re-locate at the full rate within a block of the selection-part place, on the
             // residual of the other terms.
-            let others: Vec<SlowTerm> = terms.iter().enumerate().filter(|(i, _)| *i != ti).map(|(_, t)| t.clone()).collect();
+            let others: Vec<SlowTerm> = terms
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != ti)
+                .map(|(_, t)| t.clone())
+                .collect();
             let fo = ctx_all_fit(&ctx, &others)?;
             let mut r = y_dep.clone();
             let mut jj = 0;
             for (oi, o) in others.iter().enumerate() {
-                let oa = if let SlowTerm::Step { .. } = o { at[if oi < ti { oi } else { oi + 1 }] } else { 0 };
+                let oa = if let SlowTerm::Step { .. } = o {
+                    at[if oi < ti { oi } else { oi + 1 }]
+                } else {
+                    0
+                };
                 let cols = full_columns(o, oa, input);
                 for (ci, col) in cols.iter().enumerate() {
                     for (x, v) in r.iter_mut().zip(col) {
@@ -447,9 +482,15 @@ pub fn diagnose_whole(
             let w = 2 * blocks.len;
             let (lo, hi) = ((k * dec).saturating_sub(w), (k * dec + w).min(n));
             let seg = &r[lo..hi];
-            let loc = locate_step(seg, (k * dec).saturating_sub(lo).saturating_sub(blocks.len), (k * dec - lo) + blocks.len);
+            let loc = locate_step(
+                seg,
+                (k * dec).saturating_sub(lo).saturating_sub(blocks.len),
+                (k * dec - lo) + blocks.len,
+            );
             at[ti] = lo + loc;
-            terms[ti] = SlowTerm::Step { k: (lo + loc).div_ceil(dec) };
+            terms[ti] = SlowTerm::Step {
+                k: (lo + loc).div_ceil(dec),
+            };
         }
     }
     if terms != slow.terms {
@@ -466,27 +507,39 @@ pub fn diagnose_whole(
         }
         let b = &dep.beta[jj..jj + cols.len()];
         let effect = match t {
-            SlowTerm::Step { .. } => Effect::Step { t_s: at[ti] as f64 / fs, size: b[0] },
+            SlowTerm::Step { .. } => Effect::Step {
+                t_s: at[ti] as f64 / fs,
+                size: b[0],
+            },
             SlowTerm::Temperature { lag_s, t0_c } => Effect::Temperature {
                 t0_c: *t0_c,
                 c1_per_c: b[0],
                 c2_per_c2: b[1],
                 lag_s: *lag_s,
             },
-            SlowTerm::GSensitivity => Effect::GSensitivity { coeffs_per_m_s2: [b[0], b[1], b[2]] },
+            SlowTerm::GSensitivity => Effect::GSensitivity {
+                coeffs_per_m_s2: [b[0], b[1], b[2]],
+            },
         };
         let span_s = match t {
             SlowTerm::Step { .. } => [at[ti] as f64 / fs, t_rec],
             _ => [0.0, t_rec],
         };
-        effects.push(FoundEffect { effect, span_s, test: slow.tests[ti].clone(), track: vec![] });
+        effects.push(FoundEffect {
+            effect,
+            span_s,
+            test: slow.tests[ti].clone(),
+            track: vec![],
+        });
         jj += cols.len();
     }
     if let Some(w) = &wander
         && w.written
     {
         effects.push(FoundEffect {
-            effect: Effect::RateRandomWalk { q_per_s: w.rw_q_per_s },
+            effect: Effect::RateRandomWalk {
+                q_per_s: w.rw_q_per_s,
+            },
             span_s: [0.0, t_rec],
             test: w.test.clone(),
             track: vec![],
@@ -522,6 +575,10 @@ pub fn diagnose_whole(
     })
 }
 
-fn ctx_all_fit(ctx: &SlowCtx, terms: &[SlowTerm]) -> Result<super::diagnose_slow::SlowFit, AnalysisError> {
-    ctx.fit(terms, true).ok_or(AnalysisError::Singular("slow model refit on the whole log"))
+fn ctx_all_fit(
+    ctx: &SlowCtx,
+    terms: &[SlowTerm],
+) -> Result<super::diagnose_slow::SlowFit, AnalysisError> {
+    ctx.fit(terms, true)
+        .ok_or(AnalysisError::Singular("slow model refit on the whole log"))
 }

@@ -48,7 +48,11 @@ pub fn whole_text(d: &WholeDiagnosis) -> String {
                 );
             }
             None => {
-                let _ = writeln!(o, "  not visibly quantised ({} distinct values)", q.distinct_values);
+                let _ = writeln!(
+                    o,
+                    "  not visibly quantised ({} distinct values)",
+                    q.distinct_values
+                );
             }
         }
     }
@@ -105,9 +109,11 @@ pub fn whole_text(d: &WholeDiagnosis) -> String {
         );
         if !e.track.is_empty() {
             let present: Vec<_> = e.track.iter().filter(|b| b.present).collect();
-            let (lo, hi) = present.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, b| {
-                (a.0.min(b.freq_hz), a.1.max(b.freq_hz))
-            });
+            let (lo, hi) = present
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |a, b| {
+                    (a.0.min(b.freq_hz), a.1.max(b.freq_hz))
+                });
             let _ = writeln!(
                 o,
                 "      tracked: present in {} of {} blocks, frequency {lo:.4}–{hi:.4} Hz",
@@ -167,8 +173,16 @@ pub fn whole_plots(d: &WholeDiagnosis) -> Vec<(String, String)> {
             log_x: true,
             log_y: true,
             series: vec![
-                Series { label: "intercept only".into(), x: skip0(&a.freq_hz), y: skip0(&a.density) },
-                Series { label: "with the effects".into(), x: skip0(&b.freq_hz), y: skip0(&b.density) },
+                Series {
+                    label: "intercept only".into(),
+                    x: skip0(&a.freq_hz),
+                    y: skip0(&a.density),
+                },
+                Series {
+                    label: "with the effects".into(),
+                    x: skip0(&b.freq_hz),
+                    y: skip0(&b.density),
+                },
             ],
         };
         out.push((format!("{}_spectrum", d.channel), render(&plot, 800, 480)));
@@ -180,16 +194,27 @@ pub fn whole_plots(d: &WholeDiagnosis) -> Vec<(String, String)> {
             y: v.iter().map(|p| p.1).collect(),
         };
         let plot = Plot {
-            title: format!("{}: Allan deviation of the open-loop residual (1-s means)", d.channel),
+            title: format!(
+                "{}: Allan deviation of the open-loop residual (1-s means)",
+                d.channel
+            ),
             x_label: "tau (s)".into(),
             y_label: "Allan deviation".into(),
             log_x: true,
             log_y: true,
-            series: vec![s(&p.allan_before, "intercept only"), s(&p.allan_after, "with the effects")],
+            series: vec![
+                s(&p.allan_before, "intercept only"),
+                s(&p.allan_after, "with the effects"),
+            ],
         };
         out.push((format!("{}_allan", d.channel), render(&plot, 800, 480)));
     }
-    for (i, e) in d.effects.iter().enumerate().filter(|(_, e)| !e.track.is_empty()) {
+    for (i, e) in d
+        .effects
+        .iter()
+        .enumerate()
+        .filter(|(_, e)| !e.track.is_empty())
+    {
         let pres: Vec<_> = e.track.iter().filter(|b| b.present).collect();
         if pres.is_empty() {
             continue;
@@ -206,7 +231,10 @@ pub fn whole_plots(d: &WholeDiagnosis) -> Vec<(String, String)> {
                 y: pres.iter().map(|b| b.freq_hz).collect(),
             }],
         };
-        out.push((format!("{}_line{}_track", d.channel, i + 1), render(&plot, 800, 480)));
+        out.push((
+            format!("{}_line{}_track", d.channel, i + 1),
+            render(&plot, 800, 480),
+        ));
     }
     out
 }
