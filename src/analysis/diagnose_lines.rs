@@ -9,11 +9,11 @@
 //! white and lies in this floor, so a line that passes is above the quantisation.
 //!
 //! **Tracking.** In every block the frequency is the maximum of |X(f)|² = |Σ x_n e^{−iωn}|²
-//! over ±1 bin of the candidate (1/8-bin grid, parabolic refinement), computed by a rotating
+//! over ±1 bin of the candidate (¼-bin grid, parabolic refinement), computed by a rotating
 //! phasor (no trigonometric call per sample); then (a, b) of a sin + b cos are least squares at
 //! that frequency, time from the start of the log. The line is *present* in a block when
 //! |X|²/(L σ²_f) — Exp(1) under noise, σ²_f = S(f) f_s/2 the white-equivalent variance near f —
-//! exceeds ln(17 · blocks / α) (Bonferroni over the grid and the blocks).
+//! exceeds ln(9 · blocks / α) (Bonferroni over the grid and the blocks).
 //!
 //! **Held-out prediction.** A held-out block is predicted by the mean of its two neighbouring
 //! selection blocks' sinusoids, each continued with its own frequency and phase: no held-out
@@ -133,7 +133,7 @@ pub fn line_candidates(
             continue;
         }
         let s = floor_at(j);
-        if !(s > 0.0) {
+        if s.is_nan() || s <= 0.0 {
             continue;
         }
         let ratio = avg[j] / s;
@@ -217,6 +217,9 @@ fn pair_ls(x: &[f64], mean: f64, w: f64, t0: usize) -> (f64, f64) {
     ((cc * sx - sc * cx) / det, (ss * cx - sc * sx) / det)
 }
 
+/// Frequencies tried per block (±1 bin at ¼ bin).
+const GRID: usize = 9;
+
 /// The line near `cand` tracked in every block of `y`.
 pub fn track(
     y: &[f64],
@@ -225,7 +228,7 @@ pub fn track(
     cand: &LineCandidate,
     alpha: f64,
 ) -> Vec<BlockLine> {
-    let thr = (17.0 * blocks.count as f64 / alpha).ln();
+    let thr = (GRID as f64 * blocks.count as f64 / alpha).ln();
     (0..blocks.count)
         .map(|b| {
             let r = blocks.range(b);
@@ -237,21 +240,23 @@ pub fn track(
                 let (re, im) = dft_at(x, mean, 2.0 * PI * f / rate_hz, r.start);
                 re * re + im * im
             };
-            let grid: Vec<(f64, f64)> = (0..17)
+            let step = 2.0 * bin / (GRID - 1) as f64;
+            let mid = (GRID / 2) as f64;
+            let grid: Vec<(f64, f64)> = (0..GRID)
                 .map(|j| {
-                    let f = cand.freq_hz + (j as f64 - 8.0) * bin / 8.0;
+                    let f = cand.freq_hz + (j as f64 - mid) * step;
                     (f, pw(f))
                 })
                 .collect();
-            let jb = (0..17)
+            let jb = (0..GRID)
                 .max_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
-                .unwrap_or(8);
+                .unwrap_or(GRID / 2);
             let mut f = grid[jb].0;
-            if jb > 0 && jb < 16 {
+            if jb > 0 && jb + 1 < GRID {
                 let (p0, p1, p2) = (grid[jb - 1].1, grid[jb].1, grid[jb + 1].1);
                 let den = p0 - 2.0 * p1 + p2;
                 if den < 0.0 {
-                    f += 0.5 * (p0 - p2) / den * bin / 8.0;
+                    f += 0.5 * (p0 - p2) / den * step;
                 }
             }
             let w = 2.0 * PI * f / rate_hz;

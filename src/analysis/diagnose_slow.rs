@@ -95,7 +95,7 @@ fn lstsq(x: &DMatrix<f64>, y: &DVector<f64>) -> Option<DVector<f64>> {
     let k = x.ncols();
     let g = x.transpose() * x;
     let d: Vec<f64> = (0..k).map(|j| g[(j, j)].max(0.0).sqrt()).collect();
-    if d.iter().any(|v| *v == 0.0) {
+    if d.contains(&0.0) {
         return None;
     }
     let gs = DMatrix::from_fn(k, k, |i, j| g[(i, j)] / (d[i] * d[j]));

@@ -21,7 +21,7 @@
 //!    amplitude the medians of the blocks where it is present). The held-out numbers never see
 //!    this refit.
 //!
-//! Cost: a handful of passes over the full-rate series (FFTs of the selection blocks, 17 phasor
+//! Cost: a handful of passes over the full-rate series (FFTs of the selection blocks, 10 phasor
 //! passes per candidate line and one AR lattice) and everything slow on the decimated series.
 
 use super::diagnose::ChannelInput;
