@@ -33,7 +33,7 @@ fn diagnose_never_reports_the_same_effect_twice() {
     let diag = Command::new(common::bin())
         .arg("diagnose")
         .arg(&log)
-        .args(["--channel", "gy", "--out-dir"])
+        .args(["--paper-split", "--channel", "gy", "--out-dir"])
         .arg(&out)
         .output()
         .unwrap();

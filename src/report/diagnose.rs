@@ -1,16 +1,16 @@
-//! `imuprep diagnose`: the close-the-loop bias diagnosis
-//! ([`crate::analysis::diagnose::diagnose_channel`]) on a stretch of a log ([`diagnose`]) or on
-//! overlapping windows of a long one ([`diagnose_windows`]), each writing its report, plots and
-//! bias model into a folder.
+//! `imuprep diagnose`: by default the whole-log diagnosis
+//! ([`crate::analysis::diagnose_whole::diagnose_whole`]: effects chosen on interleaved selection
+//! blocks, scored on the held-out blocks between them, one model for the whole recording);
+//! with `--paper-split` the close-the-loop iteration of issue 6
+//! ([`crate::analysis::diagnose::diagnose_channel`]: 3 min train, 3 min validation, the rest test).
+//! Either writes one report, plots and one bias model into a folder.
 
-use std::fmt;
 use std::io::Write;
 use std::path::Path;
 
 use anyhow::{Result, anyhow, ensure};
-use serde::Serialize;
 
-use super::{load_span, load_span_to, parse_channels};
+use super::{load_span_to, parse_channels};
 use crate::analysis::diagnose::{ChannelInput, DiagnoseSettings, diagnose_channel};
 use crate::analysis::diagnose_report::{DiagnoseReport, channel_plots, effect_text};
 use crate::analysis::exogenous::Exogenous;
@@ -30,26 +30,14 @@ pub fn effects_text(v: &[String]) -> String {
     }
 }
 
-/// Start times (s) of the windows of `window_s` every `hop_s` over `from_s..end_s`; a window
-/// shorter than half its length (the log's tail) is dropped, since its split would leave too
-/// little to fit and test on (the first is always kept).
-pub fn window_starts(from_s: f64, end_s: f64, window_s: f64, hop_s: f64) -> Vec<f64> {
-    let mut starts = Vec::new();
-    let mut t = from_s;
-    while t < end_s && (end_s - t >= 0.5 * window_s || starts.is_empty()) {
-        starts.push(t);
-        t += hop_s;
-    }
-    starts
-}
-
-/// `diagnose` on one stretch `from_s..to_s` of a log; progress lines go to `progress`.
+/// `diagnose` on one stretch `from_s..to_s` of a log; progress lines go to `progress`. The whole
+/// stretch is diagnosed as one ([`diagnose_whole_samples`]) unless `paper_split`.
 pub fn diagnose(
     log: &Path,
     channels: &[String],
-    from_s: f64,
-    to_s: Option<f64>,
+    (from_s, to_s): (f64, Option<f64>),
     out_dir: &Path,
+    paper_split: bool,
     progress: &mut dyn Write,
 ) -> Result<Added> {
     let (rate, samples) = load_span_to(log, from_s, to_s.map(|t| (t - from_s).max(0.0)))?;
@@ -57,6 +45,17 @@ pub fn diagnose(
         Some(t) => (((t - from_s) * rate).round() as usize).min(samples.len()),
         None => samples.len(),
     };
+    if !paper_split {
+        return super::diagnose_whole::diagnose_whole_samples(
+            log,
+            &samples[..end],
+            rate,
+            from_s,
+            channels,
+            out_dir,
+            progress,
+        );
+    }
     diagnose_samples(
         log,
         &samples[..end],
@@ -68,93 +67,9 @@ pub fn diagnose(
     )
 }
 
-/// One window of [`diagnose_windows`]: its span (s from the log's start) and what it added.
-#[derive(Debug, Clone, Serialize)]
-pub struct WindowResult {
-    pub from_s: f64,
-    pub to_s: f64,
-    pub added: Added,
-}
-
-/// What `diagnose --window-s` found: each window's additions (the summary).
-#[derive(Debug, Clone, Serialize)]
-pub struct WindowsReport {
-    pub windows: Vec<WindowResult>,
-}
-
-/// The windows of a scan: their length and start-to-start spacing, s.
-#[derive(Debug, Clone, Copy)]
-pub struct Windows {
-    pub window_s: f64,
-    pub hop_s: f64,
-}
-
-/// `diagnose --window-s W`: the loop on overlapping windows of a long log, each written to
-/// `out_dir/window_<start>s/`; each window's progress goes to `progress`.
-pub fn diagnose_windows(
-    log: &Path,
-    channels: &[String],
-    (from_s, to_s): (f64, Option<f64>),
-    w: Windows,
-    out_dir: &Path,
-    progress: &mut dyn Write,
-) -> Result<WindowsReport> {
-    let Windows { window_s, hop_s } = w;
-    ensure!(
-        window_s > 0.0 && hop_s > 0.0 && hop_s <= window_s,
-        "--window-s and --hop-s must be > 0, with the hop no longer than the window"
-    );
-    let (rate, samples) = load_span(log, from_s)?;
-    let total_s = samples.len() as f64 / rate;
-    let end_s = to_s.map_or(from_s + total_s, |t| t.min(from_s + total_s));
-    let mut windows = Vec::new();
-    for a in window_starts(from_s, end_s, window_s, hop_s) {
-        let b = (a + window_s).min(end_s);
-        writeln!(progress, "== window {a:.0}–{b:.0} s")?;
-        let dir = out_dir.join(format!("window_{a:.0}s"));
-        let i0 = (((a - from_s) * rate).round() as usize).min(samples.len());
-        let i1 = (((b - from_s) * rate).round() as usize).clamp(i0, samples.len());
-        let added = diagnose_samples(log, &samples[i0..i1], rate, a, channels, &dir, progress)?;
-        windows.push(WindowResult {
-            from_s: a,
-            to_s: b,
-            added,
-        });
-    }
-    Ok(WindowsReport { windows })
-}
-
-impl fmt::Display for WindowsReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        // Each window is tested at the loop's own significance level, so a scan of many windows
-        // adds more false findings than one run (slow wander read as a step, say): a finding is
-        // a place to look, to be confirmed with --from-s/--to-s around it.
-        writeln!(
-            f,
-            "\nsummary: what each window's loop added (step times from the log's start; each window is tested on its own, so expect some findings from slow wander)"
-        )?;
-        for w in &self.windows {
-            let (a, b) = (w.from_s, w.to_s);
-            for (ch, effects) in &w.added {
-                let text: Vec<String> = effects
-                    .iter()
-                    .map(|e| match *e {
-                        Effect::Step { t_s, size } => {
-                            effect_text(&Effect::Step { t_s: t_s + a, size })
-                        }
-                        ref other => effect_text(other),
-                    })
-                    .collect();
-                writeln!(f, "  {a:>7.0}–{b:<7.0} {ch}: {}", effects_text(&text))?;
-            }
-        }
-        Ok(())
-    }
-}
-
 /// The exogenous inputs of channel `c`: temperature, the specific force (gyro channels) and
 /// the other five axes.
-fn exogenous<'a>(
+pub fn exogenous<'a>(
     series: &'a [Vec<f64>],
     temp: Option<&'a [f64]>,
     others: &'a [(String, &'a [f64])],

@@ -10,6 +10,7 @@ pub mod convert;
 pub mod daemon;
 pub mod detector_compare;
 pub mod diagnose;
+pub mod diagnose_whole;
 pub mod evaluate;
 pub mod fit;
 pub mod flag_review;

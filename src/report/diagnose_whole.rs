@@ -1,0 +1,152 @@
+//! `imuprep diagnose LOG` (default): the whole-log diagnosis of every chosen channel, one report
+//! (`report.txt`, `report.json`), one model (`bias.toml`) and the plots, with a progress bar on
+//! stderr (hidden when stderr is not a terminal).
+
+use std::io::Write;
+use std::path::Path;
+
+use anyhow::{Result, anyhow, ensure};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+
+use super::diagnose::{Added, effects_text, exogenous};
+use super::parse_channels;
+use crate::analysis::diagnose::ChannelInput;
+use crate::analysis::diagnose_whole::{WholeDiagnosis, WholeSettings, diagnose_whole};
+use crate::analysis::diagnose_whole_report::{effect_lines, whole_plots, whole_text};
+use crate::model::bias_model::{BiasModelFile, ChannelBiasModel};
+use crate::sample::{CHANNEL_NAMES, Sample};
+
+/// The report of one run.
+#[derive(Debug, Serialize)]
+pub struct WholeReport {
+    /// What was analysed.
+    pub source: String,
+    /// How effects were chosen and tested.
+    pub method: &'static str,
+    /// One diagnosis per channel.
+    pub channels: Vec<WholeDiagnosis>,
+}
+
+const METHOD: &str = "whole log: effects proposed and fitted on the even blocks, kept only if their held-out gain on the odd blocks beats its noise (z-test at alpha = 0.001 / candidates; for slow effects the noise of the gain from the held-out innovations' autocovariance), then refitted on every block";
+
+impl WholeReport {
+    /// The text report.
+    pub fn to_text(&self) -> String {
+        let mut o = format!("diagnose: {}\nmethod: {}\n", self.source, self.method);
+        for c in &self.channels {
+            o.push_str(&whole_text(c));
+        }
+        o
+    }
+}
+
+/// The whole-log diagnosis of `samples` (the stretch starting `from_s` into `log`).
+pub fn diagnose_whole_samples(
+    log: &Path,
+    samples: &[Sample],
+    rate: f64,
+    from_s: f64,
+    channels: &[String],
+    out_dir: &Path,
+    progress: &mut dyn Write,
+) -> Result<Added> {
+    ensure!(!samples.is_empty(), "the chosen stretch is empty");
+    let chans = parse_channels(channels)?;
+    let series: Vec<Vec<f64>> = (0..6)
+        .map(|c| samples.iter().map(|s| s.channel(c)).collect())
+        .collect();
+    let temp: Option<Vec<f64>> = samples.iter().map(|s| s.temp_c).collect();
+    std::fs::create_dir_all(out_dir.join("plots"))?;
+    let settings = WholeSettings::default();
+    let mut report = WholeReport {
+        source: format!(
+            "{} [{from_s} s .. +{:.1} s at {rate} Hz]",
+            log.display(),
+            samples.len() as f64 / rate
+        ),
+        method: METHOD,
+        channels: vec![],
+    };
+    let bar = ProgressBar::new(7 * chans.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+            .map_err(|e| anyhow!(e.to_string()))?
+            .progress_chars("=> "),
+    );
+    let mut model = BiasModelFile::default();
+    let mut added_all: Added = Vec::new();
+    for c in chans {
+        let name = CHANNEL_NAMES[c];
+        let others: Vec<(String, &[f64])> = (0..6)
+            .filter(|j| *j != c)
+            .map(|j| (CHANNEL_NAMES[j].to_string(), series[j].as_slice()))
+            .collect();
+        let input = ChannelInput {
+            name,
+            values: &series[c],
+            rate_hz: rate,
+            exogenous: exogenous(&series, temp.as_deref(), &others, c),
+        };
+        let start = bar.position();
+        let d = match diagnose_whole(&input, &settings, &mut |stage| {
+            bar.set_message(format!("{name}: {stage}"));
+            bar.inc(1);
+        }) {
+            Ok(d) => d,
+            Err(e) => {
+                bar.suspend(|| writeln!(progress, "{name}: cannot diagnose: {e}"))?;
+                bar.set_position(start + 7);
+                continue;
+            }
+        };
+        bar.set_position(start + 7);
+        let h = &d.held_out;
+        let lines = effect_lines(&d);
+        bar.suspend(|| {
+            writeln!(
+                progress,
+                "{name}: held-out open-loop MSE {:.4e} → {:.4e}, one-step {:.4e} → {:.4e} ({:.1} % lower); model: {}",
+                h.open_loop_before,
+                h.open_loop_after,
+                h.one_step_before,
+                h.one_step_after,
+                100.0 * (1.0 - h.one_step_after / h.one_step_before),
+                effects_text(&lines)
+            )
+        })?;
+        for (stem, svg) in whole_plots(&d) {
+            std::fs::write(out_dir.join("plots").join(format!("{stem}.svg")), svg)?;
+        }
+        let effects: Vec<_> = d.effects.iter().map(|e| e.effect.clone()).collect();
+        model.channels.push(ChannelBiasModel {
+            channel: name.to_string(),
+            method: "burg".into(),
+            sample_rate_hz: rate,
+            mean: d.intercept,
+            ar: d.ar.clone(),
+            innovation_var: d.innovation_var,
+            white_noise_var: 0.0,
+            effects: effects.clone(),
+            ..Default::default()
+        });
+        added_all.push((name.to_string(), effects));
+        report.channels.push(d);
+    }
+    bar.finish_and_clear();
+    std::fs::write(out_dir.join("report.txt"), report.to_text())?;
+    std::fs::write(
+        out_dir.join("report.json"),
+        serde_json::to_string_pretty(&report).map_err(|e| anyhow!(e.to_string()))?,
+    )?;
+    std::fs::write(
+        out_dir.join("bias.toml"),
+        model.to_toml_string().map_err(|e| anyhow!(e.to_string()))?,
+    )?;
+    writeln!(
+        progress,
+        "wrote {0}/report.txt, {0}/report.json, {0}/bias.toml and {0}/plots/",
+        out_dir.display()
+    )?;
+    Ok(added_all)
+}
