@@ -238,10 +238,19 @@ impl Config {
             }
         };
         for k in table.keys() {
-            if !["source", "sinks", "health", "gross_error", "bias"].contains(&k.as_str()) {
+            if ![
+                "source",
+                "sinks",
+                "health",
+                "gross_error",
+                "bias",
+                "monitor",
+            ]
+            .contains(&k.as_str())
+            {
                 errs.push(
                     k.clone(),
-                    "unknown section (expected source, sinks, health, gross_error, bias)",
+                    "unknown section (expected source, sinks, health, gross_error, bias, monitor)",
                 );
             }
         }

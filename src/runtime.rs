@@ -45,6 +45,8 @@ pub struct Health {
     /// Health reports published beside the samples.
     pub health_reports: u64,
     pub stages: Vec<(String, u64)>,
+    /// Each stage's judgement of its own model (`monitor`: "model fits", "effect suspected: …").
+    pub model_health: Vec<(String, String)>,
     pub sinks: Vec<SinkReport>,
     /// Why the run ended: "end of input", "signal", ...
     pub ended_by: String,
@@ -151,6 +153,9 @@ impl Health {
         if !nz.is_empty() {
             let _ = writeln!(o, "  stages     : {}", nz.join(" "));
         }
+        for (stage, h) in &self.model_health {
+            let _ = writeln!(o, "  model      : {stage}: {h}");
+        }
         if self.source_stalls > 0 {
             let _ = writeln!(
                 o,
@@ -247,6 +252,15 @@ impl Health {
             self.source_stalls,
             self.sink_dropped()
         );
+        let line = if self
+            .model_health
+            .iter()
+            .any(|(_, h)| h.starts_with("effect"))
+        {
+            line + " model=EFFECT_SUSPECTED"
+        } else {
+            line
+        };
         if self.cleaning_stages.is_empty() {
             line + " cleaning=NONE"
         } else {
@@ -259,12 +273,15 @@ impl Health {
 pub const NO_CLEANING: &str = "NONE — no cleaning stage is enabled ([gross_error] and [bias] are off): samples are published raw";
 
 fn cleaning_stages(p: &Pipeline) -> Vec<String> {
-    p.stage_names().iter().map(|s| s.to_string()).collect()
+    p.cleaning_stage_names()
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
 }
 
 /// Run source → pipeline → sinks until the input ends or a signal arrives.
 pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health> {
-    if pipeline.stage_names().is_empty() {
+    if pipeline.cleaning_stage_names().is_empty() {
         tracing::warn!("cleaning: {NO_CLEANING}");
     }
     // Sinks first: a bad address or path fails before any data is read.
@@ -361,7 +378,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
                 fill(&mut health, &pipeline, &sinks, started);
                 tracing::info!("health: {}", health.line());
                 // Health as data: beside the samples, on every sink whose format carries it.
-                let frame = health.frame(pipeline.stage_names().len());
+                let frame = health.frame(pipeline.cleaning_stage_names().len());
                 health.health_reports += 1;
                 for k in &sinks {
                     k.offer(SinkItem::Health(frame)).await;
@@ -380,7 +397,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     publish(held, &mut health, &sinks).await;
     // A last health report closes every stream that carries them.
     fill(&mut health, &pipeline, &sinks, started);
-    let frame = health.frame(pipeline.stage_names().len());
+    let frame = health.frame(pipeline.cleaning_stage_names().len());
     health.health_reports += 1;
     for k in &sinks {
         k.offer(SinkItem::Health(frame)).await;
@@ -396,6 +413,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     }
     health.elapsed_s = started.elapsed().as_secs_f64();
     health.stages = pipeline.counters();
+    health.model_health = pipeline.model_health();
     health.cleaning_stages = cleaning_stages(&pipeline);
     health.sinks = closing.iter().map(|(n, s, _)| s.report(n)).collect();
     Ok(health)
@@ -418,6 +436,7 @@ async fn publish(out: Vec<Sample>, health: &mut Health, sinks: &[SinkHandle]) {
 fn fill(h: &mut Health, p: &Pipeline, sinks: &[SinkHandle], started: Instant) {
     h.elapsed_s = started.elapsed().as_secs_f64();
     h.stages = p.counters();
+    h.model_health = p.model_health();
     h.cleaning_stages = cleaning_stages(p);
     h.sinks = sinks.iter().map(|s| s.stats.report(&s.name)).collect();
 }

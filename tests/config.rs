@@ -120,13 +120,16 @@ fn a_user_file_changes_only_what_it_names() {
     assert_eq!(b.settings, d.stages.bias.as_ref().unwrap().settings);
     assert_eq!(c.health, d.health);
     assert_eq!(
-        c.stages.build().unwrap().stage_names(),
+        c.stages.build().unwrap().cleaning_stage_names(),
         ["gross_error", "bias"]
     );
     // Switching a stage off is said in the file, and only that stage goes.
     let off = "[source]\nkind = \"stdin\"\n[bias]\nenabled = false\n";
     let c = Config::from_toml_str(off, Path::new(".")).unwrap();
-    assert_eq!(c.stages.build().unwrap().stage_names(), ["gross_error"]);
+    assert_eq!(
+        c.stages.build().unwrap().cleaning_stage_names(),
+        ["gross_error"]
+    );
 }
 
 /// A pipeline with no cleaning stage is said in the summary and the health data (issue 13,
@@ -285,10 +288,14 @@ fn default_toml_lists_every_setting_and_every_documented_value_parses() {
             "health",
             toml::Table::try_from(imuprep::config::HealthConfig::default()).unwrap(),
         ),
+        (
+            "monitor.settings",
+            toml::Table::try_from(imuprep::stage::monitor::MonitorSettings::default()).unwrap(),
+        ),
     ] {
         let mut keys = Vec::new();
         leaf_paths(&defaults, "", &mut keys);
-        assert!(keys.len() > 10 || section == "health");
+        assert!(keys.len() > 10 || section == "health" || section == "monitor.settings");
         for k in keys {
             let full = format!("{section}.{k}");
             let got = at(&file, &full).unwrap_or_else(|| panic!("{full} is not in default.toml"));

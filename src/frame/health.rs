@@ -42,7 +42,7 @@ pub struct HealthFrame {
     pub sink_errors: u64,
     /// TCP clients connected now.
     pub tcp_clients: u64,
-    /// Stages in the pipeline (0: samples pass uncleaned).
+    /// Cleaning stages in the pipeline (0: samples pass uncleaned; the monitor is not one).
     pub stages: u64,
     /// 1 when the last sample published was flagged warming up (a stage still identifying).
     pub warming_up: u64,

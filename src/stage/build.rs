@@ -10,6 +10,7 @@ use crate::settings::{Errors, clean_serde, lenient, push_keyed, resolve};
 use crate::stage::bias::BiasStage;
 use crate::stage::bias::settings::BiasSettings;
 use crate::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
+use crate::stage::monitor::{MonitorSettings, MonitorStage};
 use crate::stage::{Pipeline, Stage};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -49,6 +50,16 @@ struct BiasSection {
     settings: BiasSettings,
 }
 
+/// `[monitor]` as written.
+#[derive(Debug, Clone, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct MonitorSection {
+    #[serde(default)]
+    enabled: bool,
+    #[serde(default)]
+    settings: MonitorSettings,
+}
+
 /// Validated bias stage settings.
 #[derive(Debug, Clone)]
 pub struct BiasConfig {
@@ -68,6 +79,11 @@ pub struct GrossErrorConfig {
 pub struct StagesConfig {
     pub gross_error: Option<GrossErrorConfig>,
     pub bias: Option<BiasConfig>,
+    /// The model-health monitor (watches, changes nothing).
+    pub monitor: Option<MonitorSettings>,
+    /// The sensor's declared rate (a log's descriptor), Hz; `None`: stages that need one
+    /// without a setting learn it from the time stamps.
+    pub declared_rate_hz: Option<f64>,
 }
 
 /// Read a TOML model file, recording any error at `path`.
@@ -114,6 +130,9 @@ where
 impl StagesConfig {
     /// Adopt the sensor's declared rate (from a log's descriptor) where the stages need one.
     pub fn set_sample_rate(&mut self, rate_hz: f64) {
+        if rate_hz > 0.0 && rate_hz.is_finite() {
+            self.declared_rate_hz = Some(rate_hz);
+        }
         if let Some(b) = self.bias.as_mut()
             && rate_hz > 0.0
         {
@@ -177,10 +196,22 @@ impl StagesConfig {
             settings: bs.settings,
             model,
         });
-        (errs.len() == n).then_some(StagesConfig { gross_error, bias })
+        let ms: MonitorSection = stage_section(table, "monitor", errs);
+        if let Err(v) = ms.settings.validate() {
+            for m in v {
+                push_keyed(errs, "monitor.settings", m);
+            }
+        }
+        let monitor = ms.enabled.then_some(ms.settings);
+        (errs.len() == n).then_some(StagesConfig {
+            gross_error,
+            bias,
+            monitor,
+            declared_rate_hz: None,
+        })
     }
 
-    /// The pipeline these settings describe: gross errors first, then bias.
+    /// The pipeline these settings describe: gross errors first, then bias, then the monitor.
     pub fn build(&self) -> Result<Pipeline, String> {
         let mut stages: Vec<Box<dyn Stage>> = Vec::new();
         if let Some(g) = &self.gross_error {
@@ -191,6 +222,11 @@ impl StagesConfig {
         if let Some(b) = &self.bias {
             let st =
                 BiasStage::new(&b.settings, b.model.as_ref()).map_err(|e| format!("bias: {e}"))?;
+            stages.push(Box::new(st));
+        }
+        if let Some(m) = &self.monitor {
+            let st = MonitorStage::new(m.clone(), self.declared_rate_hz)
+                .map_err(|e| format!("monitor: {e}"))?;
             stages.push(Box::new(st));
         }
         Ok(Pipeline::new(stages))

@@ -8,6 +8,7 @@
 pub mod bias;
 pub mod build;
 pub mod gross_error;
+pub mod monitor;
 
 use crate::sample::Sample;
 
@@ -30,6 +31,14 @@ pub trait Stage: Send {
     /// Named counters for the health report; called at report intervals, never per sample.
     fn counters(&self) -> Vec<(String, u64)> {
         Vec::new()
+    }
+    /// The stage's judgement of its own model, for the health report (`None`: it makes none).
+    fn model_health(&self) -> Option<String> {
+        None
+    }
+    /// Whether the stage changes samples (a monitor only watches them).
+    fn cleans(&self) -> bool {
+        true
     }
 }
 
@@ -101,6 +110,23 @@ impl Pipeline {
 
     pub fn stage_names(&self) -> Vec<&'static str> {
         self.stages.iter().map(|s| s.name()).collect()
+    }
+
+    /// The stages that change samples, in order (a monitor watches only).
+    pub fn cleaning_stage_names(&self) -> Vec<&'static str> {
+        self.stages
+            .iter()
+            .filter(|s| s.cleans())
+            .map(|s| s.name())
+            .collect()
+    }
+
+    /// Each stage's judgement of its own model, keyed by stage name.
+    pub fn model_health(&self) -> Vec<(String, String)> {
+        self.stages
+            .iter()
+            .filter_map(|s| s.model_health().map(|h| (s.name().to_string(), h)))
+            .collect()
     }
 
     /// All stages' counters, keyed `stage.counter`.

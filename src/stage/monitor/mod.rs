@@ -1,0 +1,376 @@
+//! Model health: the pipeline watching its own innovations at rest.
+//!
+//! Placed after the cleaning stages, the monitor changes no sample. While the sensor is still
+//! (the bias stage's `STILL` flag) the pipeline's output is the bias stage's innovation: the
+//! measurement minus the predicted bias and every modelled effect. Where the model holds that is
+//! zero-mean noise with a smooth spectrum; the monitor looks, per channel, for
+//!
+//! - an **offset** the model does not explain — a step, a drift, a temperature term it lacks
+//!   ([`step::LevelDetector`]: a window's mean output against the channel's own history), and
+//! - a **spectral line** — a vibration or an electrical line appearing ([`line::LineDetector`]:
+//!   a moving Welch average, each bin against its neighbours),
+//!
+//! and publishes a status — `model fits`, `learning`, or `effect suspected: …` with the channel,
+//! the size and the time — in the health data, so the user learns that `imuprep diagnose` should
+//! be rerun before the error reaches the navigation solution. Both tests learn their scale from
+//! the channel itself (no absolute threshold), so they follow the sensor's own noise. Motion is
+//! not tested (the output then is motion, not innovation); a run of still data broken by motion,
+//! a gap, a replaced, saturated or non-finite value starts again.
+
+pub mod line;
+pub mod settings;
+pub mod step;
+
+use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
+use crate::stage::Stage;
+use line::{LineDetector, LineEvent};
+pub use settings::MonitorSettings;
+use std::collections::VecDeque;
+use step::LevelDetector;
+
+/// Positive sample intervals used to learn the rate.
+const RATE_INTERVALS: usize = 64;
+/// Alarms kept for the status.
+const KEEP_EVENTS: usize = 16;
+
+/// What an alarm found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Finding {
+    /// A window's mean output off zero by this much (channel unit).
+    Offset(f64),
+    /// A line at this frequency, Hz (and its index among the channel's lines).
+    Line(f64, usize),
+}
+
+/// One alarm of the monitor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Alarm {
+    pub channel: usize,
+    /// Sensor time the effect was first seen, ns.
+    pub t_ns: u64,
+    pub finding: Finding,
+    /// Its size against the channel's own scale (σ for an offset, power ratio for a line).
+    pub score: f64,
+}
+
+impl std::fmt::Display for Alarm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let name = CHANNEL_NAMES[self.channel];
+        let t = self.t_ns as f64 * 1e-9;
+        match self.finding {
+            Finding::Offset(v) if self.channel < 3 => write!(
+                f,
+                "{name} offset {:+.4} °/s since {t:.1} s ({:.1} σ)",
+                v.to_degrees(),
+                self.score
+            ),
+            Finding::Offset(v) => write!(
+                f,
+                "{name} offset {v:+.5} m/s² since {t:.1} s ({:.1} σ)",
+                self.score
+            ),
+            Finding::Line(hz, _) => write!(
+                f,
+                "{name} line ≈ {hz:.3} Hz since {t:.1} s ({:.0}× its neighbours)",
+                self.score
+            ),
+        }
+    }
+}
+
+struct Channel {
+    level: LevelDetector,
+    line: LineDetector,
+}
+
+/// The model-health monitor (a pass-through stage).
+pub struct MonitorStage {
+    settings: MonitorSettings,
+    last_t_ns: Option<u64>,
+    intervals: Vec<u64>,
+    fs: Option<f64>,
+    ch: Vec<Channel>,
+    alarms: VecDeque<Alarm>,
+    offset_alarms: u64,
+    line_alarms: u64,
+    still_samples: u64,
+    line_events: Vec<LineEvent>,
+}
+
+impl MonitorStage {
+    /// A monitor for a sensor at `rate_hz` (declared, e.g. by a log's descriptor); `None`:
+    /// learned from the first time stamps (their median interval).
+    pub fn new(settings: MonitorSettings, rate_hz: Option<f64>) -> Result<Self, String> {
+        settings.validate().map_err(|e| e.join("; "))?;
+        let mut m = MonitorStage {
+            settings,
+            last_t_ns: None,
+            intervals: Vec::with_capacity(RATE_INTERVALS),
+            fs: None,
+            ch: Vec::new(),
+            alarms: VecDeque::with_capacity(KEEP_EVENTS),
+            offset_alarms: 0,
+            line_alarms: 0,
+            still_samples: 0,
+            line_events: Vec::new(),
+        };
+        if let Some(fs) = rate_hz.filter(|f| f.is_finite() && *f > 0.0) {
+            m.start(fs);
+        }
+        Ok(m)
+    }
+
+    /// The rate the monitor learned from the time stamps, Hz.
+    pub fn sample_rate_hz(&self) -> Option<f64> {
+        self.fs
+    }
+
+    /// Every alarm kept (the last 16), oldest first.
+    pub fn alarms(&self) -> impl Iterator<Item = &Alarm> {
+        self.alarms.iter()
+    }
+
+    /// Channels whose offset test is armed.
+    pub fn armed_channels(&self) -> usize {
+        self.ch.iter().filter(|c| c.level.armed()).count()
+    }
+
+    /// One line for people and for the health record.
+    pub fn status(&self) -> String {
+        let now = self.last_t_ns.unwrap_or(0);
+        let hold = (self.settings.hold_s * 1e9) as u64;
+        let recent: Vec<String> = self
+            .alarms
+            .iter()
+            .filter(|a| now.saturating_sub(a.t_ns) <= hold || self.holding(a))
+            .map(|a| a.to_string())
+            .collect();
+        if !recent.is_empty() {
+            return format!("effect suspected: {}", recent.join("; "));
+        }
+        let armed = self.armed_channels();
+        if armed > 0 {
+            return format!("model fits ({armed} of {N_CHANNELS} channels armed)");
+        }
+        match self.fs {
+            None => "learning the sample rate".into(),
+            Some(fs) => format!(
+                "learning ({:.0} s still seen of {:.0} s needed)",
+                self.still_samples as f64 / fs,
+                self.settings.learn_s
+            ),
+        }
+    }
+
+    /// Whether the alarm's effect is still present (an offset alarm holding, a line active).
+    fn holding(&self, a: &Alarm) -> bool {
+        let Some(c) = self.ch.get(a.channel) else {
+            return false;
+        };
+        match a.finding {
+            Finding::Offset(_) => c.level.active(),
+            Finding::Line(_, id) => c.line.is_active(id),
+        }
+    }
+
+    fn record(&mut self, a: Alarm) {
+        if self.alarms.len() == KEEP_EVENTS {
+            self.alarms.pop_front();
+        }
+        tracing::warn!(alarm = %a, "model health: effect suspected — rerun `imuprep diagnose`");
+        self.alarms.push_back(a);
+    }
+
+    fn learn_rate(&mut self, t_ns: u64) {
+        if let Some(prev) = self.last_t_ns
+            && t_ns > prev
+        {
+            self.intervals.push(t_ns - prev);
+        }
+        if self.intervals.len() < RATE_INTERVALS {
+            return;
+        }
+        let mid = self.intervals.len() / 2;
+        let (_, m, _) = self.intervals.select_nth_unstable(mid);
+        let fs = 1e9 / *m as f64;
+        self.start(fs);
+    }
+
+    fn start(&mut self, fs: f64) {
+        let st = &self.settings;
+        let block_n = (st.block_s * fs).round().max(1.0) as usize;
+        let window_blocks = (st.window_s / st.block_s).round().max(1.0) as usize;
+        let learn_blocks = (st.learn_s / st.block_s).ceil() as usize;
+        let seg_n = (st.line_segment_s * fs).round() as usize;
+        self.ch = (0..N_CHANNELS)
+            .map(|_| Channel {
+                level: LevelDetector::new(block_n, window_blocks, st.offset_k, learn_blocks),
+                line: LineDetector::new(seg_n, st.line_averages, st.line_k, fs),
+            })
+            .collect();
+        self.fs = Some(fs);
+        self.intervals = Vec::new();
+    }
+
+    fn watch(&mut self, s: &Sample) {
+        if self.fs.is_none() {
+            self.learn_rate(s.t_ns);
+            self.last_t_ns = Some(s.t_ns);
+            return;
+        }
+        self.last_t_ns = Some(s.t_ns);
+        if s.has(flags::REPEATED) {
+            return; // no new measurement
+        }
+        if !s.has(flags::STILL) || s.has(flags::GAP) {
+            for c in &mut self.ch {
+                c.level.interrupt();
+                c.line.interrupt();
+            }
+            return;
+        }
+        self.still_samples += 1;
+        let mut found = Vec::new();
+        for (i, c) in self.ch.iter_mut().enumerate() {
+            let v = s.channel(i);
+            let bad = flags::replaced_ch(i) | flags::sat_ch(i) | flags::SENSOR_FAULT;
+            if !v.is_finite() || s.flags & bad != 0 {
+                c.level.interrupt();
+                c.line.interrupt();
+                continue;
+            }
+            if let Some(e) = c.level.push(s.t_ns, v) {
+                found.push(Alarm {
+                    channel: i,
+                    t_ns: e.t_ns,
+                    finding: Finding::Offset(e.offset),
+                    score: e.z,
+                });
+            }
+            self.line_events.clear();
+            c.line.push(s.t_ns, v, &mut self.line_events);
+            for e in &self.line_events {
+                found.push(Alarm {
+                    channel: i,
+                    t_ns: e.t_ns,
+                    finding: Finding::Line(e.freq_hz, e.id),
+                    score: e.ratio,
+                });
+            }
+        }
+        for a in found {
+            match a.finding {
+                Finding::Offset(_) => self.offset_alarms += 1,
+                Finding::Line(..) => self.line_alarms += 1,
+            }
+            self.record(a);
+        }
+    }
+}
+
+impl Stage for MonitorStage {
+    fn name(&self) -> &'static str {
+        "monitor"
+    }
+
+    fn push(&mut self, s: Sample, out: &mut Vec<Sample>) {
+        self.watch(&s);
+        out.push(s);
+    }
+
+    fn counters(&self) -> Vec<(String, u64)> {
+        vec![
+            ("offset_alarms".into(), self.offset_alarms),
+            ("line_alarms".into(), self.line_alarms),
+            ("armed_channels".into(), self.armed_channels() as u64),
+            ("still_samples".into(), self.still_samples),
+        ]
+    }
+
+    fn model_health(&self) -> Option<String> {
+        Some(self.status())
+    }
+
+    fn cleans(&self) -> bool {
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use nalgebra::Vector3;
+
+    fn still(seq: u32, fs: f64, g: [f64; 3], a: [f64; 3]) -> Sample {
+        let mut s = Sample {
+            seq,
+            t_ns: (seq as f64 / fs * 1e9) as u64,
+            gyro: Vector3::from(g),
+            accel: Vector3::from(a),
+            ..Default::default()
+        };
+        s.flags |= flags::STILL;
+        s
+    }
+
+    #[test]
+    fn status_goes_learning_then_fits_then_names_the_effect() {
+        let fs = 100.0;
+        let mut m = MonitorStage::new(MonitorSettings::default(), None).unwrap();
+        let mut r = Rng::new(21);
+        let mut out = Vec::new();
+        let mut seen = Vec::new();
+        // 20 min at rest; from 700 s on gz carries the default model's transient of a
+        // 0.042 °/s step (what an ADIS16405-class gyro at 0.35 °/s sample noise shows).
+        let step = 0.042_f64.to_radians();
+        for i in 0..120_000u32 {
+            let t = i as f64 / fs;
+            let tr = if t >= 700.0 {
+                step * (-(t - 700.0) / 60.0).exp()
+            } else {
+                0.0
+            };
+            let g = [
+                0.006 * r.normal(),
+                0.006 * r.normal(),
+                0.006 * r.normal() + tr,
+            ];
+            let a = [
+                0.01 * r.normal(),
+                0.01 * r.normal(),
+                9.81 + 0.01 * r.normal(),
+            ];
+            let s = still(i, fs, g, a);
+            m.push(s, &mut out);
+            out.clear();
+            if i == 10_000 || i == 60_000 || i == 76_000 {
+                seen.push((t, m.status()));
+            }
+        }
+        assert!(seen[0].1.starts_with("learning"), "{seen:?}");
+        assert!(seen[1].1.starts_with("model fits"), "{seen:?}");
+        assert!(seen[2].1.contains("gz offset"), "{seen:?}");
+        let a: Vec<&Alarm> = m.alarms().collect();
+        assert_eq!(a.len(), 1, "{a:?}");
+        assert_eq!(a[0].channel, 2);
+        assert_eq!(m.counters()[0].1, 1);
+    }
+
+    #[test]
+    fn motion_is_not_tested_and_nothing_is_changed() {
+        let fs = 100.0;
+        let mut m = MonitorStage::new(MonitorSettings::default(), None).unwrap();
+        let mut out = Vec::new();
+        for i in 0..100_000u32 {
+            // Moving: a large slow rotation, never flagged still.
+            let w = (i as f64 * 0.01).sin();
+            let mut s = still(i, fs, [w, 0.0, 0.0], [0.0, 0.0, 9.81]);
+            s.flags = 0;
+            m.push(s, &mut out);
+            assert_eq!(out.pop().unwrap(), s);
+        }
+        assert_eq!(m.alarms().count(), 0);
+        assert!(m.status().starts_with("learning (0 s"), "{}", m.status());
+    }
+}
