@@ -24,6 +24,10 @@
 //!          ∧ (fewer than four samples ∨ max |Δ²| ≥ 0.45 max |x_k − p_k|)
 //! ```
 //!
+//! A context sample the caller left out (NaN: a neighbouring outlier) is skipped everywhere: in
+//! the fit, in σ̂ and z_ctx, and in the edges, which then extrapolate linearly from the two
+//! nearest finite samples among the three on that side (no two: no evidence of a break).
+//!
 //! The last line: a glitch run is a square or jagged pulse, its second differences as large as
 //! its excursion; a real transient of four samples or more is smooth at the sample scale (a
 //! half-sine of m samples has max |Δ²| = (π/(m+1))² of its height), whatever its size.
@@ -304,16 +308,20 @@ pub fn confirm(
     }
     let z = &mut z[..n];
     let z_median = crate::stats::robust::median(z);
-    let edge = |e: f64| {
-        if e.is_finite() {
-            (e / (sigma * 6f64.sqrt())).abs()
-        } else {
+    // A non-finite event value breaks in as far as it gets; a side without two finite values
+    // near the event gives no evidence of a break.
+    let edge = |x: f64, p: f64| {
+        if !x.is_finite() {
             f64::INFINITY
+        } else if !p.is_finite() {
+            0.0
+        } else {
+            ((x - p) / (sigma * 6f64.sqrt())).abs()
         }
     };
     let np = pre.len();
-    let z_in = edge(event[0] - (2.0 * pre[np - 1] - pre[np - 2]));
-    let z_out = edge(event[m - 1] - (2.0 * post[0] - post[1]));
+    let z_in = edge(event[0], extrapolate(pre.iter().rev()));
+    let z_out = edge(event[m - 1], extrapolate(post.iter()));
     let z_context = sharpest(pre).max(sharpest(post)) / sigma;
     // Jaggedness: the largest |Δ²| along pre[last], event, post[0] over the largest residual.
     let mut seq = [0.0f64; 66];
@@ -337,6 +345,25 @@ pub fn confirm(
         jaggedness,
         sigma,
     })
+}
+
+/// Linear extrapolation to distance 0 from the two nearest finite values among the first three
+/// of `side` (nearest first, at distances 1, 2, 3): `2 x₁ − x₂` when both are finite; NaN
+/// without two.
+fn extrapolate<'a>(side: impl Iterator<Item = &'a f64>) -> f64 {
+    let mut got = [(0.0f64, 0.0f64); 2];
+    let mut n = 0;
+    for (i, &x) in side.take(3).enumerate() {
+        if x.is_finite() {
+            got[n] = ((i + 1) as f64, x);
+            n += 1;
+            if n == 2 {
+                let ((da, a), (db, b)) = (got[0], got[1]);
+                return a + (a - b) * da / (db - da);
+            }
+        }
+    }
+    f64::NAN
 }
 
 impl Evidence {

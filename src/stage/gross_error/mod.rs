@@ -9,10 +9,13 @@
 //! 2. **Confirmation** (`confirm.rs`): an event (successive candidates of one channel) is held
 //!    until `post_samples` samples after it have arrived; it is a gross error only if it breaks
 //!    the signal around it by more than `confirm_k` times that signal's own roughness, and it is
-//!    not part of a shock seen on several axes (≥ 2 other channels beyond 4σ within one sample of
-//!    its start; a one-sample event whose partners were off on that sample only is a corrupted
-//!    frame, not a shock). The gate's own motion verdicts (a level change, the release rule) are
-//!    final.
+//!    not part of a shock seen on other axes (their raw values: ≥ 2 other channels beyond 4σ
+//!    within one sample of its start, or one beyond 4σ and half the event's own break, unless
+//!    that channel's own gross errors are frequent enough to coincide by chance; a one-sample
+//!    event whose partners were off on that sample only is a corrupted frame, not a shock), and
+//!    not a break covering under a third of an event the gate itself called motion (a level
+//!    change, the release rule). Around a one-sample event, a later isolated candidate is left
+//!    out of the context (`verdict.rs`).
 //! 3. **Output.** A confirmed event is replaced (default: by the two-sided interpolation) and
 //!    flagged `REPLACED` + per-channel bit. An unconfirmed one passes unchanged, flagged
 //!    per-channel `SUSPECT`: weak evidence never changes a value. Bad values are always
@@ -34,18 +37,18 @@ pub mod confirm;
 pub mod gate;
 pub mod guard;
 pub mod settings;
+mod verdict;
 
 use std::collections::VecDeque;
 
 pub use gate::ChannelCounters;
-use gate::{ChannelGate, GateParams, Mode, Outcome, RAW_KEEP};
+use gate::{ChannelGate, GateParams, Mode, Outcome};
 use guard::JumpGuard;
 
-/// A partner channel of the several-axes test is sharp beyond this many times its roughness.
-const SHOCK_K: f64 = 4.0;
 pub use settings::{
     GrossErrorSettings, MAX_CONTEXT, MAX_LOOKAHEAD, MAX_MEDIAN_WINDOW, MAX_POST, Replacement,
 };
+use verdict::RATE_WINDOW;
 
 use crate::model::arima::{ArimaError, ArimaModelFile};
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
@@ -96,8 +99,13 @@ struct Channel {
     pending: VecDeque<OpenEvent>,
     /// Best values so far (raw, or the replacement of a confirmed gross error), by index % RING.
     ring: Box<[f64; RING]>,
+    /// The raw values by index % RING (NaN for a bad value): what the several-axes test reads,
+    /// so that a partner judged first (and replaced) still counts as a partner.
+    raw: Box<[f64; RING]>,
     /// The gate's prediction at each index (what a bad value falls back to).
     preds: Box<[f64; RING]>,
+    /// Confirmed gross errors per sample, exponentially weighted over `RATE_WINDOW` samples.
+    gross_rate: f64,
 }
 
 /// One sample held while an event that touches it is judged.
@@ -160,7 +168,9 @@ impl GrossErrorStage {
                 guard: JumpGuard::new(min_sigma),
                 pending: VecDeque::with_capacity(MAX_PENDING),
                 ring: Box::new([f64::NAN; RING]),
+                raw: Box::new([f64::NAN; RING]),
                 preds: Box::new([f64::NAN; RING]),
+                gross_rate: 0.0,
             });
         }
         Ok(GrossErrorStage {
@@ -300,6 +310,8 @@ impl GrossErrorStage {
                 }
             }
             self.ch[c].ring[slot] = v;
+            self.ch[c].gross_rate *= 1.0 - 1.0 / RATE_WINDOW;
+            self.ch[c].raw[slot] = if bad { f64::NAN } else { v };
             let was_warm = self.ch[c].gate.mode == Mode::WarmingUp;
             let usable = !bad && !saturated;
             let jumped = usable && self.ch[c].guard.candidate(v, self.s.k, self.s.max_run);
@@ -408,192 +420,6 @@ impl GrossErrorStage {
             s.flags |= flags::suspect_ch(c);
             k.suspect += 1;
         }
-    }
-
-    /// Judge the oldest pending event of channel `c` with the context that has arrived (samples
-    /// before index `upto`), and write the verdict into the held samples.
-    fn resolve(&mut self, c: usize, upto: u64) {
-        let Some(ev) = self.ch[c].pending.pop_front() else {
-            return;
-        };
-        let end = ev.end.unwrap_or(upto).min(upto);
-        let m = (end - ev.start) as usize;
-        let ctx = self.s.context_samples;
-        let post_n = self.s.post_samples;
-        let mut pre = [0.0f64; MAX_CONTEXT];
-        let mut event = [0.0f64; MAX_EVENT];
-        let mut post = [0.0f64; MAX_POST];
-        let ring = &self.ch[c].ring;
-        let at = |i: u64| ring[(i % RING as u64) as usize];
-        let n_pre = (ev.start as usize).min(ctx);
-        for (j, p) in pre[..n_pre].iter_mut().enumerate() {
-            *p = at(ev.start - n_pre as u64 + j as u64);
-        }
-        let n_post = if ev.end.is_some() {
-            ((upto - end) as usize).min(post_n)
-        } else {
-            0
-        };
-        for (j, p) in post[..n_post].iter_mut().enumerate() {
-            *p = at(end + j as u64);
-        }
-        let m_judged = m.min(event.len());
-        for (j, e) in event[..m_judged].iter_mut().enumerate() {
-            *e = at(ev.start + j as u64);
-        }
-        let mut interp = [0.0f64; MAX_EVENT];
-        // A verdict needs the signal on both sides: at least three samples after the event (the
-        // break out of it, and one second difference of roughness), or it stays unconfirmed.
-        let eligible = m_judged == m && n_post >= 3;
-        // Leading and trailing samples that continue the signal are not part of the break.
-        let (lead, keep) = if eligible {
-            confirm::trim(
-                &pre[..n_pre],
-                &event[..m],
-                &post[..n_post],
-                self.s.edge_k,
-                self.min_sigma(c),
-            )
-        } else {
-            (0, m)
-        };
-        // The judged part's surroundings: the context before plus the leading samples, and the
-        // trailing samples plus the context after.
-        let mut before = [0.0f64; MAX_CONTEXT + MAX_EVENT];
-        let n_before = n_pre + lead;
-        before[..n_pre].copy_from_slice(&pre[..n_pre]);
-        before[n_pre..n_before].copy_from_slice(&event[..lead]);
-        let before = &before[n_before.saturating_sub(ctx)..n_before];
-        let mut after = [0.0f64; MAX_POST];
-        let n_after = (m - keep + n_post).min(post_n);
-        for (j, a) in after[..n_after].iter_mut().enumerate() {
-            *a = if keep + j < m {
-                event[keep + j]
-            } else {
-                post[keep + j - m]
-            };
-        }
-        let evidence = if eligible {
-            confirm::confirm(
-                before,
-                &event[lead..keep],
-                &after[..n_after],
-                self.min_sigma(c),
-                &mut interp,
-            )
-        } else {
-            None
-        };
-        // A partner of a shock must be sharp on its own scale, and at least a quarter as sharp
-        // as the event: a 20σ glitch during a walk's 4σ footfalls is no part of them.
-        let partner_k = evidence.map_or(SHOCK_K, |e| SHOCK_K.max(0.25 * e.z_in));
-        let shock = self.shock(c, ev.start, m, upto, partner_k);
-        let gross = !shock
-            && evidence.is_some_and(|e| {
-                e.gross(
-                    keep - lead,
-                    self.s.confirm_k,
-                    self.s.edge_k,
-                    self.s.stand_out,
-                )
-            });
-        let use_interp = evidence.is_some() && self.s.replacement == Replacement::Interpolation;
-        // Write the verdict into the held samples.
-        let bit = flags::replaced_ch(c);
-        let plausible = self.plausible(c);
-        let mut replaced = 0u64;
-        let mut suspect = 0u64;
-        for h in self.held.iter_mut() {
-            if h.idx < ev.start || h.idx >= end {
-                continue;
-            }
-            let j = (h.idx - ev.start) as usize;
-            let slot = (h.idx % RING as u64) as usize;
-            let v = h.out.channel(c);
-            let bad = !v.is_finite() || v.abs() > plausible;
-            if gross && (j < lead || j >= keep) && !bad {
-                continue; // outside the break: the signal itself
-            }
-            if gross || bad {
-                let r = if use_interp && (lead..keep).contains(&j) {
-                    interp[j - lead]
-                } else {
-                    self.ch[c].preds[slot]
-                };
-                if r.is_finite() {
-                    h.out.set_channel(c, r);
-                    h.out.flags |= flags::REPLACED | bit;
-                    self.ch[c].ring[slot] = r;
-                    replaced += 1;
-                    continue;
-                }
-            }
-            h.out.flags |= flags::suspect_ch(c);
-            suspect += 1;
-        }
-        let k = &mut self.ch[c].gate.counters;
-        k.replaced += replaced;
-        k.suspect += suspect;
-        if gross {
-            k.confirmed += 1;
-        } else {
-            k.suspect_events += 1;
-        }
-        if !gross && ev.end.is_none() && self.ch[c].gate.mode == Mode::Active {
-            // Forced while still open and judged motion: end the gate's run on the raw values.
-            let mut recent = [0.0f64; RAW_KEEP];
-            let last = upto.saturating_sub(1);
-            for (j, r) in recent.iter_mut().enumerate() {
-                *r = at_ring(&self.ch[c].ring, last.saturating_sub(j as u64));
-            }
-            self.ch[c].gate.resume_from(&recent);
-        }
-    }
-
-    /// Several-axes test: at least two other channels are *sharp* within one sample of `start`
-    /// — their centred second difference beyond `SHOCK_K` times their own roughness over the
-    /// `context_samples` before — a knock moves the whole body, a glitch stays in its channel.
-    /// Model-free, so it holds during warm-up too. Not for a one-sample event whose partners were
-    /// sharp on that sample only: that is what a corrupted whole frame looks like. Needs the
-    /// samples up to `start + 2` (`upto` is one past the last available).
-    fn shock(&self, c: usize, start: u64, len: usize, upto: u64, partner_k: f64) -> bool {
-        let ctx = self.s.context_samples as u64;
-        if start < ctx + 2 || start + 3 > upto {
-            return false;
-        }
-        let mut partners = 0;
-        let mut all_same = true;
-        for (o, other) in self.ch.iter().enumerate() {
-            if o == c || other.gate.mode == Mode::Disabled {
-                continue;
-            }
-            let x = |i: u64| at_ring(&other.ring, i);
-            let d = |i: u64| x(i) - 0.5 * (x(i - 1) + x(i + 1));
-            let (mut sum, mut n) = (0.0, 0u32);
-            for i in start - ctx..start - 1 {
-                let v = d(i);
-                if v.is_finite() {
-                    sum += v * v;
-                    n += 1;
-                }
-            }
-            if n == 0 {
-                continue;
-            }
-            let lim2 = partner_k * partner_k * (sum / f64::from(n)).max(f64::MIN_POSITIVE);
-            let mut mask = 0u8;
-            for (bit, i) in [start - 1, start, start + 1].into_iter().enumerate() {
-                let v = d(i);
-                if v.is_finite() && v * v > lim2 {
-                    mask |= 1 << bit;
-                }
-            }
-            if mask != 0 {
-                partners += 1;
-                all_same &= mask == 0b010;
-            }
-        }
-        partners >= 2 && !(len == 1 && all_same)
     }
 
     /// Handle `flags::GAP`: bridge or reset; open events are judged at once (their context ends

@@ -1,0 +1,251 @@
+//! The verdict on one pending event (`resolve`): gather its context, trim it to the part that
+//! breaks the signal, confirm it two-sidedly (`confirm.rs`), rule out a shock seen on other
+//! axes and a break inside a manoeuvre the gate itself called motion, and write the verdict —
+//! replaced or suspect — into the held samples.
+
+use super::confirm;
+use super::gate::{Mode, RAW_KEEP};
+use super::{GrossErrorStage, MAX_EVENT, RING, Replacement, at_ring};
+use super::{MAX_CONTEXT, MAX_POST};
+use crate::sample::flags;
+
+/// A partner channel of the several-axes test is sharp beyond this many times its roughness.
+const SHOCK_K: f64 = 4.0;
+/// Time constant of a channel's rate of confirmed gross errors (samples).
+pub(super) const RATE_WINDOW: f64 = 5000.0;
+/// A partner whose own confirmed gross errors are so frequent that one falls within the
+/// 3-sample window by chance with at least this probability is no evidence of a common cause.
+const CHANCE: f64 = 3e-3;
+
+impl GrossErrorStage {
+    /// Judge the oldest pending event of channel `c` with the context that has arrived (samples
+    /// before index `upto`), and write the verdict into the held samples.
+    pub(super) fn resolve(&mut self, c: usize, upto: u64) {
+        let Some(ev) = self.ch[c].pending.pop_front() else {
+            return;
+        };
+        let end = ev.end.unwrap_or(upto).min(upto);
+        let m = (end - ev.start) as usize;
+        let ctx = self.s.context_samples;
+        let post_n = self.s.post_samples;
+        let mut pre = [0.0f64; MAX_CONTEXT];
+        let mut event = [0.0f64; MAX_EVENT];
+        let mut post = [0.0f64; MAX_POST];
+        let ring = &self.ch[c].ring;
+        let at = |i: u64| ring[(i % RING as u64) as usize];
+        let cand = |i: u64| self.ch[c].preds[(i % RING as u64) as usize].is_finite();
+        let n_pre = (ev.start as usize).min(ctx);
+        for (j, p) in pre[..n_pre].iter_mut().enumerate() {
+            *p = at(ev.start - n_pre as u64 + j as u64);
+        }
+        let n_post = if ev.end.is_some() {
+            ((upto - end) as usize).min(post_n)
+        } else {
+            0
+        };
+        for (j, p) in post[..n_post].iter_mut().enumerate() {
+            let i = end + j as u64;
+            // Around a one-sample event, a later sample the gate also called a candidate, on
+            // its own between two ordinary ones, is the next isolated outlier, not the signal:
+            // left out, so that it neither pulls the interpolation nor inflates the roughness
+            // (at 2 % contamination neighbouring outliers otherwise mask each other).
+            let isolated = j > 0 && i + 1 < upto && cand(i) && !cand(i - 1) && !cand(i + 1);
+            *p = if m == 1 && isolated { f64::NAN } else { at(i) };
+        }
+        let m_judged = m.min(event.len());
+        for (j, e) in event[..m_judged].iter_mut().enumerate() {
+            *e = at(ev.start + j as u64);
+        }
+        let mut interp = [0.0f64; MAX_EVENT];
+        // A verdict needs the signal on both sides: at least three samples after the event (the
+        // break out of it, and one second difference of roughness), or it stays unconfirmed.
+        let eligible = m_judged == m && n_post >= 3;
+        // Leading and trailing samples that continue the signal are not part of the break.
+        let (lead, keep) = if eligible {
+            confirm::trim(
+                &pre[..n_pre],
+                &event[..m],
+                &post[..n_post],
+                self.s.edge_k,
+                self.min_sigma(c),
+            )
+        } else {
+            (0, m)
+        };
+        // The judged part's surroundings: the context before plus the leading samples, and the
+        // trailing samples plus the context after.
+        let mut before = [0.0f64; MAX_CONTEXT + MAX_EVENT];
+        let n_before = n_pre + lead;
+        before[..n_pre].copy_from_slice(&pre[..n_pre]);
+        before[n_pre..n_before].copy_from_slice(&event[..lead]);
+        let before = &before[n_before.saturating_sub(ctx)..n_before];
+        let mut after = [0.0f64; MAX_POST];
+        let n_after = (m - keep + n_post).min(post_n);
+        for (j, a) in after[..n_after].iter_mut().enumerate() {
+            *a = if keep + j < m {
+                event[keep + j]
+            } else {
+                post[keep + j - m]
+            };
+        }
+        let evidence = if eligible {
+            confirm::confirm(
+                before,
+                &event[lead..keep],
+                &after[..n_after],
+                self.min_sigma(c),
+                &mut interp,
+            )
+        } else {
+            None
+        };
+        // A partner of a shock must be sharp on its own scale, and at least a quarter as sharp
+        // as the event: a 20σ glitch during a walk's 4σ footfalls is no part of them. One
+        // partner suffices when it is at least half as sharp as the event (see `shock`).
+        let partner_k = evidence.map_or(SHOCK_K, |e| SHOCK_K.max(0.25 * e.z_in));
+        let strong_k = evidence.map_or(SHOCK_K, |e| SHOCK_K.max(0.5 * e.z_in));
+        let shock = self.shock(c, ev.start, m, upto, partner_k, strong_k);
+        // The gate called the event motion (a level change or the release rule) and the part
+        // that breaks the signal is under a third of it: that break is the sharp part of the
+        // manoeuvre, not a gross error riding on it.
+        let motion_break = ev.motion && 3 * (keep - lead) < m;
+        let gross = !shock
+            && !motion_break
+            && evidence.is_some_and(|e| {
+                e.gross(
+                    keep - lead,
+                    self.s.confirm_k,
+                    self.s.edge_k,
+                    self.s.stand_out,
+                )
+            });
+        let use_interp = evidence.is_some() && self.s.replacement == Replacement::Interpolation;
+        // Write the verdict into the held samples.
+        let bit = flags::replaced_ch(c);
+        let plausible = self.plausible(c);
+        let mut replaced = 0u64;
+        let mut suspect = 0u64;
+        for h in self.held.iter_mut() {
+            if h.idx < ev.start || h.idx >= end {
+                continue;
+            }
+            let j = (h.idx - ev.start) as usize;
+            let slot = (h.idx % RING as u64) as usize;
+            let v = h.out.channel(c);
+            let bad = !v.is_finite() || v.abs() > plausible;
+            if gross && (j < lead || j >= keep) && !bad {
+                continue; // outside the break: the signal itself
+            }
+            if gross || bad {
+                let r = if use_interp && (lead..keep).contains(&j) {
+                    interp[j - lead]
+                } else {
+                    self.ch[c].preds[slot]
+                };
+                if r.is_finite() {
+                    h.out.set_channel(c, r);
+                    h.out.flags |= flags::REPLACED | bit;
+                    self.ch[c].ring[slot] = r;
+                    replaced += 1;
+                    continue;
+                }
+            }
+            h.out.flags |= flags::suspect_ch(c);
+            suspect += 1;
+        }
+        if gross {
+            self.ch[c].gross_rate += 1.0 / RATE_WINDOW;
+        }
+        let k = &mut self.ch[c].gate.counters;
+        k.replaced += replaced;
+        k.suspect += suspect;
+        if gross {
+            k.confirmed += 1;
+        } else {
+            k.suspect_events += 1;
+        }
+        if !gross && ev.end.is_none() && self.ch[c].gate.mode == Mode::Active {
+            // Forced while still open and judged motion: end the gate's run on the raw values.
+            let mut recent = [0.0f64; RAW_KEEP];
+            let last = upto.saturating_sub(1);
+            for (j, r) in recent.iter_mut().enumerate() {
+                *r = at_ring(&self.ch[c].ring, last.saturating_sub(j as u64));
+            }
+            self.ch[c].gate.resume_from(&recent);
+        }
+    }
+
+    /// Several-axes test on the other channels' *raw* values (a partner judged first and
+    /// replaced is still a partner): a channel is *sharp* within one sample of `start` when its
+    /// centred second difference there exceeds `k` times its own RMS over the
+    /// `context_samples` before. A shock — a knock moves the whole body, a glitch stays in its
+    /// channel — is
+    ///
+    /// - two partners sharp beyond `partner_k`, or
+    /// - one partner sharp beyond `strong_k` (at least half as sharp as the event), unless that
+    ///   channel confirms gross errors of its own so often (`gross_rate`, per sample) that one
+    ///   falls within the 3-sample window by chance with probability ≥ `CHANCE` (more than one
+    ///   per 1000 samples over the last ~`RATE_WINDOW`): at a 2 % contamination of every axis,
+    ///   or the 2e-3 per channel-sample of issue 4's dense synthetic logs, coincidences are
+    ///   expected and prove nothing.
+    ///
+    /// Model-free, so it holds during warm-up too. Not for a one-sample event whose partners were
+    /// sharp on that sample only: that is what a corrupted whole frame looks like. Needs the
+    /// samples up to `start + 2` (`upto` is one past the last available).
+    pub(super) fn shock(
+        &self,
+        c: usize,
+        start: u64,
+        len: usize,
+        upto: u64,
+        partner_k: f64,
+        strong_k: f64,
+    ) -> bool {
+        let ctx = self.s.context_samples as u64;
+        if start < ctx + 2 || start + 3 > upto {
+            return false;
+        }
+        let (mut partners, mut all_same) = (0, true);
+        let (mut strong, mut strong_same) = (0, true);
+        for (o, other) in self.ch.iter().enumerate() {
+            if o == c || other.gate.mode == Mode::Disabled {
+                continue;
+            }
+            let x = |i: u64| at_ring(&other.raw, i);
+            let d = |i: u64| x(i) - 0.5 * (x(i - 1) + x(i + 1));
+            let (mut sum, mut n) = (0.0, 0u32);
+            for i in start - ctx..start - 1 {
+                let v = d(i);
+                if v.is_finite() {
+                    sum += v * v;
+                    n += 1;
+                }
+            }
+            if n == 0 {
+                continue;
+            }
+            let ms = (sum / f64::from(n)).max(f64::MIN_POSITIVE);
+            let (lim2, strong2) = (partner_k * partner_k * ms, strong_k * strong_k * ms);
+            let (mut mask, mut smask) = (0u8, 0u8);
+            for (bit, i) in [start - 1, start, start + 1].into_iter().enumerate() {
+                let v = d(i);
+                if v.is_finite() && v * v > lim2 {
+                    mask |= 1 << bit;
+                }
+                if v.is_finite() && v * v > strong2 {
+                    smask |= 1 << bit;
+                }
+            }
+            if mask != 0 {
+                partners += 1;
+                all_same &= mask == 0b010;
+            }
+            if smask != 0 && 3.0 * other.gross_rate < CHANCE {
+                strong += 1;
+                strong_same &= smask == 0b010;
+            }
+        }
+        let frame = |same: bool| len == 1 && same;
+        (partners >= 2 && !frame(all_same)) || (strong >= 1 && !frame(strong_same))
+    }
+}
