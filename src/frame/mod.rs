@@ -18,6 +18,7 @@
 
 pub mod codec;
 pub mod detect;
+pub mod framing;
 pub mod health;
 pub mod inline;
 pub mod mavlink;
