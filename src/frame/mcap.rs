@@ -29,7 +29,11 @@ use super::ros2;
 use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
+
+/// Temperature readings kept for the join (a reading logged ahead of the Imu messages it
+/// belongs to must not hide the one before it).
+const TEMP_HISTORY: usize = 8;
 use std::ops::Range;
 
 pub use super::ros2::{MAGIC, MAX_RECORD, McapOptions};
@@ -70,6 +74,8 @@ enum Rec {
     Other,
     /// A message of the selected Imu channel, with its log time.
     Imu(u64),
+    /// A message of the selected Temperature channel, with its log time.
+    Temperature(u64),
     /// An uncompressed chunk: where its records are in the chunk record.
     Chunk(Range<usize>),
     /// A compressed chunk, decompressed.
@@ -98,6 +104,12 @@ pub struct McapDecoder {
     schemas: HashMap<u16, String>,
     channels: HashMap<u16, Channel>,
     selected: Option<u16>,
+    /// The Temperature channel joined to the samples.
+    temp_channel: Option<u16>,
+    /// The latest temperature readings so far, oldest first: (time, °C).
+    temp: VecDeque<(u64, f64)>,
+    temp_msgs: u64,
+    bad_temp: u64,
     /// Records of the chunk being read (uncompressed), and the read position in them.
     chunk: Option<(Bytes, usize)>,
     pending: Option<Decoded>,
@@ -123,6 +135,10 @@ impl McapDecoder {
             schemas: HashMap::new(),
             channels: HashMap::new(),
             selected: None,
+            temp_channel: None,
+            temp: VecDeque::new(),
+            temp_msgs: 0,
+            bad_temp: 0,
             chunk: None,
             pending: None,
             chunks: 0,
@@ -136,15 +152,24 @@ impl McapDecoder {
         Decoded::Other(b)
     }
 
+    fn has_schema(&self, c: &Channel, name: &str) -> bool {
+        c.encoding == "cdr" && self.schemas.get(&c.schema_id).is_some_and(|s| s == name)
+    }
+
     fn is_imu(&self, c: &Channel) -> bool {
-        c.encoding == "cdr"
-            && self
-                .schemas
-                .get(&c.schema_id)
-                .is_some_and(|s| s == ros2::IMU_SCHEMA)
+        self.has_schema(c, ros2::IMU_SCHEMA)
     }
 
     fn add_channel(&mut self, id: u16, c: Channel) {
+        if self.temp_channel.is_none() && self.has_schema(&c, ros2::TEMPERATURE_SCHEMA) {
+            let wanted = match self.opts.temperature_topic.as_deref() {
+                Some(t) => t == c.topic,
+                None => true,
+            };
+            if wanted {
+                self.temp_channel = Some(id);
+            }
+        }
         if self.selected.is_none() && self.is_imu(&c) {
             let wanted = match &self.opts.topic {
                 Some(t) => *t == c.topic,
@@ -155,6 +180,44 @@ impl McapDecoder {
             }
         }
         self.channels.insert(id, c);
+    }
+
+    /// The time of a message: its header stamp (`time = "header"`, when the stamp is positive),
+    /// else its log time.
+    fn time_of(&self, sec: i32, nsec: u32, log_time: u64) -> u64 {
+        let stamp = (sec as i64)
+            .checked_mul(1_000_000_000)
+            .and_then(|s| s.checked_add(nsec as i64))
+            .filter(|t| *t > 0 && nsec < 1_000_000_000);
+        match stamp {
+            Some(t) if self.header_time => t as u64,
+            _ => log_time,
+        }
+    }
+
+    /// A reading of the Temperature channel, kept in time order among the latest few.
+    fn temperature(&mut self, rec: &[u8], log_time: u64) {
+        match ros2::decode_temperature(&rec[9 + 22..]) {
+            Ok((sec, nsec, c)) if c.is_finite() => {
+                let t = self.time_of(sec, nsec, log_time);
+                self.temp_msgs += 1;
+                let at = self.temp.partition_point(|(t0, _)| *t0 <= t);
+                self.temp.insert(at, (t, c));
+                if self.temp.len() > TEMP_HISTORY {
+                    self.temp.pop_front();
+                }
+            }
+            _ => self.bad_temp += 1,
+        }
+    }
+
+    /// The temperature for a sample at `t_ns`: the reading with the nearest preceding (or
+    /// equal) time among those read so far, unless older than `temperature_max_age_s`.
+    fn temperature_at(&self, t_ns: u64) -> Option<f64> {
+        let &(t, c) = self.temp.iter().rev().find(|(t, _)| *t <= t_ns)?;
+        let max_age = self.opts.temperature_max_age_s;
+        let fresh = max_age <= 0.0 || ((t_ns - t) as f64) <= max_age * 1e9;
+        fresh.then_some(c)
     }
 
     /// A sample from a message record of the selected channel.
@@ -168,17 +231,10 @@ impl McapDecoder {
                 return self.other(rec);
             }
         };
-        let stamp = (sec as i64)
-            .checked_mul(1_000_000_000)
-            .and_then(|s| s.checked_add(nsec as i64))
-            .filter(|t| *t > 0 && nsec < 1_000_000_000);
-        let t_ns = match stamp {
-            Some(t) if self.header_time => t as u64,
-            _ => log_time,
-        };
+        let t_ns = self.time_of(sec, nsec, log_time);
         let mut s = Sample {
             t_ns,
-            temp_c: None,
+            temp_c: self.temperature_at(t_ns),
             ..Sample::default()
         };
         s.set_channels(&ch);
@@ -223,6 +279,9 @@ impl McapDecoder {
             let log_time = u64::from_le_bytes(body[6..14].try_into().expect("8 bytes"));
             if Some(channel) == self.selected {
                 return Ok(Rec::Imu(log_time));
+            }
+            if Some(channel) == self.temp_channel {
+                return Ok(Rec::Temperature(log_time));
             }
             if !in_chunk && !self.channels.contains_key(&channel) {
                 return Err(());
@@ -287,6 +346,10 @@ impl McapDecoder {
         match what {
             Rec::Other => Some(self.other(rec)),
             Rec::Imu(log_time) => Some(self.message(rec, log_time)),
+            Rec::Temperature(log_time) => {
+                self.temperature(&rec, log_time);
+                Some(self.other(rec))
+            }
             Rec::Chunk(r) => {
                 self.chunks += 1;
                 self.chunk = Some((rec.slice(r), 0));
@@ -493,6 +556,18 @@ impl ProtocolDecoder for McapDecoder {
             imu,
             reading
         );
+        if let Some(c) = self.temp_channel.and_then(|i| self.channels.get(&i)) {
+            s += &format!(
+                "; temperature from {} ({} readings{})",
+                c.topic,
+                self.temp_msgs,
+                if self.bad_temp > 0 {
+                    format!(", {} unreadable", self.bad_temp)
+                } else {
+                    String::new()
+                }
+            );
+        }
         if self.bad_cdr > 0 {
             s += &format!("; {} Imu messages with bad CDR", self.bad_cdr);
         }

@@ -25,6 +25,7 @@ pub mod mavlink;
 mod mavlink_crc;
 #[cfg(feature = "ros2")]
 pub mod mcap;
+pub mod mcap_out;
 pub mod protocol;
 pub mod ros2;
 pub mod ubx;
