@@ -131,19 +131,19 @@ fn bench(c: &mut Criterion) {
             b.iter(|| black_box(count(Box::new(FrameDecoder::new()), &native)))
         });
         g.bench_function("ubx_esf_raw", |b| {
-            b.iter(|| black_box(count(Box::new(UbxDecoder::default()), &ubx_b)))
+            b.iter(|| black_box(count(Box::<UbxDecoder>::default(), &ubx_b)))
         });
         g.bench_function("mavlink_highres_imu", |b| {
-            b.iter(|| black_box(count(Box::new(MavlinkDecoder::default()), &mav)))
+            b.iter(|| black_box(count(Box::<MavlinkDecoder>::default(), &mav)))
         });
         g.bench_function("ulog_sensor_combined", |b| {
-            b.iter(|| black_box(count(Box::new(UlogDecoder::default()), &ulg)))
+            b.iter(|| black_box(count(Box::<UlogDecoder>::default(), &ulg)))
         });
         #[cfg(feature = "ros2")]
         g.bench_function("mcap_ros2_imu", |b| {
             b.iter(|| {
                 black_box(count(
-                    Box::new(imuprep::frame::mcap::McapDecoder::default()),
+                    Box::<imuprep::frame::mcap::McapDecoder>::default(),
                     &bag,
                 ))
             })
