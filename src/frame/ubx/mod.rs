@@ -204,8 +204,12 @@ impl UbxDecoder {
         }
         self.raw_msgs += 1;
         self.f.stats.frames_ok += 1;
-        let slots = raw_groups(p).count() as u16;
+        // The samples go into the queue as they are made; their carriers learn how many the
+        // message holds once all are made (one pass over the blocks).
+        let first = self.ready.len();
+        let mut slots = 0u16;
         for (i, (tag, range)) in raw_groups(p).enumerate() {
+            slots = i as u16 + 1;
             let mut vals = [None; 7];
             for b in range {
                 let o = 4 + 8 * b;
@@ -221,11 +225,16 @@ impl UbxDecoder {
                 frame2: None,
                 between: None,
                 slot: i as u16,
-                slots,
+                slots: 0,
                 offsets: [0; 4],
                 raw_scale: None,
             };
             self.emit(t, vals, carrier);
+        }
+        for item in self.ready.range_mut(first..) {
+            if let Decoded::Sample(_, Some(c)) = item {
+                c.slots = slots;
+            }
         }
         if slots == 0 {
             // A raw message without blocks carries no sample: keep its bytes.
