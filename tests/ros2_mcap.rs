@@ -54,7 +54,7 @@ fn opts(topic: Option<&str>, time: &str) -> McapOptions {
     McapOptions {
         topic: topic.map(str::to_string),
         time: time.into(),
-        rate_hz: 0.0,
+        ..McapOptions::default()
     }
 }
 
@@ -382,4 +382,114 @@ fn frd_input_is_written_in_ros_flu_axes() {
     let x = ros2::decode_imu(&m[0].3).unwrap();
     assert_eq!(x.angular_velocity, [0.1, -0.2, -0.3]);
     assert_eq!(x.linear_acceleration, [1.0, -2.0, -9.8]);
+}
+
+const TEMP_BAG: &[u8] = include_bytes!("reference/mcap_temp_bag.mcap");
+const TEMP_EXPECTED: &str = include_str!("reference/mcap_temp_expected.csv");
+const INLINE_BAG: &str = "tests/reference/mcap_inline_bag.mcap";
+const INLINE_ROSBAGS: &str = include_str!("reference/mcap_inline_rosbags.csv");
+
+#[test]
+fn temperature_topic_is_joined_by_the_nearest_preceding_stamp() {
+    // (stamp, temperature or blank) per Imu message, by the rule computed on rosbags' values
+    // (tests/reference/gen_mcap_temperature.py).
+    let want: Vec<(u64, Option<f64>)> = TEMP_EXPECTED
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let (st, t) = l.split_once(',').unwrap();
+            (st.parse().unwrap(), t.parse().ok())
+        })
+        .collect();
+    assert_eq!(want.len(), 40);
+    assert_eq!(want.iter().filter(|w| w.1.is_some()).count(), 36);
+    for chunk in [1, 77, TEMP_BAG.len()] {
+        let mut d = McapDecoder::default();
+        let (items, st) = run(&mut d, TEMP_BAG, chunk);
+        let got: Vec<(u64, Option<f64>)> =
+            samples(&items).iter().map(|s| (s.t_ns, s.temp_c)).collect();
+        // Exact: the same f64 rosbags deserialised.
+        assert_eq!(got, want, "chunk {chunk}");
+        assert_eq!(st.garbage_bytes, 0);
+        assert!(
+            d.found()
+                .contains("temperature from /imu/temperature (4 readings)"),
+            "{}",
+            d.found()
+        );
+    }
+    // Off by option, and too old a reading is not used.
+    let mut off = McapDecoder::new(McapOptions {
+        temperature_topic: Some(String::new()),
+        ..McapOptions::default()
+    });
+    let (items, _) = run(&mut off, TEMP_BAG, 4096);
+    assert!(samples(&items).iter().all(|s| s.temp_c.is_none()));
+    // Readings are 50 ms apart: with a 10 ms limit only the samples within 10 ms of the last
+    // reading before them keep it.
+    let mut short = McapDecoder::new(McapOptions {
+        temperature_max_age_s: 0.010,
+        ..McapOptions::default()
+    });
+    let (items, _) = run(&mut short, TEMP_BAG, 4096);
+    let n_short = samples(&items)
+        .iter()
+        .filter(|s| s.temp_c.is_some())
+        .count();
+    assert!(n_short > 0 && n_short < 36, "{n_short}");
+}
+
+#[test]
+fn inline_output_keeps_a_chunk_index_the_mcap_crate_and_rosbags_seek_with() {
+    let mut d = McapDecoder::default();
+    let (items, _) = run(&mut d, BAG, 4096);
+    let out = inline(&items, |s| *s);
+    if std::env::var_os("IMUPREP_BLESS").is_some() {
+        std::fs::write(INLINE_BAG, &out).unwrap();
+    }
+    // The committed bag is the one rosbags read (tests/reference/check_mcap_inline.py).
+    assert_eq!(
+        std::fs::read(INLINE_BAG).unwrap(),
+        out,
+        "the inline MCAP bytes changed: run with IMUPREP_BLESS=1, then the check script"
+    );
+    let input = crate_messages(BAG);
+    // The summary: statistics, schemas, channels and a chunk index.
+    let summary = mcap::Summary::read(&out)
+        .expect("summary reads (CRC checked)")
+        .expect("a summary");
+    let stats = summary.stats.as_ref().expect("statistics");
+    assert_eq!(stats.message_count, input.len() as u64);
+    assert_eq!(stats.channel_count, 3);
+    assert!(!summary.chunk_indexes.is_empty());
+    // Seek: every message through the chunk indexes and message indexes, in log-time order.
+    let mut seeked = Vec::new();
+    for ci in &summary.chunk_indexes {
+        let idx = summary
+            .read_message_indexes(&out, ci)
+            .expect("message indexes");
+        let mut entries: Vec<_> = idx.values().flatten().collect();
+        entries.sort_by_key(|e| (e.log_time, e.offset));
+        for e in entries {
+            let m = summary.seek_message(&out, ci, e).expect("seek");
+            seeked.push((m.channel.topic.clone(), m.log_time, m.data.into_owned()));
+        }
+    }
+    let mut want: Vec<_> = input
+        .iter()
+        .map(|m| (m.0.clone(), m.2, m.3.clone()))
+        .collect();
+    want.sort_by_key(|m| m.1);
+    seeked.sort_by(|a, b| (a.1, &a.0).cmp(&(b.1, &b.0)));
+    want.sort_by(|a, b| (a.1, &a.0).cmp(&(b.1, &b.0)));
+    assert_eq!(seeked, want);
+    // rosbags (through the index) reads the same Imu values the original gave it.
+    let imu_rows: Vec<&str> = EXPECTED.lines().skip(1).collect();
+    let got_rows: Vec<&str> = INLINE_ROSBAGS.lines().skip(1).collect();
+    assert_eq!(got_rows, imu_rows);
+    // A cut input still gives a closed, indexed file.
+    let cut = &items[..items.len() / 2];
+    let half = inline(cut, |s| *s);
+    let s2 = mcap::Summary::read(&half).unwrap().expect("summary");
+    assert!(s2.stats.unwrap().message_count > 0);
 }

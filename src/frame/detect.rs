@@ -201,6 +201,10 @@ impl ProtocolArgs {
             // ROS 2 topic names are absolute (`/imu/data`); ULog topic names never start with `/`.
             if t.starts_with('/') || c.protocol == ProtocolChoice::Mcap {
                 c.mcap.topic = Some(t.clone());
+                // A ROS 2 topic names a bag: without --protocol, a native default means MCAP.
+                if self.protocol.is_none() && c.protocol == ProtocolChoice::Native {
+                    c.protocol = ProtocolChoice::Mcap;
+                }
             } else {
                 c.ulog.topic = t.clone();
             }
@@ -291,5 +295,31 @@ pub fn decode_bytes(bytes: &[u8], c: &ProtocolConfig) -> DecodedFile {
         samples,
         stats: d.stats(),
         found: d.found(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_ros2_topic_without_protocol_reads_a_bag() {
+        let args = |p: Option<ProtocolChoice>, t: &str| ProtocolArgs {
+            protocol: p,
+            topic: Some(t.into()),
+            ..ProtocolArgs::default()
+        };
+        let mut c = ProtocolConfig::default();
+        args(None, "/imu/data").apply(&mut c);
+        assert_eq!(c.protocol, ProtocolChoice::Mcap);
+        assert_eq!(c.mcap.topic.as_deref(), Some("/imu/data"));
+        // An explicit protocol, or a ULog topic, is left alone.
+        let mut c = ProtocolConfig::default();
+        args(Some(ProtocolChoice::Auto), "/imu/data").apply(&mut c);
+        assert_eq!(c.protocol, ProtocolChoice::Auto);
+        let mut c = ProtocolConfig::default();
+        args(None, "sensor_gyro").apply(&mut c);
+        assert_eq!(c.protocol, ProtocolChoice::Native);
+        assert_eq!(c.ulog.topic, "sensor_gyro");
     }
 }

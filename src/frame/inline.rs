@@ -7,6 +7,7 @@
 //! cleaned value keeps the original field), fixes the checksum and appends the message. A
 //! message that carries several samples (UBX ESF-RAW) is written once its last sample is done.
 
+use super::mcap_out::McapStream;
 use super::protocol::{Carrier, Protocol};
 use super::{mavlink, ubx, ulog};
 
@@ -21,8 +22,8 @@ pub struct InlineEncoder {
     raw_accel_scale: f64,
     /// A multi-sample frame being patched: original, patched copy.
     cur: Option<(Bytes, Vec<u8>)>,
-    /// MCAP: past the data section (its summary refers to the input's offsets: not written).
-    mcap_summary: bool,
+    /// MCAP: the records re-chunked and indexed.
+    mcap: McapStream,
 }
 
 impl InlineEncoder {
@@ -32,49 +33,32 @@ impl InlineEncoder {
             raw_gyro_scale,
             raw_accel_scale,
             cur: None,
-            mcap_summary: false,
+            mcap: McapStream::default(),
         }
     }
 
     /// A message that is not IMU data: written unchanged (after any frame still being filled).
+    /// MCAP: the records are written into new chunks with their indexes ([`McapStream`]).
     pub fn other(&mut self, b: &[u8], out: &mut BytesMut) {
-        self.flush(out);
+        self.flush_frame(out);
         if self.protocol == Protocol::Mcap {
-            self.mcap_other(b, out);
+            self.mcap.other(b, out);
             return;
         }
         out.extend_from_slice(b);
     }
 
-    /// MCAP pass-through. The decoder hands over the records of each chunk one by one, so the
-    /// output is an MCAP without chunks: the indexes, statistics and summary of the input point
-    /// at its own chunk offsets and are left out; the data-end record's CRC and the footer's
-    /// summary offsets are written as 0 ("not present"), as the format allows.
-    fn mcap_other(&mut self, b: &[u8], out: &mut BytesMut) {
-        use super::ros2::MAGIC;
-        if b == MAGIC {
-            out.extend_from_slice(b);
-            return;
-        }
-        match b.first() {
-            Some(0x0F) => {
-                self.mcap_summary = true;
-                out.extend_from_slice(&[0x0F, 4, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
-            }
-            Some(0x02) => {
-                out.extend_from_slice(&[0x02, 20, 0, 0, 0, 0, 0, 0, 0]);
-                out.extend_from_slice(&[0u8; 20]);
-            }
-            // Message index, chunk index, attachment index, statistics, metadata index,
-            // summary offset.
-            Some(0x07 | 0x08 | 0x0A | 0x0B | 0x0D | 0x0E) => {}
-            _ if self.mcap_summary => {}
-            _ => out.extend_from_slice(b),
+    /// At the end of the output: what is held (a multi-sample frame whose later samples never
+    /// came; an MCAP whose input ended before its data-end record is closed with a summary).
+    pub fn flush(&mut self, out: &mut BytesMut) {
+        self.flush_frame(out);
+        if self.protocol == Protocol::Mcap {
+            self.mcap.finish(out);
         }
     }
 
-    /// Write what is held (a multi-sample frame whose later samples never came).
-    pub fn flush(&mut self, out: &mut BytesMut) {
+    /// Write the multi-sample frame being filled, if any.
+    fn flush_frame(&mut self, out: &mut BytesMut) {
         if let Some((_, mut f)) = self.cur.take() {
             if self.protocol == Protocol::Ubx {
                 ubx::finish(&mut f);
@@ -94,7 +78,7 @@ impl InlineEncoder {
         match self.protocol {
             Protocol::Native => super::encode_sample(s, out),
             Protocol::Mavlink => {
-                self.flush(out);
+                self.flush_frame(out);
                 // RAW_IMU: the scales the decoder read the counts with (from the config).
                 let [g, a] = c
                     .raw_scale
@@ -104,14 +88,14 @@ impl InlineEncoder {
             Protocol::Ubx => {
                 let same = matches!(&self.cur, Some((o, _)) if o.as_ptr() == c.frame.as_ptr() && o.len() == c.frame.len());
                 if !same {
-                    self.flush(out);
+                    self.flush_frame(out);
                     self.cur = Some((c.frame.clone(), c.frame.to_vec()));
                 }
                 if let Some((_, f)) = self.cur.as_mut() {
                     ubx::patch(f, c.slot, s);
                 }
                 if c.slot + 1 >= c.slots {
-                    self.flush(out);
+                    self.flush_frame(out);
                     if let Some(b) = &c.between {
                         out.extend_from_slice(b);
                     }
@@ -124,16 +108,16 @@ impl InlineEncoder {
                 }
             }
             Protocol::Mcap => {
-                self.flush(out);
+                self.flush_frame(out);
                 let mut f = c.frame.to_vec();
                 // offsets: angular_velocity.x in the record, big endian, not patchable.
                 if c.offsets[3] == 0 {
                     super::ros2::patch_imu(&mut f, c.offsets[0] as usize, c.offsets[2] == 0, s);
                 }
-                out.extend_from_slice(&f);
+                self.mcap.message(&f, out);
             }
             Protocol::Ulog => {
-                self.flush(out);
+                self.flush_frame(out);
                 let mut f = c.frame.to_vec();
                 let mut f2 = c.frame2.as_ref().map(|b| b.to_vec());
                 ulog::patch(&mut f, f2.as_deref_mut(), c.offsets, s);

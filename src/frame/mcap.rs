@@ -23,12 +23,18 @@
 //! The sample carries angular velocity and linear acceleration; orientation and the three
 //! covariance matrices stay in the carrier (the original message), so inline output keeps them.
 
-use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder, TimeTracker, flag_values};
+use super::framing::{Framer, Stamper};
+use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
 use super::ros2;
 use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
-use bytes::{Buf, Bytes, BytesMut};
-use std::collections::HashMap;
+use bytes::{Bytes, BytesMut};
+use std::collections::{HashMap, VecDeque};
+
+/// Temperature readings kept for the join (a reading logged ahead of the Imu messages it
+/// belongs to must not hide the one before it).
+const TEMP_HISTORY: usize = 8;
+use std::ops::Range;
 
 pub use super::ros2::{MAGIC, MAX_RECORD, McapOptions};
 pub const OP_HEADER: u8 = 0x01;
@@ -62,6 +68,24 @@ fn min_len(op: u8) -> Option<u64> {
     })
 }
 
+/// What a well-formed record is, once its content has been checked.
+enum Rec {
+    /// Passed through (schemas and channels are learned on the way).
+    Other,
+    /// A message of the selected Imu channel, with its log time.
+    Imu(u64),
+    /// A message of the selected Temperature channel, with its log time.
+    Temperature(u64),
+    /// An uncompressed chunk: where its records are in the chunk record.
+    Chunk(Range<usize>),
+    /// A compressed chunk, decompressed.
+    Inflated(Vec<u8>),
+    /// A compressed chunk this build cannot decompress: passed through whole.
+    Undecodable,
+    /// A chunk whose CRC failed: dropped whole (counted).
+    Corrupt,
+}
+
 #[derive(Clone, Debug)]
 struct Channel {
     topic: String,
@@ -72,18 +96,23 @@ struct Channel {
 /// Decoder for an MCAP stream (a file read front to back, or stdin).
 pub struct McapDecoder {
     opts: McapOptions,
-    stats: DecoderStats,
-    tracker: TimeTracker,
+    /// `time = "header"`: the stamp, else the log time.
+    header_time: bool,
+    f: Framer,
+    stamper: Stamper,
     magic_done: bool,
     schemas: HashMap<u16, String>,
     channels: HashMap<u16, Channel>,
     selected: Option<u16>,
+    /// The Temperature channel joined to the samples.
+    temp_channel: Option<u16>,
+    /// The latest temperature readings so far, oldest first: (time, °C).
+    temp: VecDeque<(u64, f64)>,
+    temp_msgs: u64,
+    bad_temp: u64,
     /// Records of the chunk being read (uncompressed), and the read position in them.
     chunk: Option<(Bytes, usize)>,
-    descriptor: Option<Descriptor>,
     pending: Option<Decoded>,
-    counted: usize,
-    in_garbage: bool,
     chunks: u64,
     unsupported: Vec<String>,
     bad_cdr: u64,
@@ -98,18 +127,20 @@ impl Default for McapDecoder {
 impl McapDecoder {
     pub fn new(opts: McapOptions) -> Self {
         McapDecoder {
-            tracker: TimeTracker::with_rate_hz(opts.rate_hz),
+            stamper: Stamper::new(opts.rate_hz),
+            header_time: opts.time == "header",
             opts,
-            stats: DecoderStats::default(),
+            f: Framer::default(),
             magic_done: false,
             schemas: HashMap::new(),
             channels: HashMap::new(),
             selected: None,
+            temp_channel: None,
+            temp: VecDeque::new(),
+            temp_msgs: 0,
+            bad_temp: 0,
             chunk: None,
-            descriptor: None,
             pending: None,
-            counted: 0,
-            in_garbage: false,
             chunks: 0,
             unsupported: Vec::new(),
             bad_cdr: 0,
@@ -117,39 +148,28 @@ impl McapDecoder {
     }
 
     fn other(&mut self, b: Bytes) -> Decoded {
-        self.stats.frames_ok += 1;
-        self.stats.other_messages += 1;
-        self.stats.other_bytes += b.len() as u64;
+        self.f.count_other(&b);
         Decoded::Other(b)
     }
 
-    fn garbage(&mut self, buf: &mut BytesMut, n: usize) {
-        buf.advance(n);
-        self.counted = self.counted.saturating_sub(n);
-        self.stats.garbage_bytes += n as u64;
-        if !self.in_garbage {
-            self.stats.resyncs += 1;
-            self.in_garbage = true;
-        }
-    }
-
-    fn fault(&mut self, buf: &mut BytesMut) {
-        buf.advance(1);
-        self.counted = self.counted.saturating_sub(1);
-        self.stats.garbage_bytes += 1;
-        self.stats.resyncs += 1;
-        self.in_garbage = true;
+    fn has_schema(&self, c: &Channel, name: &str) -> bool {
+        c.encoding == "cdr" && self.schemas.get(&c.schema_id).is_some_and(|s| s == name)
     }
 
     fn is_imu(&self, c: &Channel) -> bool {
-        c.encoding == "cdr"
-            && self
-                .schemas
-                .get(&c.schema_id)
-                .is_some_and(|s| s == ros2::IMU_SCHEMA)
+        self.has_schema(c, ros2::IMU_SCHEMA)
     }
 
     fn add_channel(&mut self, id: u16, c: Channel) {
+        if self.temp_channel.is_none() && self.has_schema(&c, ros2::TEMPERATURE_SCHEMA) {
+            let wanted = match self.opts.temperature_topic.as_deref() {
+                Some(t) => t == c.topic,
+                None => true,
+            };
+            if wanted {
+                self.temp_channel = Some(id);
+            }
+        }
         if self.selected.is_none() && self.is_imu(&c) {
             let wanted = match &self.opts.topic {
                 Some(t) => *t == c.topic,
@@ -162,6 +182,44 @@ impl McapDecoder {
         self.channels.insert(id, c);
     }
 
+    /// The time of a message: its header stamp (`time = "header"`, when the stamp is positive),
+    /// else its log time.
+    fn time_of(&self, sec: i32, nsec: u32, log_time: u64) -> u64 {
+        let stamp = (sec as i64)
+            .checked_mul(1_000_000_000)
+            .and_then(|s| s.checked_add(nsec as i64))
+            .filter(|t| *t > 0 && nsec < 1_000_000_000);
+        match stamp {
+            Some(t) if self.header_time => t as u64,
+            _ => log_time,
+        }
+    }
+
+    /// A reading of the Temperature channel, kept in time order among the latest few.
+    fn temperature(&mut self, rec: &[u8], log_time: u64) {
+        match ros2::decode_temperature(&rec[9 + 22..]) {
+            Ok((sec, nsec, c)) if c.is_finite() => {
+                let t = self.time_of(sec, nsec, log_time);
+                self.temp_msgs += 1;
+                let at = self.temp.partition_point(|(t0, _)| *t0 <= t);
+                self.temp.insert(at, (t, c));
+                if self.temp.len() > TEMP_HISTORY {
+                    self.temp.pop_front();
+                }
+            }
+            _ => self.bad_temp += 1,
+        }
+    }
+
+    /// The temperature for a sample at `t_ns`: the reading with the nearest preceding (or
+    /// equal) time among those read so far, unless older than `temperature_max_age_s`.
+    fn temperature_at(&self, t_ns: u64) -> Option<f64> {
+        let &(t, c) = self.temp.iter().rev().find(|(t, _)| *t <= t_ns)?;
+        let max_age = self.opts.temperature_max_age_s;
+        let fresh = max_age <= 0.0 || ((t_ns - t) as f64) <= max_age * 1e9;
+        fresh.then_some(c)
+    }
+
     /// A sample from a message record of the selected channel.
     fn message(&mut self, rec: Bytes, log_time: u64) -> Decoded {
         let data = &rec[9 + 22..];
@@ -169,40 +227,27 @@ impl McapDecoder {
             Ok(x) => x,
             Err(_) => {
                 self.bad_cdr += 1;
-                self.stats.bad_payload += 1;
+                self.f.stats.bad_payload += 1;
                 return self.other(rec);
             }
         };
-        let stamp = (sec as i64)
-            .checked_mul(1_000_000_000)
-            .and_then(|s| s.checked_add(nsec as i64))
-            .filter(|t| *t > 0 && nsec < 1_000_000_000);
-        let t_ns = match (self.opts.time.as_str(), stamp) {
-            ("header", Some(t)) => t as u64,
-            _ => log_time,
-        };
+        let t_ns = self.time_of(sec, nsec, log_time);
         let mut s = Sample {
             t_ns,
-            temp_c: None,
+            temp_c: self.temperature_at(t_ns),
             ..Sample::default()
         };
         s.set_channels(&ch);
-        self.tracker.track(&mut s, &mut self.stats);
-        if self.descriptor.is_none()
-            && let Some(r) = self.tracker.rate_hz()
-        {
-            let d = Descriptor {
-                sample_rate_hz: r,
+        let learned = self
+            .stamper
+            .stamp(&mut s, &mut self.f.stats, || Descriptor {
                 axes: super::AxisConvention::Flu,
                 ..Descriptor::default()
-            };
-            self.descriptor = Some(d);
-            self.stats.descriptors += 1;
+            });
+        if let Some(d) = learned {
             self.pending = Some(Decoded::Descriptor(d));
         }
-        flag_values(&mut s, self.descriptor.as_ref(), &mut self.stats);
-        self.stats.samples += 1;
-        self.stats.frames_ok += 1;
+        self.f.stats.frames_ok += 1;
         let at = 9 + 22 + g;
         let c = Carrier {
             frame: rec,
@@ -222,11 +267,27 @@ impl McapDecoder {
         Decoded::Sample(s, Some(c))
     }
 
-    /// Handle one whole record (`rec` = opcode, length, body). `Err(())` = implausible content
-    /// (a fault); `Ok(None)` = consumed without an item (a chunk now being read).
-    fn record(&mut self, rec: Bytes, in_chunk: bool) -> Result<Option<Decoded>, ()> {
+    /// Check one whole record (`rec` = opcode, length, body) and learn what it declares.
+    /// `Err(())` = implausible content (a fault).
+    fn record(&mut self, rec: &[u8], in_chunk: bool) -> Result<Rec, ()> {
         let op = rec[0];
         let body = &rec[9..];
+        if op == OP_MESSAGE {
+            // The hot path, read here: channel id u16, sequence u32, log time u64, publish
+            // time u64, data (the framing checked the 22 bytes are there).
+            let channel = u16::from_le_bytes([body[0], body[1]]);
+            let log_time = u64::from_le_bytes(body[6..14].try_into().expect("8 bytes"));
+            if Some(channel) == self.selected {
+                return Ok(Rec::Imu(log_time));
+            }
+            if Some(channel) == self.temp_channel {
+                return Ok(Rec::Temperature(log_time));
+            }
+            if !in_chunk && !self.channels.contains_key(&channel) {
+                return Err(());
+            }
+            return Ok(Rec::Other);
+        }
         let parsed = ::mcap::parse_record(op, body).map_err(|_| ())?;
         use ::mcap::records::Record;
         match parsed {
@@ -241,54 +302,74 @@ impl McapDecoder {
                 };
                 self.add_channel(c.id, ch);
             }
-            Record::Message { header, .. } => {
-                if !self.channels.contains_key(&header.channel_id) && !in_chunk {
-                    return Err(());
-                }
-                if Some(header.channel_id) == self.selected {
-                    return Ok(Some(self.message(rec, header.log_time)));
-                }
-            }
             Record::Chunk { header, data } => {
                 if in_chunk {
                     return Err(());
                 }
                 let start = data.as_ptr() as usize - rec.as_ptr() as usize;
                 let len = data.len();
-                let records = if header.compression.is_empty() {
+                let crc_ok = |records: &[u8]| {
+                    header.uncompressed_crc == 0 || crc32(records) == header.uncompressed_crc
+                };
+                if header.compression.is_empty() {
                     if header.uncompressed_size != len as u64 {
                         return Err(());
                     }
-                    rec.slice(start..start + len)
-                } else {
-                    match decompress(&rec) {
-                        Ok(v) => Bytes::from(v),
-                        Err(e) => {
-                            // No decompressor in this build: the chunk passes through whole.
-                            let name = header.compression.clone();
-                            if !self.unsupported.contains(&name) {
-                                tracing::warn!(
-                                    "MCAP chunk compressed with {name:?}: {e} (build with --features ros2-compression)"
-                                );
-                                self.unsupported.push(name);
-                            }
-                            self.stats.unknown_type += 1;
-                            return Ok(Some(self.other(rec)));
-                        }
+                    if !crc_ok(&rec[start..start + len]) {
+                        return Ok(Rec::Corrupt);
                     }
-                };
-                if header.uncompressed_crc != 0 && crc32(&records) != header.uncompressed_crc {
-                    self.stats.crc_errors += 1;
-                    self.stats.garbage_bytes += rec.len() as u64;
-                    return Ok(None);
+                    return Ok(Rec::Chunk(start..start + len));
                 }
-                self.chunks += 1;
-                self.chunk = Some((records, 0));
-                return Ok(None);
+                return Ok(match decompress(rec) {
+                    Ok(v) if crc_ok(&v) => Rec::Inflated(v),
+                    Ok(_) => Rec::Corrupt,
+                    Err(e) => {
+                        // No decompressor in this build: the chunk passes through whole.
+                        let name = header.compression.clone();
+                        if !self.unsupported.contains(&name) {
+                            tracing::warn!(
+                                "MCAP chunk compressed with {name:?}: {e} (build with --features ros2-compression)"
+                            );
+                            self.unsupported.push(name);
+                        }
+                        Rec::Undecodable
+                    }
+                });
             }
             _ => {}
         }
-        Ok(Some(self.other(rec)))
+        Ok(Rec::Other)
+    }
+
+    /// The item of a checked record (`None`: a chunk, now being read, or dropped).
+    fn act(&mut self, rec: Bytes, what: Rec) -> Option<Decoded> {
+        match what {
+            Rec::Other => Some(self.other(rec)),
+            Rec::Imu(log_time) => Some(self.message(rec, log_time)),
+            Rec::Temperature(log_time) => {
+                self.temperature(&rec, log_time);
+                Some(self.other(rec))
+            }
+            Rec::Chunk(r) => {
+                self.chunks += 1;
+                self.chunk = Some((rec.slice(r), 0));
+                None
+            }
+            Rec::Inflated(v) => {
+                self.chunks += 1;
+                self.chunk = Some((Bytes::from(v), 0));
+                None
+            }
+            Rec::Undecodable => {
+                self.f.stats.unknown_type += 1;
+                Some(self.other(rec))
+            }
+            Rec::Corrupt => {
+                self.f.stats.crc_errors += 1;
+                self.f.stats.garbage_bytes += rec.len() as u64;
+                None
+            }
+        }
     }
 
     /// The next item from the chunk being read.
@@ -300,8 +381,8 @@ impl McapDecoder {
                 return None;
             }
             if rest < 9 {
-                self.stats.bad_payload += 1;
-                self.stats.garbage_bytes += rest as u64;
+                self.f.stats.bad_payload += 1;
+                self.f.stats.garbage_bytes += rest as u64;
                 return None;
             }
             let op = data[pos];
@@ -310,19 +391,23 @@ impl McapDecoder {
             if !ok {
                 // The chunk's CRC passed (or was not written) but its records do not frame:
                 // the rest of the chunk is lost, counted.
-                self.stats.bad_payload += 1;
-                self.stats.garbage_bytes += rest as u64;
+                self.f.stats.bad_payload += 1;
+                self.f.stats.garbage_bytes += rest as u64;
                 return None;
             }
             let end = pos + 9 + n as usize;
+            let checked = self.record(&data[pos..end], true);
             let rec = data.slice(pos..end);
             self.chunk = Some((data, end));
-            match self.record(rec, true) {
-                Ok(Some(d)) => return Some(d),
-                Ok(None) => continue,
+            match checked {
+                Ok(what) => {
+                    if let Some(d) = self.act(rec, what) {
+                        return Some(d);
+                    }
+                }
                 Err(()) => {
-                    self.stats.bad_payload += 1;
-                    self.stats.garbage_bytes += (end - pos) as u64;
+                    self.f.stats.bad_payload += 1;
+                    self.f.stats.garbage_bytes += (end - pos) as u64;
                 }
             }
         }
@@ -334,29 +419,16 @@ impl McapDecoder {
                 return Some(d);
             }
             if !self.magic_done {
-                match buf.windows(MAGIC.len()).position(|w| w == MAGIC) {
-                    Some(0) => {}
-                    Some(p) => self.garbage(buf, p),
-                    None => {
-                        let keep = (MAGIC.len() - 1).min(buf.len());
-                        let n = buf.len() - keep;
-                        if n > 0 {
-                            self.garbage(buf, n);
-                        }
-                        return None;
-                    }
+                if !self.f.seek_magic(buf, &MAGIC) {
+                    return None;
                 }
                 self.magic_done = true;
-                self.in_garbage = false;
-                self.counted = self.counted.saturating_sub(MAGIC.len());
-                let m = buf.split_to(MAGIC.len()).freeze();
+                let m = self.f.take(buf, MAGIC.len());
                 return Some(self.other(m));
             }
             if buf.len() >= MAGIC.len() && buf[..MAGIC.len()] == MAGIC {
                 // The closing magic (or a second file appended).
-                self.in_garbage = false;
-                self.counted = self.counted.saturating_sub(MAGIC.len());
-                let m = buf.split_to(MAGIC.len()).freeze();
+                let m = self.f.take(buf, MAGIC.len());
                 return Some(self.other(m));
             }
             if buf.len() < 9 {
@@ -373,8 +445,8 @@ impl McapDecoder {
                     _ => true,
                 };
             if !plausible {
-                self.stats.header_errors += 1;
-                self.fault(buf);
+                self.f.stats.header_errors += 1;
+                self.f.fault(buf);
                 continue;
             }
             let total = 9 + n as usize;
@@ -382,23 +454,17 @@ impl McapDecoder {
                 // Not reserved here: a corrupt length must not allocate what it claims.
                 return None;
             }
-            let rec = buf.split_to(total).freeze();
-            match self.record(rec.clone(), false) {
-                Ok(d) => {
-                    self.in_garbage = false;
-                    self.counted = self.counted.saturating_sub(total);
-                    if let Some(d) = d {
+            match self.record(&buf[..total], false) {
+                Ok(what) => {
+                    let rec = self.f.take(buf, total);
+                    if let Some(d) = self.act(rec, what) {
                         return Some(d);
                     }
                 }
                 Err(()) => {
-                    // Put the bytes back (the record was not one): step one byte.
-                    let mut back = BytesMut::with_capacity(rec.len() + buf.len());
-                    back.extend_from_slice(&rec);
-                    back.extend_from_slice(buf);
-                    *buf = back;
-                    self.stats.bad_payload += 1;
-                    self.fault(buf);
+                    // Not a record after all: step one byte.
+                    self.f.stats.bad_payload += 1;
+                    self.f.fault(buf);
                 }
             }
         }
@@ -447,29 +513,22 @@ impl ProtocolDecoder for McapDecoder {
         Protocol::Mcap
     }
     fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        if buf.len() > self.counted {
-            self.stats.bytes_in += (buf.len() - self.counted) as u64;
-        }
-        self.counted = buf.len();
+        self.f.arrived(buf);
         if let Some(p) = self.pending.take() {
             return Some(p);
         }
         self.step(buf)
     }
     fn discard_tail(&mut self, buf: &mut BytesMut) {
-        if !buf.is_empty() {
-            // A record cut short: count it once, then look for records after its first byte.
-            if !self.in_garbage {
-                self.stats.truncated += 1;
-            }
-            self.fault(buf);
-        }
+        // A record cut short: count it once, then look for records after its first byte.
+        let start = !self.f.in_garbage();
+        self.f.truncated_front(buf, start);
     }
     fn stats(&self) -> DecoderStats {
-        self.stats
+        self.f.stats
     }
     fn descriptor(&self) -> Option<Descriptor> {
-        self.descriptor
+        self.stamper.descriptor()
     }
     fn found(&self) -> String {
         let mut imu: Vec<&str> = self
@@ -497,6 +556,18 @@ impl ProtocolDecoder for McapDecoder {
             imu,
             reading
         );
+        if let Some(c) = self.temp_channel.and_then(|i| self.channels.get(&i)) {
+            s += &format!(
+                "; temperature from {} ({} readings{})",
+                c.topic,
+                self.temp_msgs,
+                if self.bad_temp > 0 {
+                    format!(", {} unreadable", self.bad_temp)
+                } else {
+                    String::new()
+                }
+            );
+        }
         if self.bad_cdr > 0 {
             s += &format!("; {} Imu messages with bad CDR", self.bad_cdr);
         }

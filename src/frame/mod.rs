@@ -18,12 +18,14 @@
 
 pub mod codec;
 pub mod detect;
+pub mod framing;
 pub mod health;
 pub mod inline;
 pub mod mavlink;
 mod mavlink_crc;
 #[cfg(feature = "ros2")]
 pub mod mcap;
+pub mod mcap_out;
 pub mod protocol;
 pub mod ros2;
 pub mod ubx;

@@ -98,8 +98,9 @@ pub trait ProtocolDecoder: Send {
     fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded>;
     /// At end of input: what can still be decoded, then the tail that cannot complete is
     /// counted and dropped ([`Self::discard_tail`]) and decoding resumes after it, until the
-    /// buffer is empty.
+    /// buffer is empty; then what the decoder held back ([`Self::held`]).
     fn decode_item_eof(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
+        self.end_of_input();
         if let Some(d) = self.decode_item(buf) {
             return Some(d);
         }
@@ -109,10 +110,18 @@ pub trait ProtocolDecoder: Send {
                 return Some(d);
             }
         }
-        None
+        self.held()
     }
     /// Bytes that can never complete a message at end of input: count and drop them.
     fn discard_tail(&mut self, buf: &mut BytesMut);
+    /// No more bytes will come (a decoder that waits for the next message's start before it
+    /// trusts one stops waiting).
+    fn end_of_input(&mut self) {}
+    /// After the last byte: an item held back waiting for a partner that never came (half of
+    /// a gyro/accel pair), one per call, `None` when nothing is held.
+    fn held(&mut self) -> Option<Decoded> {
+        None
+    }
     fn stats(&self) -> DecoderStats;
     /// The last descriptor seen or implied by the configuration, if any.
     fn descriptor(&self) -> Option<Descriptor>;

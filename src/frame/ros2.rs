@@ -36,6 +36,11 @@ pub struct McapOptions {
     pub time: String,
     /// Nominal rate, Hz (0 = learn it from the time stamps).
     pub rate_hz: f64,
+    /// Topic of the `sensor_msgs/msg/Temperature` messages joined to the samples (absent = the
+    /// first Temperature topic declared; `""` = none).
+    pub temperature_topic: Option<String>,
+    /// A temperature reading older than this (s, by the time stamps) is not used (0 = no limit).
+    pub temperature_max_age_s: f64,
 }
 
 impl Default for McapOptions {
@@ -44,6 +49,8 @@ impl Default for McapOptions {
             topic: None,
             time: "header".into(),
             rate_hz: 0.0,
+            temperature_topic: None,
+            temperature_max_age_s: 5.0,
         }
     }
 }
@@ -147,6 +154,29 @@ pub fn decode_imu_fast(d: &[u8]) -> Result<(i32, u32, [f64; N_CHANNELS], usize, 
     Ok((sec, nanosec, ch, g, le))
 }
 
+/// A CDR `sensor_msgs/msg/Temperature`: header stamp (sec, nanosec) and `temperature` (°C);
+/// the `variance` after it is not needed.
+pub fn decode_temperature(d: &[u8]) -> Result<(i32, u32, f64), CdrError> {
+    if d.len() < 16 {
+        return Err(CdrError::Short(d.len()));
+    }
+    let le = match (d[0], d[1]) {
+        (0, 1) => true,
+        (0, 0) => false,
+        (a, b) => return Err(CdrError::Encapsulation(a, b)),
+    };
+    let n = u32_at(d, 12, le) as usize;
+    let end = 16usize.checked_add(n).ok_or(CdrError::FrameId(n))?;
+    if end > d.len() {
+        return Err(CdrError::FrameId(n));
+    }
+    let at = 4 + (end - 4).div_ceil(8) * 8;
+    if at + 16 > d.len() {
+        return Err(CdrError::Short(d.len()));
+    }
+    Ok((u32_at(d, 4, le) as i32, u32_at(d, 8, le), f64_at(d, at, le)))
+}
+
 /// Every field of a CDR-encoded `sensor_msgs/msg/Imu`.
 pub fn decode_imu(d: &[u8]) -> Result<ImuMsg, CdrError> {
     let (block, le, n) = layout(d)?;
@@ -237,6 +267,8 @@ pub fn decode_string(d: &[u8]) -> Option<String> {
 /// Schema name and definition (`ros2msg`: the message, then each type it uses after a line of
 /// `=` and `MSG: type`), as rosbag2 stores them.
 pub const IMU_SCHEMA: &str = "sensor_msgs/msg/Imu";
+/// Schema name of the temperature messages joined to the samples.
+pub const TEMPERATURE_SCHEMA: &str = "sensor_msgs/msg/Temperature";
 pub const IMU_DEFINITION: &str = "std_msgs/Header header
 geometry_msgs/Quaternion orientation
 float64[9] orientation_covariance

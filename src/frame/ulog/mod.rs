@@ -23,11 +23,14 @@
 //! message (with asserts on its buffers), where this decoder must count, resynchronise and
 //! keep every message's bytes for pass-through.
 
-use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder, TimeTracker, flag_values};
+mod format;
+
+use super::framing::{Framer, Stamper};
+use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
 use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
-use bytes::{Buf, Bytes, BytesMut};
-use std::collections::HashMap;
+use bytes::{Bytes, BytesMut};
+use format::{Formats, Layout, Role};
 
 /// The first 7 bytes of a ULog file.
 pub const MAGIC: [u8; 7] = [b'U', b'L', b'o', b'g', 0x01, 0x12, 0x35];
@@ -60,90 +63,29 @@ impl Default for UlogOptions {
     }
 }
 
-/// One field of a format: type name, array length (1 if scalar), field name.
-#[derive(Clone, Debug)]
-struct Field {
-    ty: String,
-    n: usize,
-    name: String,
-}
-
-fn primitive_size(ty: &str) -> Option<usize> {
-    Some(match ty {
-        "int8_t" | "uint8_t" | "bool" | "char" => 1,
-        "int16_t" | "uint16_t" => 2,
-        "int32_t" | "uint32_t" | "float" => 4,
-        "int64_t" | "uint64_t" | "double" => 8,
-        _ => return None,
-    })
-}
-
-fn parse_format(body: &[u8]) -> Option<(String, Vec<Field>)> {
-    let text = std::str::from_utf8(body).ok()?;
-    let (name, rest) = text.split_once(':')?;
-    let mut fields = Vec::new();
-    for f in rest.split(';').filter(|f| !f.is_empty()) {
-        let (ty, fname) = f.trim().split_once(' ')?;
-        let (ty, n) = match ty.split_once('[') {
-            Some((t, k)) => (t, k.trim_end_matches(']').parse::<usize>().ok()?),
-            None => (ty, 1),
-        };
-        fields.push(Field {
-            ty: ty.to_string(),
-            n,
-            name: fname.to_string(),
-        });
-    }
-    Some((name.to_string(), fields))
-}
-
-/// Where the IMU values of a subscribed topic sit in its data message (offsets from the start
-/// of the fields, after msg_id).
-#[derive(Clone, Copy, Debug, Default)]
-struct Layout {
-    time: usize,
-    /// Offset of three consecutive f32: gyro (sensor_combined `gyro_rad`, sensor_gyro x y z) or
-    /// accel.
-    xyz: usize,
-    /// sensor_combined: offset of `accelerometer_m_s2`.
-    accel: Option<usize>,
-    temp: Option<usize>,
-    /// Bytes of fields needed.
-    need: usize,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Role {
-    Combined,
-    Gyro,
-    Accel,
-}
-
-/// Field name → (byte offset, type, array length).
-type FieldOffsets = HashMap<String, (usize, String, usize)>;
-
 /// Decoder for a ULog stream (a file read front to back).
 pub struct UlogDecoder {
     opts: UlogOptions,
-    stats: DecoderStats,
-    tracker: TimeTracker,
+    f: Framer,
+    stamper: Stamper,
     header_done: bool,
-    formats: HashMap<String, Vec<Field>>,
-    /// msg_id → (role, layout) for the selected subscriptions.
-    subs: HashMap<u16, (Role, Layout)>,
-    /// msg_id → size in bytes of every subscribed topic (for plausibility checks).
-    sizes: HashMap<u16, usize>,
+    formats: Formats,
+    /// (msg_id, role, layout) of the selected subscriptions (one or two).
+    subs: Vec<(u16, Role, Layout)>,
+    /// Size in bytes of every subscribed topic, indexed by msg_id ([`NO_SIZE`] = not
+    /// subscribed), for the plausibility check of each data message.
+    sizes: Vec<u32>,
     /// sensor_gyro / sensor_accel pairing: the last message of each, not yet used.
     gyro: Option<Bytes>,
     accel: Option<Bytes>,
     gyro_layout: Layout,
     accel_layout: Layout,
-    descriptor: Option<Descriptor>,
     pending: Option<Decoded>,
-    counted: usize,
-    in_garbage: bool,
     found_topics: Vec<String>,
 }
+
+/// `sizes` entry of a msg_id without a subscription.
+const NO_SIZE: u32 = u32::MAX;
 
 impl Default for UlogDecoder {
     fn default() -> Self {
@@ -161,106 +103,33 @@ const DATA_FIELDS: usize = 5;
 impl UlogDecoder {
     pub fn new(opts: UlogOptions) -> Self {
         UlogDecoder {
-            tracker: TimeTracker::with_rate_hz(opts.rate_hz),
+            stamper: Stamper::new(opts.rate_hz),
             opts,
-            stats: DecoderStats::default(),
+            f: Framer::default(),
             header_done: false,
-            formats: HashMap::new(),
-            subs: HashMap::new(),
-            sizes: HashMap::new(),
+            formats: Formats::default(),
+            subs: Vec::new(),
+            sizes: Vec::new(),
             gyro: None,
             accel: None,
             gyro_layout: Layout::default(),
             accel_layout: Layout::default(),
-            descriptor: None,
             pending: None,
-            counted: 0,
-            in_garbage: false,
             found_topics: Vec::new(),
         }
     }
 
-    fn size_of(&self, ty: &str, depth: usize) -> Option<usize> {
-        if let Some(s) = primitive_size(ty) {
-            return Some(s);
-        }
-        if depth > 8 {
-            return None;
-        }
-        let fields = self.formats.get(ty)?;
-        fields
-            .iter()
-            .map(|f| self.size_of(&f.ty, depth + 1).map(|s| s * f.n))
-            .sum()
-    }
-
-    /// Byte offset of each named field of `topic`.
-    fn offsets(&self, topic: &str) -> Option<(FieldOffsets, usize)> {
-        let fields = self.formats.get(topic)?;
-        let mut o = 0;
-        let mut m = HashMap::new();
-        for f in fields {
-            let s = self.size_of(&f.ty, 0)?;
-            m.insert(f.name.clone(), (o, f.ty.clone(), f.n));
-            o += s * f.n;
-        }
-        Some((m, o))
-    }
-
-    fn layout(&self, topic: &str, role: Role) -> Option<Layout> {
-        let (m, _) = self.offsets(topic)?;
-        let at = |name: &str, ty: &str, n: usize| {
-            m.get(name)
-                .filter(|(_, t, k)| t == ty && *k >= n)
-                .map(|(o, _, _)| *o)
-        };
-        let time =
-            at("timestamp_sample", "uint64_t", 1).or_else(|| at("timestamp", "uint64_t", 1))?;
-        let (xyz, accel) = match role {
-            Role::Combined => (
-                at("gyro_rad", "float", 3)?,
-                Some(at("accelerometer_m_s2", "float", 3)?),
-            ),
-            _ => {
-                let x = at("x", "float", 1)?;
-                if at("y", "float", 1)? != x + 4 || at("z", "float", 1)? != x + 8 {
-                    return None;
-                }
-                (x, None)
-            }
-        };
-        let temp = at("temperature", "float", 1);
-        let need = [
-            time + 8,
-            xyz + 12,
-            accel.map_or(0, |a| a + 12),
-            temp.map_or(0, |t| t + 4),
-        ]
-        .into_iter()
-        .max()
-        .unwrap_or(0);
-        Some(Layout {
-            time,
-            xyz,
-            accel,
-            temp,
-            need,
-        })
-    }
-
     fn other(&mut self, b: Bytes) -> Decoded {
-        self.stats.frames_ok += 1;
-        self.stats.other_messages += 1;
-        self.stats.other_bytes += b.len() as u64;
+        self.f.count_other(&b);
         Decoded::Other(b)
     }
 
-    fn fault(&mut self, buf: &mut BytesMut) {
-        buf.advance(1);
-        self.counted = self.counted.saturating_sub(1);
-        self.stats.garbage_bytes += 1;
-        self.stats.resyncs += 1;
-        self.in_garbage = true;
+    /// The subscribed size of a data message's msg_id.
+    fn size_of_id(&self, id: u16) -> Option<usize> {
+        match self.sizes.get(id as usize) {
+            Some(&s) if s != NO_SIZE => Some(s as usize),
+            _ => None,
+        }
     }
 
     fn subscribe(&mut self, body: &[u8]) {
@@ -272,8 +141,12 @@ impl UlogDecoder {
         let Ok(name) = std::str::from_utf8(&body[3..]) else {
             return;
         };
-        if let Some((_, size)) = self.offsets(name) {
-            self.sizes.insert(id, size);
+        if let Some(size) = self.formats.topic_size(name) {
+            let i = id as usize;
+            if self.sizes.len() <= i {
+                self.sizes.resize(i + 1, NO_SIZE);
+            }
+            self.sizes[i] = size.min(NO_SIZE as usize - 1) as u32;
         }
         let label = format!("{name}[{multi}]");
         if !self.found_topics.contains(&label) {
@@ -288,13 +161,14 @@ impl UlogDecoder {
             ("sensor_accel", "sensor_gyro") => Role::Accel,
             _ => return,
         };
-        if let Some(l) = self.layout(name, role) {
+        if let Some(l) = self.formats.layout(name, role) {
             match role {
                 Role::Gyro => self.gyro_layout = l,
                 Role::Accel => self.accel_layout = l,
                 Role::Combined => {}
             }
-            self.subs.insert(id, (role, l));
+            self.subs.retain(|(i, _, _)| *i != id);
+            self.subs.push((id, role, l));
         }
     }
 
@@ -311,33 +185,27 @@ impl UlogDecoder {
             ..Sample::default()
         };
         s.set_channels(&ch);
-        self.tracker.track(&mut s, &mut self.stats);
-        if self.descriptor.is_none()
-            && let Some(r) = self.tracker.rate_hz()
-        {
-            let d = Descriptor {
-                sample_rate_hz: r,
+        let learned = self
+            .stamper
+            .stamp(&mut s, &mut self.f.stats, || Descriptor {
                 axes: super::AxisConvention::Frd,
                 ..Descriptor::default()
-            };
-            self.descriptor = Some(d);
-            self.stats.descriptors += 1;
+            });
+        if let Some(d) = learned {
             self.pending = Some(Decoded::Descriptor(d));
         }
-        flag_values(&mut s, self.descriptor.as_ref(), &mut self.stats);
-        self.stats.samples += 1;
-        self.stats.frames_ok += 1;
+        self.f.stats.frames_ok += 1;
         Decoded::Sample(s, Some(carrier))
     }
 
     fn data(&mut self, msg: Bytes) -> Decoded {
         let id = u16::from_le_bytes([msg[3], msg[4]]);
-        let Some(&(role, l)) = self.subs.get(&id) else {
+        let Some(&(_, role, l)) = self.subs.iter().find(|(i, _, _)| *i == id) else {
             return self.other(msg);
         };
         let f = &msg[DATA_FIELDS..];
         if f.len() < l.need {
-            self.stats.bad_payload += 1;
+            self.f.stats.bad_payload += 1;
             return self.other(msg);
         }
         let t = u64::from_le_bytes(f[l.time..l.time + 8].try_into().expect("8 bytes"));
@@ -371,11 +239,11 @@ impl UlogDecoder {
                 if role == Role::Gyro {
                     if let Some(old) = self.gyro.replace(msg) {
                         // Two gyro messages without an accel between: the first has no pair.
-                        self.stats.partial_samples += 1;
+                        self.f.stats.partial_samples += 1;
                         return self.other(old);
                     }
                 } else if let Some(old) = self.accel.replace(msg) {
-                    self.stats.partial_samples += 1;
+                    self.f.stats.partial_samples += 1;
                     return self.other(old);
                 }
                 match (self.gyro.take(), self.accel.take()) {
@@ -428,26 +296,11 @@ impl UlogDecoder {
         loop {
             if !self.header_done {
                 // Find the file header (a stream may start with garbage).
-                match buf.windows(MAGIC.len()).position(|w| w == MAGIC) {
-                    Some(0) => {}
-                    Some(p) => {
-                        self.garbage(buf, p);
-                    }
-                    None => {
-                        let keep = (MAGIC.len() - 1).min(buf.len());
-                        let n = buf.len() - keep;
-                        if n > 0 {
-                            self.garbage(buf, n);
-                        }
-                        return None;
-                    }
-                }
-                if buf.len() < HEADER_LEN {
+                if !self.f.seek_magic(buf, &MAGIC) || buf.len() < HEADER_LEN {
                     return None;
                 }
                 self.header_done = true;
-                self.counted = self.counted.saturating_sub(HEADER_LEN);
-                let h = buf.split_to(HEADER_LEN).freeze();
+                let h = self.f.take(buf, HEADER_LEN);
                 return Some(self.other(h));
             }
             if buf.len() < 3 {
@@ -465,8 +318,8 @@ impl UlogDecoder {
                     _ => true,
                 };
             if !plausible {
-                self.stats.header_errors += 1;
-                self.fault(buf);
+                self.f.stats.header_errors += 1;
+                self.f.fault(buf);
                 continue;
             }
             let total = 3 + size;
@@ -479,29 +332,25 @@ impl UlogDecoder {
                 b'S' => buf[3..total] == SYNC_MAGIC,
                 b'D' => {
                     let id = u16::from_le_bytes([buf[3], buf[4]]);
-                    match self.sizes.get(&id) {
+                    match self.size_of_id(id) {
                         // Trailing padding (< 8 bytes) may be left out.
-                        Some(&s) => size - 2 <= s && size - 2 + 8 > s,
+                        Some(s) => size - 2 <= s && size - 2 + 8 > s,
                         None => false,
                     }
                 }
-                b'F' => parse_format(&buf[3..total]).is_some(),
+                b'F' => format::is_format(&buf[3..total]),
                 b'A' => std::str::from_utf8(&buf[6..total]).is_ok(),
                 _ => true,
             };
             if !ok {
-                self.stats.bad_payload += 1;
-                self.fault(buf);
+                self.f.stats.bad_payload += 1;
+                self.f.fault(buf);
                 continue;
             }
-            self.in_garbage = false;
-            self.counted = self.counted.saturating_sub(total);
-            let msg = buf.split_to(total).freeze();
+            let msg = self.f.take(buf, total);
             match ty {
                 b'F' => {
-                    if let Some((name, fields)) = parse_format(&msg[3..]) {
-                        self.formats.insert(name, fields);
-                    }
+                    self.formats.add(&msg[3..]);
                     return Some(self.other(msg));
                 }
                 b'A' => {
@@ -520,16 +369,6 @@ impl UlogDecoder {
             }
         }
     }
-
-    fn garbage(&mut self, buf: &mut BytesMut, n: usize) {
-        buf.advance(n);
-        self.counted = self.counted.saturating_sub(n);
-        self.stats.garbage_bytes += n as u64;
-        if !self.in_garbage {
-            self.stats.resyncs += 1;
-            self.in_garbage = true;
-        }
-    }
 }
 
 impl ProtocolDecoder for UlogDecoder {
@@ -537,44 +376,31 @@ impl ProtocolDecoder for UlogDecoder {
         Protocol::Ulog
     }
     fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        if buf.len() > self.counted {
-            self.stats.bytes_in += (buf.len() - self.counted) as u64;
-        }
-        self.counted = buf.len();
+        self.f.arrived(buf);
         if let Some(p) = self.pending.take() {
             return Some(p);
         }
         self.step(buf)
     }
-    fn decode_item_eof(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        if let Some(d) = self.decode_item(buf) {
-            return Some(d);
-        }
-        while !buf.is_empty() {
-            self.discard_tail(buf);
-            if let Some(d) = self.decode_item(buf) {
-                return Some(d);
-            }
-        }
+    fn held(&mut self) -> Option<Decoded> {
         // An unpaired gyro or accel message at the end: keep its bytes.
-        if let Some(b) = self.gyro.take().or_else(|| self.accel.take()) {
-            self.stats.partial_samples += 1;
-            return Some(self.other(b));
-        }
-        None
+        let b = self.gyro.take().or_else(|| self.accel.take())?;
+        self.f.stats.partial_samples += 1;
+        Some(self.other(b))
     }
     fn discard_tail(&mut self, buf: &mut BytesMut) {
+        // ULog has no sync word to search for: the whole tail is one cut message.
         if !buf.is_empty() {
-            self.stats.truncated += 1;
+            self.f.stats.truncated += 1;
             let n = buf.len();
-            self.garbage(buf, n);
+            self.f.skip(buf, n);
         }
     }
     fn stats(&self) -> DecoderStats {
-        self.stats
+        self.f.stats
     }
     fn descriptor(&self) -> Option<Descriptor> {
-        self.descriptor
+        self.stamper.descriptor()
     }
     fn found(&self) -> String {
         let imu: Vec<&String> = self
