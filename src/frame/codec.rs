@@ -165,9 +165,29 @@ impl FrameDecoder {
         }
     }
 
+    /// Mark the channels the last descriptor declares absent (NaN, [`Sample::absent`]); they
+    /// are no measurement, so neither non-finite nor saturated.
+    fn mark_absent(&self, s: &mut Sample) {
+        let absent = self.descriptor.map_or(0, |d| d.absent);
+        if absent == 0 {
+            return;
+        }
+        s.absent = absent;
+        for c in 0..6 {
+            if s.is_absent(c) {
+                s.set_channel(c, f64::NAN);
+                s.flags &= !flags::sat_ch(c);
+            }
+        }
+    }
+
     fn check_values(&mut self, s: &mut Sample) {
         let ch = s.channels();
-        if ch.iter().any(|v| !v.is_finite()) {
+        if ch
+            .iter()
+            .enumerate()
+            .any(|(c, v)| !v.is_finite() && !s.is_absent(c))
+        {
             s.flags |= flags::NON_FINITE;
             self.stats.non_finite += 1;
         }
@@ -178,7 +198,7 @@ impl FrameDecoder {
                 } else {
                     d.accel_range_m_s2
                 } as f64;
-                if range > 0.0 && v.abs() >= range {
+                if range > 0.0 && v.abs() >= range && !s.is_absent(c) {
                     s.flags |= flags::sat_ch(c);
                 }
             }
@@ -249,6 +269,7 @@ impl FrameDecoder {
                 (MSG_SAMPLE, SAMPLE_PAYLOAD) | (MSG_CLEAN_SAMPLE, CLEAN_SAMPLE_PAYLOAD) => {
                     let mut s = parse_sample(seq, payload, ty == MSG_CLEAN_SAMPLE);
                     self.track_sequence(&mut s);
+                    self.mark_absent(&mut s);
                     self.check_values(&mut s);
                     self.stats.samples += 1;
                     Some(Message::Sample(s))
@@ -408,6 +429,7 @@ mod tests {
             accel_range_m_s2: 156.9,
             axes: AxisConvention::Frd,
             device_id: 42,
+            absent: 0,
         };
         let mut b = BytesMut::new();
         encode_descriptor(&d, &mut b);
