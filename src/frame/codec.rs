@@ -451,6 +451,55 @@ mod tests {
     }
 
     #[test]
+    fn descriptor_absent_mask_marks_the_samples_and_old_descriptors_read_all_present() {
+        let d = Descriptor {
+            sample_rate_hz: 100.0,
+            gyro_range_rad_s: 4.0,
+            absent: 0b111_000, // gyro-only
+            ..Descriptor::default()
+        };
+        let mut b = BytesMut::new();
+        encode_descriptor(&d, &mut b);
+        // Byte 17 of the payload (reserved, 0, before partial sensors) holds the mask.
+        assert_eq!(b[HEADER_LEN + 17], 0b111_000);
+        let mut s = sample(0);
+        s.absent = 0b111_000;
+        s.accel[0] = 0.0; // whatever an absent channel holds, the wire says NaN
+        encode_sample(&s, &mut b);
+        let mut s1 = sample(1);
+        s1.accel[2] = 1e9; // beyond no range: absent, so not saturated either
+        encode_sample(&s1, &mut b);
+        let (got, st) = {
+            let mut dec = FrameDecoder::new();
+            let mut out = Vec::new();
+            while let Some(m) = dec.decode(&mut b).unwrap() {
+                if let Message::Sample(x) = m {
+                    out.push(x);
+                }
+            }
+            (out, dec.stats())
+        };
+        assert_eq!(got.len(), 2);
+        for g in &got {
+            assert_eq!(g.absent, 0b111_000);
+            assert!(g.accel.iter().all(|v| v.is_nan()));
+            assert!(g.gyro.iter().all(|v| v.is_finite()));
+            assert_eq!(g.flags & (flags::NON_FINITE | flags::SAT_ANY), 0);
+        }
+        assert_eq!((st.non_finite, st.saturated), (0, 0));
+        // A descriptor from before (byte 17 = 0): all present, NaN is a non-finite value.
+        let mut b = BytesMut::new();
+        encode_descriptor(&Descriptor::default(), &mut b);
+        let mut s = sample(0);
+        s.accel[0] = f64::NAN;
+        encode_sample(&s, &mut b);
+        let (got, st) = decode_all(&b, b.len());
+        assert_eq!(got[0].absent, 0);
+        assert!(got[0].has(flags::NON_FINITE));
+        assert_eq!(st.non_finite, 1);
+    }
+
+    #[test]
     fn clean_sample_carries_bias_and_sigma() {
         let mut s = sample(1);
         s.flags |= flags::BIAS_REMOVED;

@@ -191,3 +191,28 @@ pub fn write_health_json(h: &HealthFrame, out: &mut String) {
     }
     out.push_str("}\n");
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_report_round_trips_and_an_older_shorter_one_still_reads() {
+        let h = HealthFrame {
+            samples_in: 7,
+            warming_up: 1,
+            absent_channels: 0b111_000,
+            ..HealthFrame::default()
+        };
+        let mut b = BytesMut::new();
+        encode_health(&h, 0, &mut b);
+        let p = &b[HEADER_LEN..b.len() - TRAILER_LEN];
+        assert_eq!(p.len(), HealthFrame::PAYLOAD);
+        assert_eq!(parse_health(p), Some(h));
+        // A writer from before `absent_channels` (26 counters): the field reads as 0.
+        let old = parse_health(&p[..8 * HealthFrame::MIN_FIELDS]).unwrap();
+        assert_eq!(old.absent_channels, 0);
+        assert_eq!((old.samples_in, old.warming_up), (7, 1));
+        assert_eq!(parse_health(&p[..8 * HealthFrame::MIN_FIELDS - 8]), None);
+    }
+}
