@@ -176,8 +176,17 @@ impl Health {
         for s in &self.sinks {
             let _ = writeln!(
                 o,
-                "  sink       : {} — {} out, {} dropped, {} errors, {} health reports",
-                s.name, s.samples_out, s.dropped, s.errors, s.health_out
+                "  sink       : {} — {} out, {} dropped, {} errors, {} health reports{}",
+                s.name,
+                s.samples_out,
+                s.dropped,
+                s.errors,
+                s.health_out,
+                if s.messages_dropped > 0 {
+                    format!(", {} pass-through messages dropped", s.messages_dropped)
+                } else {
+                    String::new()
+                }
             );
             let g = &s.clients_gone;
             if g.clients > 0 {
@@ -263,6 +272,18 @@ impl Health {
             self.source_stalls,
             self.sink_dropped()
         );
+        // Which sink lost what, as it happens (the total alone does not say who is behind).
+        let per_sink: Vec<String> = self
+            .sinks
+            .iter()
+            .filter(|k| k.dropped_total() > 0)
+            .map(|k| format!("{}={}", k.name, k.dropped_total()))
+            .collect();
+        let line = if per_sink.is_empty() {
+            line
+        } else {
+            format!("{line} ({})", per_sink.join(" "))
+        };
         let line = if self.absent_channels != 0 {
             format!(
                 "{line} absent={}",
