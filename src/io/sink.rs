@@ -209,9 +209,8 @@ impl SinkHandle {
     /// (see the module docs).
     pub async fn offer(&self, item: SinkItem) {
         let item = match self.try_put(item) {
-            Ok(()) => return,
-            Err(None) => return, // closed
-            Err(Some(item)) => item,
+            Put::Sent | Put::Closed => return,
+            Put::Full(item) => *item,
         };
         if self.lossless && self.stuck.load(Relaxed) && self.tx.capacity() * 2 >= SINK_QUEUE {
             self.stuck.store(false, Relaxed);
@@ -219,9 +218,9 @@ impl SinkHandle {
         }
         let item = if self.lossless && !self.stuck.load(Relaxed) {
             match self.put_within_stall(item).await {
-                Ok(()) => return,
-                Err(None) => return,
-                Err(Some(item)) => {
+                Put::Sent | Put::Closed => return,
+                Put::Full(item) => {
+                    let item = *item;
                     self.stuck.store(true, Relaxed);
                     tracing::warn!(
                         sink = %self.name,
@@ -261,38 +260,37 @@ impl SinkHandle {
         }
     }
 
-    /// Queue `item` now (after the pending skip marker): `Err(Some(item))` when the queue is
-    /// full, `Err(None)` when the sink has ended.
-    fn try_put(&self, item: SinkItem) -> Result<(), Option<SinkItem>> {
+    /// Queue `item` now (after the pending skip marker).
+    fn try_put(&self, item: SinkItem) -> Put {
         if let Some(skip) = self.pending_skip() {
             match self.tx.try_send(skip) {
                 Ok(()) => self.skip_sent(),
-                Err(mpsc::error::TrySendError::Full(_)) => return Err(Some(item)),
-                Err(mpsc::error::TrySendError::Closed(_)) => return Err(None),
+                Err(mpsc::error::TrySendError::Full(_)) => return Put::Full(Box::new(item)),
+                Err(mpsc::error::TrySendError::Closed(_)) => return Put::Closed,
             }
         }
         match self.tx.try_send(item) {
-            Ok(()) => Ok(()),
-            Err(mpsc::error::TrySendError::Full(item)) => Err(Some(item)),
-            Err(mpsc::error::TrySendError::Closed(_)) => Err(None),
+            Ok(()) => Put::Sent,
+            Err(mpsc::error::TrySendError::Full(item)) => Put::Full(Box::new(item)),
+            Err(mpsc::error::TrySendError::Closed(_)) => Put::Closed,
         }
     }
 
     /// Queue `item` (after the pending skip marker), waiting at most the stall time in all.
-    async fn put_within_stall(&self, item: SinkItem) -> Result<(), Option<SinkItem>> {
+    async fn put_within_stall(&self, item: SinkItem) -> Put {
         let deadline = tokio::time::Instant::now() + self.stall;
         if let Some(skip) = self.pending_skip() {
             match self.tx.send_timeout(skip, self.stall).await {
                 Ok(()) => self.skip_sent(),
-                Err(mpsc::error::SendTimeoutError::Timeout(_)) => return Err(Some(item)),
-                Err(mpsc::error::SendTimeoutError::Closed(_)) => return Err(None),
+                Err(mpsc::error::SendTimeoutError::Timeout(_)) => return Put::Full(Box::new(item)),
+                Err(mpsc::error::SendTimeoutError::Closed(_)) => return Put::Closed,
             }
         }
         let left = deadline.saturating_duration_since(tokio::time::Instant::now());
         match self.tx.send_timeout(item, left).await {
-            Ok(()) => Ok(()),
-            Err(mpsc::error::SendTimeoutError::Timeout(item)) => Err(Some(item)),
-            Err(mpsc::error::SendTimeoutError::Closed(_)) => Err(None),
+            Ok(()) => Put::Sent,
+            Err(mpsc::error::SendTimeoutError::Timeout(item)) => Put::Full(Box::new(item)),
+            Err(mpsc::error::SendTimeoutError::Closed(_)) => Put::Closed,
         }
     }
 
@@ -335,6 +333,15 @@ impl SinkHandle {
     pub fn is_stuck(&self) -> bool {
         self.stuck.load(Relaxed)
     }
+}
+
+/// What became of an item offered to a sink's queue.
+enum Put {
+    Sent,
+    /// The sink has ended.
+    Closed,
+    /// The queue is full (or stayed full for the stall time): the item is handed back.
+    Full(Box<SinkItem>),
 }
 
 /// Queue length (in batches) of a sink's own input.
