@@ -6,7 +6,7 @@ use crate::frame::health::HealthFrame;
 use crate::frame::{DecoderStats, Descriptor};
 use crate::io::sink::{self, SinkHandle, SinkItem, SinkReport};
 use crate::io::source::{self, SourceEvent};
-use crate::sample::{Sample, flags};
+use crate::sample::{Sample, channel_names_of, flags};
 use crate::stage::Pipeline;
 use serde::Serialize;
 use std::sync::Arc;
@@ -42,6 +42,11 @@ pub struct Health {
     pub last_t_ns: u64,
     /// Whether the last sample published was flagged warming up.
     pub warming_up_now: bool,
+    /// Channels absent in the last sample published (bit `c` for channel `c`): a partial
+    /// sensor's channels that carry no data.
+    pub absent_channels: u8,
+    /// Samples published with at least one absent channel.
+    pub samples_partial: u64,
     /// Health reports published beside the samples.
     pub health_reports: u64,
     pub stages: Vec<(String, u64)>,
@@ -59,6 +64,8 @@ impl Health {
         self.samples_out += 1;
         self.last_t_ns = s.t_ns;
         self.warming_up_now = s.flags & flags::WARMING_UP != 0;
+        self.absent_channels = s.absent;
+        self.samples_partial += u64::from(s.absent != 0);
         let f = s.flags;
         self.flagged_replaced += u64::from(f & flags::REPLACED != 0);
         self.flagged_suspect += u64::from(f & flags::SUSPECT_ANY != 0);
@@ -127,6 +134,14 @@ impl Health {
             self.flagged_warming_up,
             self.flagged_bias_removed
         );
+        if self.samples_partial > 0 {
+            let _ = writeln!(
+                o,
+                "  absent     : {} samples without channel(s) {} (published as absent, never as zeros; not cleaned)",
+                self.samples_partial,
+                channel_names_of(self.absent_channels).join(" ")
+            );
+        }
         if !self.source_found.is_empty() {
             let _ = writeln!(o, "  found      : {}", self.source_found);
         }
@@ -166,8 +181,17 @@ impl Health {
         for s in &self.sinks {
             let _ = writeln!(
                 o,
-                "  sink       : {} — {} out, {} dropped, {} errors, {} health reports",
-                s.name, s.samples_out, s.dropped, s.errors, s.health_out
+                "  sink       : {} — {} out, {} dropped, {} errors, {} health reports{}",
+                s.name,
+                s.samples_out,
+                s.dropped,
+                s.errors,
+                s.health_out,
+                if s.messages_dropped > 0 {
+                    format!(", {} pass-through messages dropped", s.messages_dropped)
+                } else {
+                    String::new()
+                }
             );
             let g = &s.clients_gone;
             if g.clients > 0 {
@@ -232,6 +256,7 @@ impl Health {
             tcp_clients: self.sinks.iter().map(|s| s.clients.len() as u64).sum(),
             stages: n_stages as u64,
             warming_up: u64::from(self.warming_up_now),
+            absent_channels: u64::from(self.absent_channels),
         }
     }
 
@@ -258,6 +283,26 @@ impl Health {
             .any(|(_, h)| h.starts_with("effect"))
         {
             line + " model=EFFECT_SUSPECTED"
+        } else {
+            line
+        };
+        // Which sink lost what, as it happens (the total alone does not say who is behind).
+        let per_sink: Vec<String> = self
+            .sinks
+            .iter()
+            .filter(|k| k.dropped_total() > 0)
+            .map(|k| format!("{}={}", k.name, k.dropped_total()))
+            .collect();
+        let line = if per_sink.is_empty() {
+            line
+        } else {
+            format!("{line} ({})", per_sink.join(" "))
+        };
+        let line = if self.absent_channels != 0 {
+            format!(
+                "{line} absent={}",
+                channel_names_of(self.absent_channels).join(",")
+            )
         } else {
             line
         };

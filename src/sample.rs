@@ -11,6 +11,19 @@ pub const N_CHANNELS: usize = 6;
 /// Channel names in index order, as used in CSV headers, configs and reports.
 pub const CHANNEL_NAMES: [&str; N_CHANNELS] = ["gx", "gy", "gz", "ax", "ay", "az"];
 
+/// Bit mask of all six channels (`absent` masks: bit `c` for channel `c`).
+pub const ALL_CHANNELS: u8 = 0x3f;
+
+/// The names of the channels set in `mask` (bit `c` = channel `c`), in index order.
+pub fn channel_names_of(mask: u8) -> Vec<&'static str> {
+    CHANNEL_NAMES
+        .iter()
+        .enumerate()
+        .filter(|(c, _)| mask & (1 << c) != 0)
+        .map(|(_, n)| *n)
+        .collect()
+}
+
 /// Index of a channel by its name (`gx` … `az`).
 pub fn channel_index(name: &str) -> Option<usize> {
     CHANNEL_NAMES.iter().position(|n| *n == name)
@@ -102,6 +115,12 @@ pub struct Sample {
     pub bias: [f32; N_CHANNELS],
     /// 1-σ uncertainty of `bias`, per channel; zero if no estimate.
     pub bias_sd: [f32; N_CHANNELS],
+    /// Channels the sensor does not have (bit `c` for channel `c`; a gyro-only recording has
+    /// `0b111000`). An absent channel holds NaN, which is no measurement: stages leave it alone
+    /// (no bias learned, no gross-error decision, no stillness vote) and it is neither flagged
+    /// non-finite nor replaced. On the wire it is the descriptor's absent mask
+    /// (`docs/frame-format.md`).
+    pub absent: u8,
 }
 
 impl Default for Sample {
@@ -115,6 +134,7 @@ impl Default for Sample {
             flags: 0,
             bias: [0.0; N_CHANNELS],
             bias_sd: [0.0; N_CHANNELS],
+            absent: 0,
         }
     }
 }
@@ -164,6 +184,12 @@ impl Sample {
     #[inline]
     pub fn t_s(&self) -> f64 {
         self.t_ns as f64 * 1e-9
+    }
+
+    /// True if channel `c` is absent (the sensor has no such channel; see [`Sample::absent`]).
+    #[inline]
+    pub fn is_absent(&self, c: usize) -> bool {
+        self.absent & (1 << c) != 0
     }
 
     #[inline]

@@ -492,4 +492,24 @@ fn inline_output_keeps_a_chunk_index_the_mcap_crate_and_rosbags_seek_with() {
     let half = inline(cut, |s| *s);
     let s2 = mcap::Summary::read(&half).unwrap().expect("summary");
     assert!(s2.stats.unwrap().message_count > 0);
+
+/// A gyro-only sensor's bag: the accel triad is "no data" by the message's own convention
+/// (covariance[0] = -1), never a measured zero acceleration (issue 13 item 10).
+#[test]
+fn an_absent_triad_is_no_data_in_the_imu_message() {
+    let w = imuprep::io::mcap_sink::ImuBagWriter::new(
+        std::io::Cursor::new(Vec::new()),
+        McapSinkOptions::default(),
+    )
+    .unwrap();
+    let mut s = imuprep::sample::Sample {
+        absent: 0b111_000,
+        ..Default::default()
+    };
+    s.set_channels(&[0.1, 0.2, 0.3, f64::NAN, f64::NAN, f64::NAN]);
+    let m = w.imu_msg(&s);
+    assert_eq!(m.linear_acceleration_covariance[0], -1.0);
+    assert_eq!(m.linear_acceleration, [0.0; 3]);
+    assert!(m.angular_velocity_covariance[0] >= 0.0);
+    assert_eq!(m.angular_velocity, [0.1, 0.2, 0.3]);
 }

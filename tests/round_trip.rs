@@ -108,10 +108,12 @@ fn import_reports_bad_cell_with_line_and_column() {
 }
 
 #[test]
-fn import_reports_missing_column_and_lists_the_header() {
+fn import_names_an_absent_channel_and_refuses_a_file_without_any() {
+    // A missing channel column is an absent channel (issue 13 item 10: partial sensors), said
+    // on stderr by name; a file with no channel column at all is an error listing the header.
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("bad.csv");
-    std::fs::write(&input, "t,gx,gy,gz,ax,ay\n0,1,2,3,4,5\n").unwrap();
+    let input = dir.path().join("five.csv");
+    std::fs::write(&input, "t,gx,gy,gz,ax,ay\n0,1,2,3,4,5\n0.01,1,2,3,4,5\n").unwrap();
     let out = Command::new(common::bin())
         .arg("import")
         .arg(&input)
@@ -119,10 +121,26 @@ fn import_reports_missing_column_and_lists_the_header() {
         .arg(dir.path().join("x.log"))
         .output()
         .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("channels absent") && err.contains(": az"),
+        "{err}"
+    );
+
+    let input = dir.path().join("bad.csv");
+    std::fs::write(&input, "t,temp,pressure\n0,25,1013\n").unwrap();
+    let out = Command::new(common::bin())
+        .arg("import")
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("y.log"))
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("missing column for az") && err.contains("t,gx,gy,gz,ax,ay"),
+        err.contains("no sensor column") && err.contains("t,temp,pressure"),
         "{err}"
     );
 }

@@ -259,3 +259,63 @@ async fn stuck_consumer_never_freezes_the_run_and_health_travels_with_the_data()
     assert_eq!(st.health_frames as usize, frames.len());
     assert_eq!(st.unknown_type + st.crc_errors + st.bad_payload, 0);
 }
+
+/// A pseudo-terminal nobody reads (inline sink, `--out pty:`) beside a healthy sink: the run
+/// ends, the healthy sink gets every sample, and the pty's drops show in the health published
+/// while the run goes on, not only at the end.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn stuck_pty_inline_sink_never_freezes_the_run_and_its_drops_show_as_they_happen() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("in.log");
+    // 40 000 native frames (2.2 MB, far beyond a pty's buffer) at 200 Hz = 200 s, replayed at
+    // 100× ≈ 2 s of wall time.
+    let n = 40_000;
+    imuprep::io::log::write_log(&log, &common::descriptor(), &common::samples(n, 13)).unwrap();
+    let jsonl = dir.path().join("out.jsonl");
+    let mut cfg = Config::default_embedded().unwrap();
+    cfg.source = SourceConfig::Replay {
+        path: log,
+        speed: 100.0,
+    };
+    cfg.sinks = vec![
+        Sink::Inline { path: None },
+        Sink::File {
+            path: jsonl.clone(),
+            format: Format::Jsonl,
+        },
+    ];
+    cfg.health.interval_s = 0.1;
+    let health = tokio::time::timeout(
+        Duration::from_secs(60),
+        imuprep::runtime::run(&cfg, Pipeline::pass_through()),
+    )
+    .await
+    .expect("a pty nobody reads froze the run")
+    .unwrap();
+    assert_eq!(health.samples_out, n as u64);
+    let pty = &health.sinks[0];
+    assert!(pty.name.starts_with("pty:"), "{pty:?}");
+    assert!(pty.dropped > 0, "{pty:?}");
+    assert!(pty.samples_out + pty.dropped <= n as u64, "{pty:?}");
+    assert_eq!(health.sinks[1].dropped, 0, "{:?}", health.sinks[1]);
+    let text = std::fs::read_to_string(&jsonl).unwrap();
+    let mut samples = 0;
+    let mut reports = Vec::new();
+    for line in text.lines() {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap();
+        if v.get("type").and_then(|t| t.as_str()) == Some("health") {
+            reports.push(v);
+        } else {
+            samples += 1;
+        }
+    }
+    assert_eq!(samples, n);
+    // Drops in a report published before the end (the last one is the closing report).
+    assert!(
+        reports[..reports.len() - 1]
+            .iter()
+            .any(|r| r["sink_dropped"].as_u64() > Some(0)),
+        "the pty's drops must show in the health published during the run ({} reports)",
+        reports.len()
+    );
+}

@@ -165,9 +165,29 @@ impl FrameDecoder {
         }
     }
 
+    /// Mark the channels the last descriptor declares absent (NaN, [`Sample::absent`]); they
+    /// are no measurement, so neither non-finite nor saturated.
+    fn mark_absent(&self, s: &mut Sample) {
+        let absent = self.descriptor.map_or(0, |d| d.absent);
+        if absent == 0 {
+            return;
+        }
+        s.absent = absent;
+        for c in 0..6 {
+            if s.is_absent(c) {
+                s.set_channel(c, f64::NAN);
+                s.flags &= !flags::sat_ch(c);
+            }
+        }
+    }
+
     fn check_values(&mut self, s: &mut Sample) {
         let ch = s.channels();
-        if ch.iter().any(|v| !v.is_finite()) {
+        if ch
+            .iter()
+            .enumerate()
+            .any(|(c, v)| !v.is_finite() && !s.is_absent(c))
+        {
             s.flags |= flags::NON_FINITE;
             self.stats.non_finite += 1;
         }
@@ -178,7 +198,7 @@ impl FrameDecoder {
                 } else {
                     d.accel_range_m_s2
                 } as f64;
-                if range > 0.0 && v.abs() >= range {
+                if range > 0.0 && v.abs() >= range && !s.is_absent(c) {
                     s.flags |= flags::sat_ch(c);
                 }
             }
@@ -249,6 +269,7 @@ impl FrameDecoder {
                 (MSG_SAMPLE, SAMPLE_PAYLOAD) | (MSG_CLEAN_SAMPLE, CLEAN_SAMPLE_PAYLOAD) => {
                     let mut s = parse_sample(seq, payload, ty == MSG_CLEAN_SAMPLE);
                     self.track_sequence(&mut s);
+                    self.mark_absent(&mut s);
                     self.check_values(&mut s);
                     self.stats.samples += 1;
                     Some(Message::Sample(s))
@@ -408,6 +429,7 @@ mod tests {
             accel_range_m_s2: 156.9,
             axes: AxisConvention::Frd,
             device_id: 42,
+            absent: 0,
         };
         let mut b = BytesMut::new();
         encode_descriptor(&d, &mut b);
@@ -426,6 +448,55 @@ mod tests {
         assert_eq!(got.t_ns, s.t_ns);
         assert_eq!(wire(&got), wire(&s));
         assert_eq!(got.temp_c, Some(25.5));
+    }
+
+    #[test]
+    fn descriptor_absent_mask_marks_the_samples_and_old_descriptors_read_all_present() {
+        let d = Descriptor {
+            sample_rate_hz: 100.0,
+            gyro_range_rad_s: 4.0,
+            absent: 0b111_000, // gyro-only
+            ..Descriptor::default()
+        };
+        let mut b = BytesMut::new();
+        encode_descriptor(&d, &mut b);
+        // Byte 17 of the payload (reserved, 0, before partial sensors) holds the mask.
+        assert_eq!(b[HEADER_LEN + 17], 0b111_000);
+        let mut s = sample(0);
+        s.absent = 0b111_000;
+        s.accel[0] = 0.0; // whatever an absent channel holds, the wire says NaN
+        encode_sample(&s, &mut b);
+        let mut s1 = sample(1);
+        s1.accel[2] = 1e9; // beyond no range: absent, so not saturated either
+        encode_sample(&s1, &mut b);
+        let (got, st) = {
+            let mut dec = FrameDecoder::new();
+            let mut out = Vec::new();
+            while let Some(m) = dec.decode(&mut b).unwrap() {
+                if let Message::Sample(x) = m {
+                    out.push(x);
+                }
+            }
+            (out, dec.stats())
+        };
+        assert_eq!(got.len(), 2);
+        for g in &got {
+            assert_eq!(g.absent, 0b111_000);
+            assert!(g.accel.iter().all(|v| v.is_nan()));
+            assert!(g.gyro.iter().all(|v| v.is_finite()));
+            assert_eq!(g.flags & (flags::NON_FINITE | flags::SAT_ANY), 0);
+        }
+        assert_eq!((st.non_finite, st.saturated), (0, 0));
+        // A descriptor from before (byte 17 = 0): all present, NaN is a non-finite value.
+        let mut b = BytesMut::new();
+        encode_descriptor(&Descriptor::default(), &mut b);
+        let mut s = sample(0);
+        s.accel[0] = f64::NAN;
+        encode_sample(&s, &mut b);
+        let (got, st) = decode_all(&b, b.len());
+        assert_eq!(got[0].absent, 0);
+        assert!(got[0].has(flags::NON_FINITE));
+        assert_eq!(st.non_finite, 1);
     }
 
     #[test]

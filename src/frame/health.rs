@@ -46,11 +46,15 @@ pub struct HealthFrame {
     pub stages: u64,
     /// 1 when the last sample published was flagged warming up (a stage still identifying).
     pub warming_up: u64,
+    /// Channels the last sample published does not have (bit `c` for channel `c`, gx..az; 0 =
+    /// all present): a partial sensor's absent channels. Appended in field 27; a payload of 26
+    /// counters (older writers) reads as 0.
+    pub absent_channels: u64,
 }
 
 impl HealthFrame {
     /// Field names in payload order (also the JSON keys).
-    pub const FIELDS: [&'static str; 26] = [
+    pub const FIELDS: [&'static str; 27] = [
         "elapsed_ms",
         "last_t_ns",
         "samples_in",
@@ -77,12 +81,17 @@ impl HealthFrame {
         "tcp_clients",
         "stages",
         "warming_up",
+        "absent_channels",
     ];
+
+    /// Counters of the first version of this frame: a shorter payload is a bad payload; the
+    /// fields appended since read as 0 when a payload stops after these.
+    pub const MIN_FIELDS: usize = 26;
 
     /// Payload bytes this build writes.
     pub const PAYLOAD: usize = 8 * Self::FIELDS.len();
 
-    fn values(&self) -> [u64; 26] {
+    fn values(&self) -> [u64; 27] {
         [
             self.elapsed_ms,
             self.last_t_ns,
@@ -110,10 +119,11 @@ impl HealthFrame {
             self.tcp_clients,
             self.stages,
             self.warming_up,
+            self.absent_channels,
         ]
     }
 
-    fn from_values(v: &[u64; 26]) -> Self {
+    fn from_values(v: &[u64; 27]) -> Self {
         HealthFrame {
             elapsed_ms: v[0],
             last_t_ns: v[1],
@@ -141,6 +151,7 @@ impl HealthFrame {
             tcp_clients: v[23],
             stages: v[24],
             warming_up: v[25],
+            absent_channels: v[26],
         }
     }
 }
@@ -160,11 +171,11 @@ pub fn encode_health(h: &HealthFrame, seq: u32, buf: &mut BytesMut) {
 /// Parse a health payload: `None` when it is shorter than this build's fields or not a whole
 /// number of counters.
 pub(crate) fn parse_health(p: &[u8]) -> Option<HealthFrame> {
-    if p.len() < HealthFrame::PAYLOAD || !p.len().is_multiple_of(8) {
+    if p.len() < 8 * HealthFrame::MIN_FIELDS || !p.len().is_multiple_of(8) {
         return None;
     }
-    let mut v = [0u64; 26];
-    for (i, x) in v.iter_mut().enumerate() {
+    let mut v = [0u64; 27];
+    for (i, x) in v.iter_mut().enumerate().take(p.len() / 8) {
         *x = u64::from_le_bytes(p[8 * i..8 * i + 8].try_into().expect("8 bytes"));
     }
     Some(HealthFrame::from_values(&v))
@@ -179,4 +190,29 @@ pub fn write_health_json(h: &HealthFrame, out: &mut String) {
         let _ = write!(out, ",\"{k}\":{v}");
     }
     out.push_str("}\n");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_report_round_trips_and_an_older_shorter_one_still_reads() {
+        let h = HealthFrame {
+            samples_in: 7,
+            warming_up: 1,
+            absent_channels: 0b111_000,
+            ..HealthFrame::default()
+        };
+        let mut b = BytesMut::new();
+        encode_health(&h, 0, &mut b);
+        let p = &b[HEADER_LEN..b.len() - TRAILER_LEN];
+        assert_eq!(p.len(), HealthFrame::PAYLOAD);
+        assert_eq!(parse_health(p), Some(h));
+        // A writer from before `absent_channels` (26 counters): the field reads as 0.
+        let old = parse_health(&p[..8 * HealthFrame::MIN_FIELDS]).unwrap();
+        assert_eq!(old.absent_channels, 0);
+        assert_eq!((old.samples_in, old.warming_up), (7, 1));
+        assert_eq!(parse_health(&p[..8 * HealthFrame::MIN_FIELDS - 8]), None);
+    }
 }

@@ -37,6 +37,15 @@ impl InlineEncoder {
         }
     }
 
+    /// Forget the multi-sample frame being patched if it is `frame` (an inline sink dropped one
+    /// of its samples: a frame with an unpatched raw slot must not be written as cleaned).
+    pub fn discard(&mut self, frame: &Bytes) {
+        if matches!(&self.cur, Some((o, _)) if o.as_ptr() == frame.as_ptr() && o.len() == frame.len())
+        {
+            self.cur = None;
+        }
+    }
+
     /// A message that is not IMU data: written unchanged (after any frame still being filled).
     /// MCAP: the records are written into new chunks with their indexes ([`McapStream`]).
     pub fn other(&mut self, b: &[u8], out: &mut BytesMut) {

@@ -121,6 +121,11 @@ pub struct Descriptor {
     pub accel_range_m_s2: f32,
     pub axes: AxisConvention,
     pub device_id: u32,
+    /// Channels the sensor does not have, bit `c` for channel `c` (gx gy gz ax ay az); 0 = all
+    /// six present. Byte 17 of the payload, reserved (0) before partial sensors were supported,
+    /// so every older log reads as all present. Samples of the stream carry NaN there and the
+    /// decoder marks them [`Sample::absent`].
+    pub absent: u8,
 }
 
 /// A decoded message.
@@ -157,7 +162,8 @@ pub fn encode_descriptor(d: &Descriptor, buf: &mut BytesMut) {
     buf.put_f32_le(d.gyro_range_rad_s);
     buf.put_f32_le(d.accel_range_m_s2);
     buf.put_u8(d.axes.to_u8());
-    buf.put_bytes(0, 3);
+    buf.put_u8(d.absent & crate::sample::ALL_CHANNELS);
+    buf.put_bytes(0, 2);
     buf.put_u32_le(d.device_id);
     put_trailer(buf, start);
 }
@@ -186,7 +192,10 @@ pub fn encode_sample(s: &Sample, buf: &mut BytesMut) {
     let p = HEADER_LEN;
     f[p..p + 8].copy_from_slice(&s.t_ns.to_le_bytes());
     for (i, v) in s.channels().iter().enumerate() {
-        f[p + 8 + 4 * i..p + 12 + 4 * i].copy_from_slice(&(*v as f32).to_le_bytes());
+        // An absent channel is NaN on the wire whatever the sample holds (the descriptor's
+        // absent mask says why).
+        let v = if s.is_absent(i) { f32::NAN } else { *v as f32 };
+        f[p + 8 + 4 * i..p + 12 + 4 * i].copy_from_slice(&v.to_le_bytes());
     }
     let t = s.temp_c.map_or(f32::NAN, |t| t as f32);
     f[p + 32..p + 36].copy_from_slice(&t.to_le_bytes());
@@ -250,6 +259,7 @@ pub(crate) fn parse_descriptor(p: &[u8]) -> Descriptor {
         gyro_range_rad_s: f32_at(p, 8),
         accel_range_m_s2: f32_at(p, 12),
         axes: AxisConvention::from_u8(p[16]),
+        absent: p[17] & crate::sample::ALL_CHANNELS,
         device_id: u32::from_le_bytes(p[20..24].try_into().expect("4 bytes")),
     }
 }

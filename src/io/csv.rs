@@ -9,7 +9,7 @@ use crate::io::format::{CSV_HEADER, write_csv_row};
 /// The log reader and writer live in [`crate::io::log`]; re-exported here for older callers.
 pub use crate::io::log::{read_descriptor, read_log, read_log_span, write_log};
 use crate::io::timing::{TimeFaults, derive_sequence};
-use crate::sample::Sample;
+use crate::sample::{ALL_CHANNELS, Sample, channel_names_of};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 
@@ -136,6 +136,8 @@ struct Layout {
     gyro: GyroUnit,
     accel: AccelUnit,
     time: TimeUnit,
+    /// Channels without a column (bit `c` for channel `c`).
+    absent: u8,
 }
 
 fn detect(header: &[String], o: &ImportOptions, path: &Path) -> Result<Layout, CsvError> {
@@ -183,13 +185,16 @@ fn detect(header: &[String], o: &ImportOptions, path: &Path) -> Result<Layout, C
         });
         idx[k] = found;
     }
-    for k in 1..7 {
-        if idx[k].is_none() {
-            return Err(err(format!(
-                "missing column for {} (name it {:?}, or pass --col {}=NAME)",
-                CANON[k], CANON[k], CANON[k]
-            )));
-        }
+    // A channel without a column is absent (a gyro-only or accel-only sensor, a single axis);
+    // a file with none of the six has no sensor data at all.
+    let absent = (0..6)
+        .filter(|c| idx[c + 1].is_none())
+        .fold(0u8, |m, c| m | 1 << c);
+    if absent == ALL_CHANNELS {
+        return Err(err(
+            "no sensor column: none of gx, gy, gz, ax, ay, az found (name them so, or pass --col gx=NAME ...)"
+                .into(),
+        ));
     }
     if idx[0].is_none() && o.time_from_index_hz.is_none() {
         return Err(err(
@@ -201,19 +206,27 @@ fn detect(header: &[String], o: &ImportOptions, path: &Path) -> Result<Layout, C
             .map(|p| header[p].trim() == CANON[k])
             .unwrap_or(false)
     };
+    // The unit of a triad from its first present column (none needed for an absent triad).
+    let first = |ks: std::ops::RangeInclusive<usize>| ks.into_iter().find(|k| idx[*k].is_some());
     let gyro = o.gyro_unit.map(Ok).unwrap_or_else(|| {
-        if canon_named(1) {
+        let Some(k) = first(1..=3) else {
+            return Ok(GyroUnit::RadS);
+        };
+        if canon_named(k) {
             return Ok(GyroUnit::RadS);
         }
-        gyro_unit_of(&toks[idx[1].expect("checked")]).ok_or_else(|| {
+        gyro_unit_of(&toks[idx[k].expect("present")]).ok_or_else(|| {
             err("cannot tell the gyro unit from the column name: pass --gyro-unit".into())
         })
     })?;
     let accel = o.accel_unit.map(Ok).unwrap_or_else(|| {
-        if canon_named(4) {
+        let Some(k) = first(4..=6) else {
+            return Ok(AccelUnit::MS2);
+        };
+        if canon_named(k) {
             return Ok(AccelUnit::MS2);
         }
-        accel_unit_of(&toks[idx[4].expect("checked")]).ok_or_else(|| {
+        accel_unit_of(&toks[idx[k].expect("present")]).ok_or_else(|| {
             err("cannot tell the accel unit from the column name: pass --accel-unit".into())
         })
     })?;
@@ -228,6 +241,7 @@ fn detect(header: &[String], o: &ImportOptions, path: &Path) -> Result<Layout, C
         gyro,
         accel,
         time,
+        absent,
     })
 }
 
@@ -251,11 +265,22 @@ pub struct ImportReport {
     pub rows: u64,
     /// Sequence and time faults derived from the time stamps (all zero with `--rate`).
     pub time: TimeFaults,
+    /// Channels the file does not have (no column, or a column empty in every row): written as
+    /// absent (the descriptor's absent mask, NaN values), never as zeros.
+    pub absent: Vec<String>,
 }
 
 impl std::fmt::Display for ImportReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} rows; {}", self.rows, self.time)
+        write!(f, "{} rows; {}", self.rows, self.time)?;
+        if !self.absent.is_empty() {
+            write!(
+                f,
+                "; channels absent (no column, or every cell empty): {} — written as absent, not as zeros",
+                self.absent.join(", ")
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -295,6 +320,9 @@ pub fn read_csv_report(
     let ascale = if lay.accel == AccelUnit::G { G0 } else { 1.0 };
     let mut out = Vec::new();
     let mut t0: Option<f64> = None;
+    // Empty cells per channel, and the line of the first.
+    let mut empty = [0usize; 6];
+    let mut first_empty: [Option<usize>; 6] = [None; 6];
     for (i, line) in lines.enumerate() {
         let line = line.map_err(io)?;
         let lineno = i + 2;
@@ -317,7 +345,9 @@ pub fn read_csv_report(
                         header[p]
                     ),
                 })?;
-            if cell.is_empty() && k == 7 {
+            if cell.is_empty() && k != 0 {
+                // Temperature may be empty; an empty channel cell is judged after the last row
+                // (a column empty in every row is an absent channel).
                 return Ok(None);
             }
             cell.parse::<f64>().map(Some).map_err(|_| CsvError::Cell {
@@ -353,17 +383,60 @@ pub fn read_csv_report(
             });
         }
         s.t_ns = t_ns as u64;
-        let mut ch = [0.0; 6];
+        let mut ch = [f64::NAN; 6];
         for (c, v) in ch.iter_mut().enumerate() {
+            if lay.absent & (1 << c) != 0 {
+                continue;
+            }
             let scale = if c < 3 { gscale } else { ascale };
-            *v = get(c + 1)?.expect("channel column resolved") * scale;
+            match get(c + 1)? {
+                Some(x) => *v = x * scale,
+                None => {
+                    empty[c] += 1;
+                    first_empty[c].get_or_insert(lineno);
+                }
+            }
         }
         s.set_channels(&ch);
         s.temp_c = get(7)?;
         out.push(s);
     }
+    // A channel column empty in every row is an absent channel; a few empty cells are an error
+    // (a value is missing, and nothing says what it was).
+    let mut absent = lay.absent;
+    for c in 0..6 {
+        let Some(line) = first_empty[c] else { continue };
+        if empty[c] == out.len() {
+            absent |= 1 << c;
+            continue;
+        }
+        let p = lay.idx[c + 1].expect("present channel");
+        return Err(CsvError::Cell {
+            path: path.into(),
+            line,
+            col: p + 1,
+            cell: String::new(),
+            name: header[p].clone(),
+        });
+    }
+    if absent == ALL_CHANNELS {
+        return Err(CsvError::Columns {
+            path: path.into(),
+            msg:
+                "no sensor data: every channel column (gx, gy, gz, ax, ay, az) is empty or missing"
+                    .into(),
+            header: header.join(","),
+        });
+    }
+    for s in out.iter_mut() {
+        s.absent = absent;
+    }
     let mut report = ImportReport {
         rows: out.len() as u64,
+        absent: channel_names_of(absent)
+            .into_iter()
+            .map(str::to_string)
+            .collect(),
         ..ImportReport::default()
     };
     let rate = match o.time_from_index_hz {
@@ -379,6 +452,7 @@ pub fn read_csv_report(
         accel_range_m_s2: o.accel_range_m_s2,
         axes: Default::default(),
         device_id: o.device_id,
+        absent,
     };
     Ok((d, out, report))
 }

@@ -18,8 +18,12 @@ pub fn t_seconds(t_ns: u64) -> String {
 /// Append one CSV row (values at the f32 precision of the wire, shortest round-trip form).
 pub fn write_csv_row(s: &Sample, out: &mut String) {
     out.push_str(&t_seconds(s.t_ns));
-    for v in s.channels() {
-        let _ = write!(out, ",{}", v as f32);
+    for (c, v) in s.channels().into_iter().enumerate() {
+        if s.is_absent(c) {
+            out.push(','); // absent: an empty cell (NaN is a present channel's non-finite value)
+        } else {
+            let _ = write!(out, ",{}", v as f32);
+        }
     }
     out.push(',');
     if let Some(t) = s.temp_c {
@@ -58,6 +62,18 @@ pub fn write_json_row(s: &Sample, out: &mut String) {
     let _ = write!(out, ",\"flags\":{}", s.flags);
     json_array(out, "bias", s.bias.iter().copied());
     json_array(out, "bias_sd", s.bias_sd.iter().copied());
+    if s.absent != 0 {
+        // Absent channels are null above like a non-finite value; this key says which are
+        // absent (the sensor has no such channel), not bad.
+        out.push_str(",\"absent\":[");
+        for (i, n) in crate::sample::channel_names_of(s.absent).iter().enumerate() {
+            if i > 0 {
+                out.push(',');
+            }
+            let _ = write!(out, "\"{n}\"");
+        }
+        out.push(']');
+    }
     out.push_str("}\n");
 }
 

@@ -7,7 +7,9 @@
 //! orientation unknown (`orientation_covariance[0] = -1`, the message's convention),
 //! angular velocity and linear acceleration cleaned, and on the two covariance diagonals the
 //! variance of the published bias estimate (σ² of `bias_sd`, per axis; all zero = unknown, as
-//! ROS reads it, while the bias stage has no estimate). Axes are ROS's FLU: a sensor that
+//! ROS reads it, while the bias stage has no estimate); a triad the sensor does not have (all
+//! three channels absent, a gyro-only or accel-only sensor) has `covariance[0] = -1`, the
+//! message's "no data", and zero values. Axes are ROS's FLU: a sensor that
 //! declared FRD has y and z negated. The log time is the sensor time too (deterministic).
 //!
 //! Health: `std_msgs/msg/String` with one JSON object per second of sensor time (and one at the
@@ -130,16 +132,28 @@ impl<W: Write + Seek> ImuBagWriter<W> {
         };
         let mut oc = [0.0; 9];
         oc[0] = -1.0;
+        // A triad the sensor does not have (every axis absent): "no data" by the message's own
+        // convention, covariance[0] = -1 (values 0, to be ignored); a single absent axis of a
+        // present triad stays NaN.
+        let triad_absent = |c0: usize| (c0..c0 + 3).all(|c| s.is_absent(c));
+        let (mut av, mut avc) = ([v(0), v(1), v(2)], diag(0));
+        if triad_absent(0) {
+            (av, avc) = ([0.0; 3], oc);
+        }
+        let (mut la, mut lac) = ([v(3), v(4), v(5)], diag(3));
+        if triad_absent(3) {
+            (la, lac) = ([0.0; 3], oc);
+        }
         ImuMsg {
             sec: (s.t_ns / 1_000_000_000) as i32,
             nanosec: (s.t_ns % 1_000_000_000) as u32,
             frame_id: self.opts.frame_id.clone(),
             orientation: [0.0, 0.0, 0.0, 1.0],
             orientation_covariance: oc,
-            angular_velocity: [v(0), v(1), v(2)],
-            angular_velocity_covariance: diag(0),
-            linear_acceleration: [v(3), v(4), v(5)],
-            linear_acceleration_covariance: diag(3),
+            angular_velocity: av,
+            angular_velocity_covariance: avc,
+            linear_acceleration: la,
+            linear_acceleration_covariance: lac,
             angular_velocity_at: 0,
             little_endian: true,
         }

@@ -13,7 +13,14 @@
 //!   is offered like a network sink — batches it cannot take are dropped and counted — until
 //!   its queue has drained to half, when it is waited for again. A stuck consumer therefore
 //!   costs the stream one stall time, once, and never freezes the daemon or its health reports.
-//!   (Inline sinks stay waited for: their samples must meet the carriers queued ahead of them.)
+//! * Inline sinks (serial device, file, pseudo-terminal) are local sinks too, with one more
+//!   duty: each sample must meet its own carrier, which travels ahead of it in the side stream.
+//!   What a stuck inline sink drops (sample batches, side batches) is told to its writer by a
+//!   [`SinkItem::Skip`] marker queued before the next item that gets through, so the writer
+//!   knows the index of every sample and carrier: a sample whose carrier was dropped, and a
+//!   carrier whose sample was dropped, are dropped too (counted), and a frame that carries
+//!   several samples (UBX ESF-RAW) is dropped whole when one of them was, so nothing raw is
+//!   ever written as cleaned and no sample lands in another's carrier.
 
 use crate::config::{Format, Sink};
 use crate::frame::Descriptor;
@@ -39,6 +46,14 @@ pub enum SinkItem {
     /// A health report, written beside the samples by sinks whose format carries it (native
     /// frames, JSON lines); CSV and inline sinks skip it.
     Health(HealthFrame),
+    /// Inline sinks only: since the previous item, this many samples and sample carriers were
+    /// dropped (the sink was stuck); see the module docs.
+    Skip {
+        samples: u64,
+        carriers: u64,
+        /// The protocol announced in a dropped side batch (it applies to what follows).
+        protocol: Option<crate::frame::Protocol>,
+    },
 }
 
 /// How long a local sink's full queue is waited for before the sink counts as stuck.
@@ -96,6 +111,8 @@ pub struct SinkStats {
     pub health_out: AtomicU64,
     /// Write/send errors.
     pub errors: AtomicU64,
+    /// Inline sinks: pass-through messages (not IMU data) dropped with a side batch while stuck.
+    pub messages_dropped: AtomicU64,
     /// TCP clients connected now.
     pub clients: Mutex<Vec<Arc<ClientCounters>>>,
     /// TCP clients that have left.
@@ -110,6 +127,8 @@ pub struct SinkReport {
     pub dropped: u64,
     pub health_out: u64,
     pub errors: u64,
+    /// Inline sinks: pass-through messages dropped while stuck.
+    pub messages_dropped: u64,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub clients: Vec<ClientStats>,
     #[serde(skip_serializing_if = "is_zero_gone")]
@@ -143,6 +162,11 @@ pub struct SinkHandle {
     pub stall: Duration,
     /// Set while the sink is stuck (dropping instead of waiting).
     stuck: AtomicBool,
+    /// Inline sinks: samples and carriers dropped since the last item that got through, not
+    /// yet told to the writer (a [`SinkItem::Skip`] goes ahead of the next item).
+    skip_samples: AtomicU64,
+    skip_carriers: AtomicU64,
+    skip_protocol: Mutex<Option<crate::frame::Protocol>>,
 }
 
 impl SinkStats {
@@ -153,6 +177,7 @@ impl SinkStats {
             dropped: self.dropped.load(Relaxed),
             health_out: self.health_out.load(Relaxed),
             errors: self.errors.load(Relaxed),
+            messages_dropped: self.messages_dropped.load(Relaxed),
             clients: self
                 .clients
                 .lock()
@@ -179,30 +204,23 @@ impl SinkStats {
 }
 
 impl SinkHandle {
-    /// Offer an item. Network sinks: dropped (and counted) when the queue is full. Local sinks:
-    /// waited for up to `stall`, then dropped while the sink is stuck (see the module docs).
+    /// Offer an item. Network sinks: dropped (and counted) when the queue is full. Local sinks
+    /// (inline ones included): waited for up to `stall`, then dropped while the sink is stuck
+    /// (see the module docs).
     pub async fn offer(&self, item: SinkItem) {
-        let item = match self.tx.try_send(item) {
-            Ok(()) => {
-                return;
-            }
-            Err(mpsc::error::TrySendError::Closed(_)) => return,
-            Err(mpsc::error::TrySendError::Full(item)) => item,
+        let item = match self.try_put(item) {
+            Put::Sent | Put::Closed => return,
+            Put::Full(item) => *item,
         };
-        if self.lossless && self.wants_side {
-            // Inline: carriers and samples must stay paired, so never drop.
-            let _ = self.tx.send(item).await;
-            return;
-        }
         if self.lossless && self.stuck.load(Relaxed) && self.tx.capacity() * 2 >= SINK_QUEUE {
             self.stuck.store(false, Relaxed);
             tracing::info!(sink = %self.name, "sink caught up; no longer dropping");
         }
         let item = if self.lossless && !self.stuck.load(Relaxed) {
-            match self.tx.send_timeout(item, self.stall).await {
-                Ok(()) => return,
-                Err(mpsc::error::SendTimeoutError::Closed(_)) => return,
-                Err(mpsc::error::SendTimeoutError::Timeout(item)) => {
+            match self.put_within_stall(item).await {
+                Put::Sent | Put::Closed => return,
+                Put::Full(item) => {
+                    let item = *item;
                     self.stuck.store(true, Relaxed);
                     tracing::warn!(
                         sink = %self.name,
@@ -215,8 +233,99 @@ impl SinkHandle {
         } else {
             item
         };
-        if let SinkItem::Samples(b) = item {
-            self.stats.dropped.fetch_add(b.len() as u64, Relaxed);
+        self.dropped(item);
+    }
+
+    /// The pending skip marker of an inline sink, if any.
+    fn pending_skip(&self) -> Option<SinkItem> {
+        let (samples, carriers) = (
+            self.skip_samples.load(Relaxed),
+            self.skip_carriers.load(Relaxed),
+        );
+        let protocol = self.skip_protocol.lock().ok().and_then(|p| *p);
+        (self.wants_side && (samples + carriers > 0 || protocol.is_some())).then_some(
+            SinkItem::Skip {
+                samples,
+                carriers,
+                protocol,
+            },
+        )
+    }
+
+    fn skip_sent(&self) {
+        self.skip_samples.store(0, Relaxed);
+        self.skip_carriers.store(0, Relaxed);
+        if let Ok(mut p) = self.skip_protocol.lock() {
+            *p = None;
+        }
+    }
+
+    /// Queue `item` now (after the pending skip marker).
+    fn try_put(&self, item: SinkItem) -> Put {
+        if let Some(skip) = self.pending_skip() {
+            match self.tx.try_send(skip) {
+                Ok(()) => self.skip_sent(),
+                Err(mpsc::error::TrySendError::Full(_)) => return Put::Full(Box::new(item)),
+                Err(mpsc::error::TrySendError::Closed(_)) => return Put::Closed,
+            }
+        }
+        match self.tx.try_send(item) {
+            Ok(()) => Put::Sent,
+            Err(mpsc::error::TrySendError::Full(item)) => Put::Full(Box::new(item)),
+            Err(mpsc::error::TrySendError::Closed(_)) => Put::Closed,
+        }
+    }
+
+    /// Queue `item` (after the pending skip marker), waiting at most the stall time in all.
+    async fn put_within_stall(&self, item: SinkItem) -> Put {
+        let deadline = tokio::time::Instant::now() + self.stall;
+        if let Some(skip) = self.pending_skip() {
+            match self.tx.send_timeout(skip, self.stall).await {
+                Ok(()) => self.skip_sent(),
+                Err(mpsc::error::SendTimeoutError::Timeout(_)) => return Put::Full(Box::new(item)),
+                Err(mpsc::error::SendTimeoutError::Closed(_)) => return Put::Closed,
+            }
+        }
+        let left = deadline.saturating_duration_since(tokio::time::Instant::now());
+        match self.tx.send_timeout(item, left).await {
+            Ok(()) => Put::Sent,
+            Err(mpsc::error::SendTimeoutError::Timeout(item)) => Put::Full(Box::new(item)),
+            Err(mpsc::error::SendTimeoutError::Closed(_)) => Put::Closed,
+        }
+    }
+
+    /// Count what a full queue lost; an inline sink's writer is told before its next item.
+    fn dropped(&self, item: SinkItem) {
+        match item {
+            SinkItem::Samples(b) => {
+                self.stats.dropped.fetch_add(b.len() as u64, Relaxed);
+                if self.wants_side {
+                    self.skip_samples.fetch_add(b.len() as u64, Relaxed);
+                }
+            }
+            SinkItem::Side(items) => {
+                use crate::io::source::SideItem;
+                let carriers = items
+                    .iter()
+                    .filter(|i| matches!(i, SideItem::Sample(_)))
+                    .count();
+                let others = items
+                    .iter()
+                    .filter(|i| matches!(i, SideItem::Other(_)))
+                    .count();
+                self.skip_carriers.fetch_add(carriers as u64, Relaxed);
+                self.stats
+                    .messages_dropped
+                    .fetch_add(others as u64, Relaxed);
+                let announced = items.iter().rev().find_map(|i| match i {
+                    SideItem::Protocol(p) => Some(*p),
+                    _ => None,
+                });
+                if let (Some(p), Ok(mut slot)) = (announced, self.skip_protocol.lock()) {
+                    *slot = Some(p);
+                }
+            }
+            _ => {}
         }
     }
 
@@ -224,6 +333,15 @@ impl SinkHandle {
     pub fn is_stuck(&self) -> bool {
         self.stuck.load(Relaxed)
     }
+}
+
+/// What became of an item offered to a sink's queue.
+enum Put {
+    Sent,
+    /// The sink has ended.
+    Closed,
+    /// The queue is full (or stayed full for the stall time): the item is handed back.
+    Full(Box<SinkItem>),
 }
 
 /// Queue length (in batches) of a sink's own input.
@@ -316,6 +434,9 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
                 task,
                 stall: DEFAULT_STALL,
                 stuck: AtomicBool::new(false),
+                skip_samples: AtomicU64::new(0),
+                skip_carriers: AtomicU64::new(0),
+                skip_protocol: Mutex::new(None),
             });
         }
     };
@@ -328,6 +449,9 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
         task,
         stall: DEFAULT_STALL,
         stuck: AtomicBool::new(false),
+        skip_samples: AtomicU64::new(0),
+        skip_carriers: AtomicU64::new(0),
+        skip_protocol: Mutex::new(None),
     })
 }
 
@@ -347,7 +471,7 @@ async fn write_stream<W: tokio::io::AsyncWrite + Unpin>(
         match &item {
             SinkItem::Descriptor(d) if !started => enc.preamble(d, as_file, &mut buf),
             SinkItem::Descriptor(d) => enc.descriptor(d, &mut buf),
-            SinkItem::Side(_) => continue,
+            SinkItem::Side(_) | SinkItem::Skip { .. } => continue,
             SinkItem::Health(h) => {
                 if !started || !enc.health(h, &mut buf) {
                     // Nothing to say before the stream's preamble, or a format without health.
@@ -422,7 +546,7 @@ async fn tcp_server(
                 let n = match &item {
                     SinkItem::Descriptor(d) => { descriptor = *d; enc.descriptor(d, &mut buf); 0 }
                     SinkItem::Samples(b) => { for s in b.iter() { enc.sample(s, &mut buf); } b.len() as u64 }
-                    SinkItem::Side(_) => 0,
+                    SinkItem::Side(_) | SinkItem::Skip { .. } => 0,
                     SinkItem::Health(h) => { enc.health(h, &mut buf); 0 }
                 };
                 if buf.is_empty() { continue; }
@@ -587,7 +711,8 @@ fn is_char_device(p: &std::path::Path) -> bool {
 /// Inline output: each cleaned sample goes back into its carrier, messages that are not IMU data
 /// are written unchanged, all in input order. The side stream arrives ahead of the samples (the
 /// pipeline may hold samples for its look-ahead); a pass-through message is written as soon as
-/// every sample before it has been.
+/// every sample before it has been. Samples and carriers are paired by index, so what a stuck
+/// sink dropped ([`SinkItem::Skip`]) never shifts a sample into another's carrier.
 async fn inline_writer<W: tokio::io::AsyncWrite + Unpin, K: Send + 'static>(
     mut w: W,
     _keep: Option<K>,
@@ -596,33 +721,25 @@ async fn inline_writer<W: tokio::io::AsyncWrite + Unpin, K: Send + 'static>(
 ) {
     use crate::frame::inline::InlineEncoder;
     use crate::io::source::SideItem;
-    use std::collections::VecDeque;
-    let mut enc: Option<InlineEncoder> = None;
-    let mut queue: VecDeque<SideItem> = VecDeque::new();
+    let mut p = InlinePairing::default();
     let mut buf = BytesMut::with_capacity(1 << 16);
-    let mut unmatched = 0u64;
     while let Some(item) = rx.recv().await {
         buf.clear();
         match item {
             SinkItem::Descriptor(_) | SinkItem::Health(_) => continue,
-            SinkItem::Side(items) => queue.extend(items.iter().cloned()),
+            SinkItem::Side(items) => p.side(&items),
+            SinkItem::Skip {
+                samples,
+                carriers,
+                protocol,
+            } => p.skip(samples, carriers, protocol),
             SinkItem::Samples(b) => {
-                for s in b.iter() {
-                    drain_others(&mut queue, &mut enc, &mut buf);
-                    match queue.pop_front() {
-                        Some(SideItem::Sample(c)) => {
-                            let e = enc.get_or_insert_with(|| {
-                                InlineEncoder::new(crate::frame::Protocol::Native, 0.0, 0.0)
-                            });
-                            e.sample(c.as_ref(), s, &mut buf);
-                        }
-                        _ => unmatched += 1,
-                    }
-                }
-                stats.samples_out.fetch_add(b.len() as u64, Relaxed);
+                let (written, dropped) = p.samples(&b, &mut buf);
+                stats.samples_out.fetch_add(written, Relaxed);
+                stats.dropped.fetch_add(dropped, Relaxed);
             }
         }
-        drain_others(&mut queue, &mut enc, &mut buf);
+        drain_others(&mut p.queue, &mut p.enc, &mut buf);
         if !buf.is_empty() && (w.write_all(&buf).await.is_err() || w.flush().await.is_err()) {
             stats.errors.fetch_add(1, Relaxed);
             break;
@@ -630,32 +747,135 @@ async fn inline_writer<W: tokio::io::AsyncWrite + Unpin, K: Send + 'static>(
     }
     // End of stream: what is left (messages after the last sample, a half-filled frame).
     buf.clear();
-    while let Some(it) = queue.pop_front() {
+    while let Some((_, it)) = p.queue.pop_front() {
         if let SideItem::Other(b) = it {
-            enc.get_or_insert_with(|| InlineEncoder::new(crate::frame::Protocol::Native, 0.0, 0.0))
+            p.enc
+                .get_or_insert_with(|| InlineEncoder::new(crate::frame::Protocol::Native, 0.0, 0.0))
                 .other(&b, &mut buf);
         }
     }
-    if let Some(e) = enc.as_mut() {
+    if let Some(e) = p.enc.as_mut() {
         e.flush(&mut buf);
     }
-    if unmatched > 0 {
-        stats.errors.fetch_add(unmatched, Relaxed);
-        tracing::warn!(unmatched, "inline sink: samples without a carrier");
+    if p.unmatched > 0 {
+        stats.errors.fetch_add(p.unmatched, Relaxed);
+        tracing::warn!(
+            unmatched = p.unmatched,
+            "inline sink: samples without a carrier"
+        );
     }
     let _ = w.write_all(&buf).await;
     let _ = w.flush().await;
 }
 
+/// The inline writer's pairing of samples with their carriers by index (module docs).
+#[derive(Default)]
+struct InlinePairing {
+    enc: Option<crate::frame::inline::InlineEncoder>,
+    /// Side items not yet written, each carrier with its index.
+    queue: std::collections::VecDeque<(u64, crate::io::source::SideItem)>,
+    /// Index of the next carrier and of the next sample to arrive (dropped ones counted).
+    carriers_in: u64,
+    samples_in: u64,
+    /// A multi-sample frame one of whose samples was dropped: its other samples go too.
+    poisoned: Option<Bytes>,
+    /// Samples that came with no carrier at all (a source bug, counted as errors).
+    unmatched: u64,
+}
+
+impl InlinePairing {
+    fn side(&mut self, items: &[crate::io::source::SideItem]) {
+        use crate::io::source::SideItem;
+        for it in items {
+            let k = self.carriers_in;
+            if matches!(it, SideItem::Sample(_)) {
+                self.carriers_in += 1;
+            }
+            self.queue.push_back((k, it.clone()));
+        }
+    }
+
+    fn skip(&mut self, samples: u64, carriers: u64, protocol: Option<crate::frame::Protocol>) {
+        self.samples_in += samples;
+        self.carriers_in += carriers;
+        if let Some(p) = protocol {
+            self.enc = Some(crate::frame::inline::InlineEncoder::new(p, 0.0, 0.0));
+        }
+    }
+
+    /// Drop carrier `c` (its sample was dropped): and the whole frame it is part of.
+    fn discard(&mut self, c: Option<crate::frame::protocol::Carrier>) {
+        if let Some(c) = c {
+            if let Some(e) = self.enc.as_mut() {
+                e.discard(&c.frame);
+            }
+            if c.slots > 1 {
+                self.poisoned = Some(c.frame);
+            }
+        }
+    }
+
+    fn is_poisoned(&self, c: &Option<crate::frame::protocol::Carrier>) -> bool {
+        matches!((&self.poisoned, c), (Some(p), Some(c)) if p.as_ptr() == c.frame.as_ptr() && p.len() == c.frame.len())
+    }
+
+    /// Write a batch of samples into their carriers; (written, dropped).
+    fn samples(&mut self, b: &[Sample], buf: &mut BytesMut) -> (u64, u64) {
+        use crate::frame::inline::InlineEncoder;
+        use crate::io::source::SideItem;
+        let (mut written, mut dropped) = (0, 0);
+        for s in b {
+            let i = self.samples_in;
+            self.samples_in += 1;
+            loop {
+                drain_others(&mut self.queue, &mut self.enc, buf);
+                match self.queue.front() {
+                    Some((k, SideItem::Sample(_))) if *k < i => {
+                        // A carrier whose sample was dropped.
+                        if let Some((_, SideItem::Sample(c))) = self.queue.pop_front() {
+                            self.discard(c);
+                        }
+                    }
+                    Some((k, SideItem::Sample(_))) if *k == i => {
+                        let Some((_, SideItem::Sample(c))) = self.queue.pop_front() else {
+                            unreachable!("front is a carrier")
+                        };
+                        if self.is_poisoned(&c) {
+                            self.discard(c);
+                            dropped += 1;
+                        } else {
+                            let e = self.enc.get_or_insert_with(|| {
+                                InlineEncoder::new(crate::frame::Protocol::Native, 0.0, 0.0)
+                            });
+                            e.sample(c.as_ref(), s, buf);
+                            written += 1;
+                        }
+                        break;
+                    }
+                    _ => {
+                        if i < self.carriers_in {
+                            dropped += 1; // its carrier was dropped
+                        } else {
+                            self.unmatched += 1;
+                        }
+                        break;
+                    }
+                }
+            }
+        }
+        (written, dropped)
+    }
+}
+
 /// Write the pass-through messages at the front of the queue (no sample precedes them).
 fn drain_others(
-    queue: &mut std::collections::VecDeque<crate::io::source::SideItem>,
+    queue: &mut std::collections::VecDeque<(u64, crate::io::source::SideItem)>,
     enc: &mut Option<crate::frame::inline::InlineEncoder>,
     buf: &mut BytesMut,
 ) {
     use crate::frame::inline::InlineEncoder;
     use crate::io::source::SideItem;
-    while let Some(front) = queue.front() {
+    while let Some((_, front)) = queue.front() {
         match front {
             SideItem::Protocol(p) => {
                 // MAVLink RAW_IMU frames carry the configured scales in their carrier; the
@@ -672,5 +892,82 @@ fn drain_others(
             }
             SideItem::Sample(_) => break,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::protocol::Carrier;
+    use crate::io::source::SideItem;
+
+    fn carrier(frame: &Bytes, slot: u16, slots: u16) -> SideItem {
+        SideItem::Sample(Some(Carrier {
+            frame: frame.clone(),
+            slot,
+            slots,
+            ..Carrier::default()
+        }))
+    }
+
+    fn samples(n: usize) -> Vec<Sample> {
+        (0..n)
+            .map(|i| Sample {
+                seq: i as u32,
+                ..Sample::default()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn pairing_by_index_survives_dropped_samples_and_dropped_carriers() {
+        let mut p = InlinePairing::default();
+        let mut buf = BytesMut::new();
+        let frames: Vec<Bytes> = (0..10u8).map(|i| Bytes::from(vec![i; 4])).collect();
+        // Carriers 0..6 arrive; samples 0, 1 are written, 2..4 dropped (Skip), 4, 5 written.
+        p.side(
+            &frames[..6]
+                .iter()
+                .map(|f| carrier(f, 0, 1))
+                .collect::<Vec<_>>(),
+        );
+        assert_eq!(p.samples(&samples(2), &mut buf), (2, 0));
+        p.skip(2, 0, None);
+        assert_eq!(p.samples(&samples(2), &mut buf), (2, 0));
+        assert!(
+            p.queue.is_empty(),
+            "the dropped samples' carriers are discarded"
+        );
+        // Carriers 6, 7 dropped (Skip), 8, 9 arrive: samples 6, 7 have none and are dropped.
+        p.skip(0, 2, None);
+        p.side(
+            &frames[8..]
+                .iter()
+                .map(|f| carrier(f, 0, 1))
+                .collect::<Vec<_>>(),
+        );
+        assert_eq!(p.samples(&samples(4), &mut buf), (2, 2));
+        assert_eq!((p.unmatched, p.queue.len()), (0, 0));
+        // A sample with no carrier ever: unmatched (an error), not a drop.
+        assert_eq!(p.samples(&samples(1), &mut buf), (0, 0));
+        assert_eq!(p.unmatched, 1);
+    }
+
+    #[test]
+    fn a_frame_with_several_samples_is_dropped_whole_when_one_of_them_was() {
+        let mut p = InlinePairing::default();
+        let mut buf = BytesMut::new();
+        let f = Bytes::from(vec![7u8; 8]);
+        let g = Bytes::from(vec![8u8; 8]);
+        p.side(&[
+            carrier(&f, 0, 3),
+            carrier(&f, 1, 3),
+            carrier(&f, 2, 3),
+            carrier(&g, 0, 1),
+        ]);
+        p.skip(1, 0, None); // slot 0's sample dropped
+        // Slots 1 and 2 would otherwise go out in a frame whose slot 0 is still raw.
+        assert_eq!(p.samples(&samples(3), &mut buf), (1, 2));
+        assert!(p.queue.is_empty());
     }
 }

@@ -24,6 +24,7 @@ pub fn descriptor(sim: &Simulator) -> Descriptor {
         accel_range_m_s2: i.accel_range_m_s2 as f32,
         axes: crate::frame::AxisConvention::Frd,
         device_id: i.device_id,
+        absent: 0,
     }
 }
 

@@ -66,6 +66,7 @@ pub fn descriptor() -> Descriptor {
         accel_range_m_s2: 156.9,
         axes: imuprep::frame::AxisConvention::Frd,
         device_id: 7,
+        absent: 0,
     }
 }
 

@@ -653,8 +653,10 @@ impl BiasStage {
         let g = calibrate(&self.gyro_cal, &s.gyro);
         let a = calibrate(&self.accel_cal, &s.accel);
         let cal = [g[0], g[1], g[2], a[0], a[1], a[2]];
+        // An absent channel is NaN and not finite, so it is never a measurement below; it is
+        // no bad value either (not counted, not flagged).
         let finite: [bool; N_CHANNELS] = std::array::from_fn(|c| cal[c].is_finite());
-        if finite.iter().any(|f| !f) {
+        if (0..N_CHANNELS).any(|c| !finite[c] && !s.is_absent(c)) {
             s.flags |= flags::NON_FINITE;
             self.counters.non_finite += 1;
         }
@@ -680,6 +682,9 @@ impl BiasStage {
         let mut eff = [0.0; N_CHANNELS];
         let mut effect_applied = false;
         for c in 0..N_CHANNELS {
+            if s.is_absent(c) {
+                continue; // no effect is compensated on a channel the sensor does not have
+            }
             let st = &mut self.ch[c];
             if let Some(tc) = st.temp.as_mut()
                 && let Some(term) = tc.update(s.temp_c, steps)
@@ -716,8 +721,12 @@ impl BiasStage {
         let still = if repeat {
             self.detector.is_still()
         } else {
-            self.detector
-                .update(&[y[0], y[1], y[2]], &[y[3], y[4], y[5]], &gyro_ref)
+            self.detector.update_present(
+                &[y[0], y[1], y[2]],
+                &[y[3], y[4], y[5]],
+                &gyro_ref,
+                s.absent,
+            )
         };
         if still {
             s.flags |= flags::STILL;
@@ -751,6 +760,13 @@ impl BiasStage {
         let lead_steps = self.lead_steps;
         let mut out = [0.0; N_CHANNELS];
         for (c, st) in self.ch.iter_mut().enumerate() {
+            if s.is_absent(c) {
+                // Nothing measured, nothing subtracted: NaN out, no bias, not warming up.
+                out[c] = f64::NAN;
+                s.bias[c] = 0.0;
+                s.bias_sd[c] = 0.0;
+                continue;
+            }
             let mut sub = eff[c];
             if let Some(est) = st.est.as_ref() {
                 let (b, var) = if lead_steps == est.lead_nominal.steps {

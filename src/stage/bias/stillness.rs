@@ -284,21 +284,58 @@ impl StillnessDetector {
         accel_m_s2: &[f64; 3],
         gyro_ref: &[Option<(f64, f64)>; 3],
     ) -> bool {
+        self.update_present(gyro_rad_s, accel_m_s2, gyro_ref, 0)
+    }
+
+    /// [`StillnessDetector::update`] for a sensor without some channels: `absent` bit `c` for
+    /// channel `c` (gx gy gz ax ay az). An absent axis takes no part in any test (it enters the
+    /// window as a constant 0); a triad with no axis present casts no vote (its tests pass), and
+    /// the gravity-norm test needs all three accel axes. With nothing present the sample is not
+    /// still. `absent = 0` is exactly [`StillnessDetector::update`].
+    #[inline]
+    pub fn update_present(
+        &mut self,
+        gyro_rad_s: &[f64; 3],
+        accel_m_s2: &[f64; 3],
+        gyro_ref: &[Option<(f64, f64)>; 3],
+        absent: u8,
+    ) -> bool {
         let n = self.window;
-        if gyro_rad_s
-            .iter()
-            .chain(accel_m_s2.iter())
-            .any(|v| !v.is_finite())
+        let on = |c: usize| absent & (1 << c) == 0;
+        let gyro_on = absent & 0b000_111 != 0b000_111;
+        let accel_on = absent & 0b111_000 != 0b111_000;
+        let norm_on = absent & 0b111_000 == 0;
+        if !(gyro_on || accel_on)
+            || gyro_rad_s
+                .iter()
+                .chain(accel_m_s2.iter())
+                .enumerate()
+                .any(|(c, v)| on(c) && !v.is_finite())
         {
             self.run = 0;
             self.still = false;
             self.features.candidate = false;
             return false;
         }
-        let norm = (accel_m_s2[0] * accel_m_s2[0]
-            + accel_m_s2[1] * accel_m_s2[1]
-            + accel_m_s2[2] * accel_m_s2[2])
-            .sqrt();
+        let keep = |c: usize, v: f64| if on(c) { v } else { 0.0 };
+        let gyro_rad_s = &[
+            keep(0, gyro_rad_s[0]),
+            keep(1, gyro_rad_s[1]),
+            keep(2, gyro_rad_s[2]),
+        ];
+        let accel_m_s2 = &[
+            keep(3, accel_m_s2[0]),
+            keep(4, accel_m_s2[1]),
+            keep(5, accel_m_s2[2]),
+        ];
+        let norm = if norm_on {
+            (accel_m_s2[0] * accel_m_s2[0]
+                + accel_m_s2[1] * accel_m_s2[1]
+                + accel_m_s2[2] * accel_m_s2[2])
+                .sqrt()
+        } else {
+            0.0
+        };
         // Lag-1 products (the first sample pairs with itself: it only biases ρ of the first
         // window, towards 1, i.e. towards caution).
         let lag = |a: usize| {
@@ -346,18 +383,22 @@ impl StillnessDetector {
         let gyro_sd = (var[0] + var[1] + var[2]).sqrt();
         let accel_sd = (var[3] + var[4] + var[5]).sqrt();
         let full = self.filled == n;
-        if full && gyro_sd > 0.0 && accel_sd > 0.0 {
+        if full && (!gyro_on || gyro_sd > 0.0) && (!accel_on || accel_sd > 0.0) {
             // Minimum statistics: fall at once, rise slowly.
-            self.floor_g = if self.floor_g.is_nan() {
-                gyro_sd
-            } else {
-                (self.floor_g * self.rise).min(gyro_sd)
-            };
-            self.floor_a = if self.floor_a.is_nan() {
-                accel_sd
-            } else {
-                (self.floor_a * self.rise).min(accel_sd)
-            };
+            if gyro_on {
+                self.floor_g = if self.floor_g.is_nan() {
+                    gyro_sd
+                } else {
+                    (self.floor_g * self.rise).min(gyro_sd)
+                };
+            }
+            if accel_on {
+                self.floor_a = if self.floor_a.is_nan() {
+                    accel_sd
+                } else {
+                    (self.floor_a * self.rise).min(accel_sd)
+                };
+            }
         }
         // Per-axis σ: the window's own, no lower than the floor's share (a sample that leaves the
         // window's spread is an onset; a quiet window must not make ordinary noise look like
@@ -366,6 +407,7 @@ impl StillnessDetector {
         let ax_floor_a = self.floor_a * self.floor_a / 3.0;
         let dev = |a: usize, b: usize, floor2: f64| {
             (a..b)
+                .filter(|c| on(*c))
                 .map(|c| (row[c] - mean[c]).abs() / var[c].max(floor2).sqrt())
                 .fold(0.0f64, f64::max)
         };
@@ -398,14 +440,17 @@ impl StillnessDetector {
             candidate: false,
         };
         let k = self.s.noise_factor;
+        // A triad with no axis present casts no vote (its tests pass).
         let quiet = full
-            && f.gyro_sd_rad_s <= k * self.floor_g
-            && f.gyro_sd_rad_s <= self.s.gyro_sd_max_rad_s
-            && f.accel_sd_m_s2 <= k * self.floor_a
-            && f.accel_sd_m_s2 <= self.s.accel_sd_max_m_s2
-            && f.gyro_instant_sigma <= self.s.instant_k
-            && f.accel_instant_sigma <= self.s.instant_k
-            && f.accel_norm_dev_m_s2 <= self.s.accel_norm_dev_max_m_s2;
+            && (!gyro_on
+                || (f.gyro_sd_rad_s <= k * self.floor_g
+                    && f.gyro_sd_rad_s <= self.s.gyro_sd_max_rad_s
+                    && f.gyro_instant_sigma <= self.s.instant_k))
+            && (!accel_on
+                || (f.accel_sd_m_s2 <= k * self.floor_a
+                    && f.accel_sd_m_s2 <= self.s.accel_sd_max_m_s2
+                    && f.accel_instant_sigma <= self.s.instant_k))
+            && (!norm_on || f.accel_norm_dev_m_s2 <= self.s.accel_norm_dev_max_m_s2);
         let mean_ok = f.gyro_mean_sigma.is_nan() || f.gyro_mean_sigma <= self.s.mean_k;
         if quiet {
             self.run = self.run.saturating_add(1);

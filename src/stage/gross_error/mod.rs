@@ -62,6 +62,10 @@ const VERDICT_FLAGS: u32 = flags::REPLACED
     | flags::SAT_ANY
     | flags::WARMING_UP;
 
+/// Present channels a sample needs before a bit-identical copy of the previous one counts as a
+/// stale repeat: one triad (three quantised values all unchanged is rare in real data; one
+/// channel unchanged is common at rest).
+const MIN_REPEAT_CHANNELS: usize = 3;
 /// Raw history kept per channel (samples): context + look-ahead + post context fit in it.
 const RING: usize = 2048;
 /// Events per channel awaiting a verdict at once; one more forces the oldest's verdict.
@@ -226,15 +230,19 @@ impl GrossErrorStage {
         (self.delayed, self.max_delay)
     }
 
-    /// `s` repeats the previous sample bit for bit (every channel finite): a stale sample.
-    /// Remembers `s` as the previous sample otherwise.
+    /// `s` repeats the previous sample bit for bit (every present channel finite): a stale
+    /// sample. Remembers `s` as the previous sample otherwise. Absent channels take no part;
+    /// with fewer than [`MIN_REPEAT_CHANNELS`] present a bit-identical sample is ordinary for a
+    /// quantised sensor at rest, so nothing is called a repeat.
     fn is_repeat(&mut self, s: &Sample) -> bool {
         let v = s.channels();
-        let repeat = self.last_raw.is_some_and(|l| {
-            l.iter()
-                .zip(&v)
-                .all(|(a, b)| a.to_bits() == b.to_bits() && a.is_finite())
-        });
+        let present = N_CHANNELS - s.absent.count_ones() as usize;
+        let repeat = present >= MIN_REPEAT_CHANNELS
+            && self.last_raw.is_some_and(|l| {
+                l.iter().zip(&v).enumerate().all(|(c, (a, b))| {
+                    s.is_absent(c) || (a.to_bits() == b.to_bits() && a.is_finite())
+                })
+            });
         if !repeat {
             self.last_raw = Some(v);
         }
@@ -287,7 +295,9 @@ impl GrossErrorStage {
         let slot = (idx % RING as u64) as usize;
         let mut warming = false;
         for c in 0..N_CHANNELS {
-            if self.ch[c].gate.mode == Mode::Disabled {
+            // An absent channel is no measurement: no gate, no event, no verdict (its ring
+            // stays NaN, so it is no partner of the several-axes test either).
+            if self.ch[c].gate.mode == Mode::Disabled || s.is_absent(c) {
                 continue;
             }
             let v = s.channel(c);
