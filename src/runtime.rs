@@ -8,6 +8,7 @@ use crate::io::sink::{self, SinkHandle, SinkItem, SinkReport};
 use crate::io::source::{self, SourceEvent};
 use crate::sample::{Sample, flags};
 use crate::stage::Pipeline;
+use crate::stage::health::PipelineHealth;
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -44,7 +45,8 @@ pub struct Health {
     pub warming_up_now: bool,
     /// Health reports published beside the samples.
     pub health_reports: u64,
-    pub stages: Vec<(String, u64)>,
+    /// Every stage's typed health.
+    pub stages: PipelineHealth,
     pub sinks: Vec<SinkReport>,
     /// Why the run ended: "end of input", "signal", ...
     pub ended_by: String,
@@ -141,15 +143,10 @@ impl Health {
         if self.cleaning_stages.is_empty() {
             let _ = writeln!(o, "  cleaning   : {NO_CLEANING}");
         }
-        // Non-zero stage counters only (the JSON summary has them all).
-        let nz: Vec<String> = self
-            .stages
-            .iter()
-            .filter(|(_, v)| *v != 0)
-            .map(|(k, v)| format!("{k}={v}"))
-            .collect();
+        // Non-zero stage counters only (the JSON summary has them all, and the stages' state).
+        let nz = self.stages.nonzero_counters();
         if !nz.is_empty() {
-            let _ = writeln!(o, "  stages     : {}", nz.join(" "));
+            let _ = writeln!(o, "  stages     : {nz}");
         }
         if self.source_stalls > 0 {
             let _ = writeln!(
@@ -227,6 +224,7 @@ impl Health {
             tcp_clients: self.sinks.iter().map(|s| s.clients.len() as u64).sum(),
             stages: n_stages as u64,
             warming_up: u64::from(self.warming_up_now),
+            ..self.stages.frame_fields()
         }
     }
 
@@ -250,7 +248,7 @@ impl Health {
         if self.cleaning_stages.is_empty() {
             line + " cleaning=NONE"
         } else {
-            line
+            format!("{line} {}", self.stages.state_line())
         }
     }
 }
@@ -364,7 +362,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
                 let frame = health.frame(pipeline.stage_names().len());
                 health.health_reports += 1;
                 for k in &sinks {
-                    k.offer(SinkItem::Health(frame)).await;
+                    k.offer(SinkItem::Health(Box::new(frame))).await;
                 }
             }
             sig = &mut shutdown => {
@@ -383,7 +381,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     let frame = health.frame(pipeline.stage_names().len());
     health.health_reports += 1;
     for k in &sinks {
-        k.offer(SinkItem::Health(frame)).await;
+        k.offer(SinkItem::Health(Box::new(frame))).await;
     }
     // Dropping each sink's sender closes its queue; the task flushes and ends.
     let mut closing: Vec<_> = sinks
@@ -395,7 +393,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
         let _ = tokio::time::timeout(Duration::from_secs(2), task).await;
     }
     health.elapsed_s = started.elapsed().as_secs_f64();
-    health.stages = pipeline.counters();
+    health.stages = pipeline.health();
     health.cleaning_stages = cleaning_stages(&pipeline);
     health.sinks = closing.iter().map(|(n, s, _)| s.report(n)).collect();
     Ok(health)
@@ -417,7 +415,7 @@ async fn publish(out: Vec<Sample>, health: &mut Health, sinks: &[SinkHandle]) {
 
 fn fill(h: &mut Health, p: &Pipeline, sinks: &[SinkHandle], started: Instant) {
     h.elapsed_s = started.elapsed().as_secs_f64();
-    h.stages = p.counters();
+    h.stages = p.health();
     h.cleaning_stages = cleaning_stages(p);
     h.sinks = sinks.iter().map(|s| s.stats.report(&s.name)).collect();
 }

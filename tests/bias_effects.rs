@@ -7,8 +7,8 @@ use common::*;
 use imuprep::model::bias_model::{BiasModelFile, Effect};
 use imuprep::rng::Rng;
 use imuprep::sample::flags;
-use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
+use imuprep::stage::bias::health::{BiasChannelState, BiasModelOrigin};
 use imuprep::stage::bias::settings::BiasSettings;
 use std::f64::consts::TAU;
 
@@ -351,11 +351,12 @@ fn warm_up_identifies_a_model_at_the_first_stop_then_removes_the_bias() {
             .all(|f| f & flags::BIAS_REMOVED != 0)
     );
     assert!(run.flags[done..].iter().all(|f| f & flags::WARMING_UP == 0));
-    let counters = stage.counters();
-    assert!(
-        counters.contains(&("warmup_fits".to_string(), 3)),
-        "{counters:?}"
-    );
+    let health = stage.health();
+    assert_eq!(health.counters.warmup_fits, 3, "{health:?}");
+    for c in 0..3 {
+        assert_eq!(health.channels[c].state, BiasChannelState::Estimating);
+        assert_eq!(health.channels[c].model, BiasModelOrigin::WarmUp);
+    }
     for axis in 0..3 {
         let (c, b) = run.rms_pair(axis, 8.0);
         eprintln!(

@@ -38,7 +38,7 @@ pub enum SinkItem {
     Side(Arc<Vec<crate::io::source::SideItem>>),
     /// A health report, written beside the samples by sinks whose format carries it (native
     /// frames, JSON lines); CSV and inline sinks skip it.
-    Health(HealthFrame),
+    Health(Box<HealthFrame>),
 }
 
 /// How long a local sink's full queue is waited for before the sink counts as stuck.

@@ -3,13 +3,15 @@
 //! A stage is plain Rust: no I/O, no clock reads (time arrives in the sample), no allocation and
 //! no `tracing` per sample. One entry point, [`Stage::push`] (with [`Stage::flush`] at the end of
 //! the input); a [`Pipeline`] is itself a stage. Health is read at report intervals through
-//! [`Stage::counters`].
+//! [`Stage::health`] (typed, one struct per stage: [`health`]).
 
 pub mod bias;
 pub mod build;
 pub mod gross_error;
+pub mod health;
 
 use crate::sample::Sample;
+use crate::stage::health::{PipelineHealth, StageHealth};
 
 /// One synchronous processing step.
 pub trait Stage: Send {
@@ -27,9 +29,10 @@ pub trait Stage: Send {
     fn lookahead(&self) -> usize {
         0
     }
-    /// Named counters for the health report; called at report intervals, never per sample.
-    fn counters(&self) -> Vec<(String, u64)> {
-        Vec::new()
+    /// Typed health (counters since the start, state now); called at report intervals, never
+    /// per sample.
+    fn health(&self) -> StageHealth {
+        StageHealth::Silent
     }
 }
 
@@ -103,15 +106,13 @@ impl Pipeline {
         self.stages.iter().map(|s| s.name()).collect()
     }
 
-    /// All stages' counters, keyed `stage.counter`.
-    pub fn counters(&self) -> Vec<(String, u64)> {
-        let mut out = Vec::new();
+    /// Every stage's health.
+    pub fn health(&self) -> PipelineHealth {
+        let mut h = PipelineHealth::default();
         for st in &self.stages {
-            for (k, v) in st.counters() {
-                out.push((format!("{}.{}", st.name(), k), v));
-            }
+            h.add(st.health());
         }
-        out
+        h
     }
 }
 
@@ -129,8 +130,8 @@ impl Stage for Pipeline {
     fn lookahead(&self) -> usize {
         self.lookahead
     }
-    fn counters(&self) -> Vec<(String, u64)> {
-        Pipeline::counters(self)
+    fn health(&self) -> StageHealth {
+        StageHealth::Pipeline(Pipeline::health(self))
     }
 }
 

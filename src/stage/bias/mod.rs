@@ -69,6 +69,7 @@
 //! restarts.
 
 pub mod cusum;
+pub mod health;
 pub mod kf;
 pub mod line_canceller;
 pub mod settings;
@@ -82,6 +83,7 @@ use crate::model::bias_state_space::{BiasStateSpace, StateSpaceError, state_spac
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use crate::stage::Stage;
 use crate::stage::bias::cusum::Cusum;
+use crate::stage::bias::health::{BiasCounters, BiasModelOrigin};
 use crate::stage::bias::kf::{BiasKf, ConstantState, Lead};
 use crate::stage::bias::line_canceller::LineCanceller;
 use crate::stage::bias::settings::{
@@ -89,6 +91,7 @@ use crate::stage::bias::settings::{
 };
 use crate::stage::bias::stillness::StillnessDetector;
 use crate::stage::bias::temperature::TemperatureComp;
+use crate::stage::health::StageHealth;
 
 /// Most vibration lines cancelled per channel.
 pub const MAX_LINES: usize = 4;
@@ -171,23 +174,8 @@ struct ChannelState {
     bias: f64,
     bias_sd: f64,
     diag: ChannelDiagnostics,
-}
-
-#[derive(Debug, Clone, Copy, Default)]
-struct Counters {
-    samples: u64,
-    still: u64,
-    updates: u64,
-    step_alarms: u64,
-    warmup_fits: u64,
-    warmup_fit_failures: u64,
-    non_finite: u64,
-    long_gaps: u64,
-    white_noise_clamped: u64,
-    ignored_effects: u64,
-    rejected_updates: u64,
-    reanchors: u64,
-    repeats: u64,
+    /// Where the channel's model came from.
+    origin: BiasModelOrigin,
 }
 
 /// The bias stage (6 channels). See the module docs for what it does.
@@ -210,7 +198,7 @@ pub struct BiasStage {
     step_inflation: f64,
     default_step: f64,
     default_rrw_q_per_s: f64,
-    counters: Counters,
+    counters: BiasCounters,
 }
 
 impl BiasStage {
@@ -245,7 +233,7 @@ impl BiasStage {
             |k: &str| BiasStageError::Model(vec![format!("{k}: calibration matrix is singular")]);
         let gyro_cal = settings.gyro.build().ok_or_else(|| cal_err("gyro"))?;
         let accel_cal = settings.accel.build().ok_or_else(|| cal_err("accel"))?;
-        let mut counters = Counters::default();
+        let mut counters = BiasCounters::default();
         let empty = ChannelState {
             temp: None,
             gsens: None,
@@ -259,6 +247,7 @@ impl BiasStage {
             bias: 0.0,
             bias_sd: 0.0,
             diag: ChannelDiagnostics::default(),
+            origin: BiasModelOrigin::None,
         };
         let mut ch: [ChannelState; N_CHANNELS] = std::array::from_fn(|_| empty.clone());
         let mut stage_proto = BiasStage {
@@ -295,13 +284,14 @@ impl BiasStage {
             let m = model.and_then(|m| m.channel(name));
             match m {
                 Some(m) => {
+                    state.origin = BiasModelOrigin::File;
                     let ss =
                         state_space_from_model(m).map_err(|source| BiasStageError::StateSpace {
                             channel: name.into(),
                             source,
                         })?;
                     if ss.white_noise_clamped {
-                        counters.white_noise_clamped += 1;
+                        counters.white_noise_clamped_channels += 1;
                     }
                     let mut n_lines = 0;
                     for e in &m.effects {
@@ -514,7 +504,7 @@ impl BiasStage {
                         st.diag.updated = true;
                         st.diag.innovation = nu;
                         st.diag.innovation_var = s;
-                        self.counters.updates += 1;
+                        self.counters.bias_updates += 1;
                     }
                 } else if !still {
                     est.rejected_run = 0;
@@ -599,6 +589,7 @@ impl BiasStage {
             rejected_run: 0,
         });
         self.ch[c].warm = None;
+        self.ch[c].origin = BiasModelOrigin::WarmUp;
         self.counters.warmup_fits += 1;
     }
 
@@ -656,7 +647,7 @@ impl BiasStage {
         let finite: [bool; N_CHANNELS] = std::array::from_fn(|c| cal[c].is_finite());
         if finite.iter().any(|f| !f) {
             s.flags |= flags::NON_FINITE;
-            self.counters.non_finite += 1;
+            self.counters.non_finite_samples += 1;
         }
         let accel_ok = finite[3] && finite[4] && finite[5];
 
@@ -721,7 +712,7 @@ impl BiasStage {
         };
         if still {
             s.flags |= flags::STILL;
-            self.counters.still += 1;
+            self.counters.still_samples += 1;
         }
 
         // 5. Delayed measurement updates of the gyro filters.
@@ -807,22 +798,7 @@ impl Stage for BiasStage {
         out.push(self.process(s));
     }
 
-    fn counters(&self) -> Vec<(String, u64)> {
-        let c = &self.counters;
-        vec![
-            ("samples".into(), c.samples),
-            ("still_samples".into(), c.still),
-            ("bias_updates".into(), c.updates),
-            ("step_alarms".into(), c.step_alarms),
-            ("warmup_fits".into(), c.warmup_fits),
-            ("warmup_fit_failures".into(), c.warmup_fit_failures),
-            ("non_finite_samples".into(), c.non_finite),
-            ("long_gaps".into(), c.long_gaps),
-            ("white_noise_clamped_channels".into(), c.white_noise_clamped),
-            ("ignored_effects".into(), c.ignored_effects),
-            ("rejected_updates".into(), c.rejected_updates),
-            ("reanchors".into(), c.reanchors),
-            ("repeats".into(), c.repeats),
-        ]
+    fn health(&self) -> StageHealth {
+        StageHealth::Bias(BiasStage::health(self))
     }
 }

@@ -33,6 +33,7 @@
 pub mod confirm;
 pub mod gate;
 pub mod guard;
+pub mod health;
 pub mod settings;
 
 use std::collections::VecDeque;
@@ -50,6 +51,7 @@ pub use settings::{
 use crate::model::arima::{ArimaError, ArimaModelFile};
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use crate::stage::Stage;
+use crate::stage::health::StageHealth;
 
 /// The flags a repeat copies from the sample it repeats, besides its values.
 const VERDICT_FLAGS: u32 = flags::REPLACED
@@ -737,37 +739,7 @@ impl Stage for GrossErrorStage {
         self.s.lookahead_samples
     }
 
-    fn counters(&self) -> Vec<(String, u64)> {
-        let mut out = vec![
-            ("gaps_bridged".to_string(), self.gaps_bridged),
-            ("gaps_reset".to_string(), self.gaps_reset),
-            ("held_samples".to_string(), self.delayed),
-            ("longest_hold".to_string(), self.max_delay),
-            ("repeats".to_string(), self.repeats),
-        ];
-        for (c, ch) in self.ch.iter().enumerate() {
-            if ch.gate.mode == Mode::Disabled {
-                continue;
-            }
-            let n = CHANNEL_NAMES[c];
-            let k = &ch.gate.counters;
-            for (name, v) in [
-                ("replaced", k.replaced),
-                ("runs", k.runs),
-                ("confirmed", k.confirmed),
-                ("suspect_events", k.suspect_events),
-                ("suspect", k.suspect),
-                ("level_changes", k.level_changes),
-                ("released", k.released),
-                ("non_finite", k.non_finite),
-                ("implausible", k.implausible),
-                ("saturated", k.saturated),
-                ("warmup", k.warmup),
-                ("fallback_models", k.fallback_models),
-            ] {
-                out.push((format!("{n}.{name}"), v));
-            }
-        }
-        out
+    fn health(&self) -> StageHealth {
+        StageHealth::GrossError(GrossErrorStage::health(self))
     }
 }
