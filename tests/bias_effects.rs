@@ -261,7 +261,7 @@ fn rate_random_walk_grows_the_published_sd_by_q_per_second() {
     m.channels[2].ar.clear();
     m.channels[2].innovation_var = 1e-12;
     m.channels[2].effects = vec![Effect::RateRandomWalk { q_per_s: q }];
-    let mut stage = BiasStage::new(&settings_with(), Some(&m)).unwrap();
+    let mut stage = BiasStage::new(settings_with(), Some(&m)).unwrap();
     let run = drive(&mut stage, 60.0, 71, standard_bias(1200), |_| None);
     // Motion of cycle 1: STILL is off from ~38.0 s to 60 s; compare 40 s and 55 s.
     let (a, b) = (4000, 5500);
@@ -284,7 +284,7 @@ fn rate_random_walk_effect_lets_the_filter_follow_a_walking_bias() {
         m.channels[2].ar.clear();
         m.channels[2].innovation_var = 1e-12;
         m.channels[2].effects = effects;
-        BiasStage::new(&settings_with(), Some(&m)).unwrap()
+        BiasStage::new(settings_with(), Some(&m)).unwrap()
     };
     let walk = || {
         let mut r = Rng::new(77);
@@ -404,5 +404,5 @@ fn model_rate_must_match() {
         "a matching model is accepted"
     );
     m.channels[0].sample_rate_hz = 200.0;
-    assert!(BiasStage::new(&BiasSettings::default(), Some(&m)).is_err());
+    assert!(BiasStage::new(BiasSettings::default(), Some(&m)).is_err());
 }

@@ -97,7 +97,7 @@ fn process_never_allocates_after_construction_except_at_the_warm_up_fit() {
             .channels
             .push(truth_model(name, &[0.9], 1e-6, 1e-3, all(false)));
     }
-    let mut stage = BiasStage::new(&settings_with(), Some(&model)).unwrap();
+    let mut stage = BiasStage::new(settings_with(), Some(&model)).unwrap();
     let input = samples(20_000);
     let before = allocs();
     for s in &input {

@@ -192,7 +192,7 @@ mod tests {
 
     fn pipeline() -> Pipeline {
         let ge = GrossErrorStage::new(GrossErrorSettings::default(), None).unwrap();
-        let b = BiasStage::new(&BiasSettings::default(), None).unwrap();
+        let b = BiasStage::new(BiasSettings::default(), None).unwrap();
         Pipeline::new(vec![Box::new(ge), Box::new(b)])
     }
 

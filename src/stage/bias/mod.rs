@@ -81,13 +81,14 @@ use nalgebra::Vector3;
 use crate::model::bias_model::{BiasModelFile, Effect};
 use crate::model::bias_state_space::{BiasStateSpace, StateSpaceError, state_space_from_model};
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
+use crate::settings::IntoValid;
 use crate::stage::Stage;
 use crate::stage::bias::cusum::Cusum;
 use crate::stage::bias::health::{BiasCounters, BiasModelOrigin};
 use crate::stage::bias::kf::{BiasKf, ConstantState, Lead};
 use crate::stage::bias::line_canceller::LineCanceller;
 use crate::stage::bias::settings::{
-    BiasSettings, Calibration, MAX_UPDATE_DELAY, SettingsErrors, WarmupSettings,
+    Calibration, MAX_UPDATE_DELAY, SettingsErrors, ValidBiasSettings, WarmupSettings,
 };
 use crate::stage::bias::stillness::StillnessDetector;
 use crate::stage::bias::temperature::TemperatureComp;
@@ -205,10 +206,10 @@ impl BiasStage {
     /// Build the stage with `model` (from the config's `[bias] model`, a file or inline), or
     /// without one (each gyro channel identifies its own during warm-up).
     pub fn new(
-        settings: &BiasSettings,
+        settings: impl IntoValid<Valid = ValidBiasSettings>,
         model: Option<&BiasModelFile>,
     ) -> Result<Self, BiasStageError> {
-        settings.validate()?;
+        let settings = settings.into_valid()?;
         let model = match model {
             Some(m) => {
                 let mut errs = m.validate().err().unwrap_or_default();

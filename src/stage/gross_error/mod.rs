@@ -46,10 +46,12 @@ use guard::JumpGuard;
 const SHOCK_K: f64 = 4.0;
 pub use settings::{
     GrossErrorSettings, MAX_CONTEXT, MAX_LOOKAHEAD, MAX_MEDIAN_WINDOW, MAX_POST, Replacement,
+    ValidGrossErrorSettings,
 };
 
 use crate::model::arima::{ArimaError, ArimaModelFile};
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
+use crate::settings::{IntoValid, SettingsErrors};
 use crate::stage::Stage;
 use crate::stage::health::StageHealth;
 
@@ -71,8 +73,8 @@ const MAX_EVENT: usize = 64;
 /// Why the stage could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum GrossErrorError {
-    #[error("invalid gross_error settings: {}", .0.join("; "))]
-    InvalidSettings(Vec<String>),
+    #[error(transparent)]
+    InvalidSettings(SettingsErrors),
     #[error(transparent)]
     Model(#[from] ArimaError),
 }
@@ -112,7 +114,7 @@ struct Held {
 /// The gross-error stage (module docs).
 #[derive(Debug, Clone)]
 pub struct GrossErrorStage {
-    s: GrossErrorSettings,
+    s: ValidGrossErrorSettings,
     p: GateParams,
     ch: Vec<Channel>,
     last_seq: Option<u32>,
@@ -136,11 +138,11 @@ impl GrossErrorStage {
     /// Build the stage. Channels with a model in `models` (matched by name) start active; the
     /// other enabled channels warm up and identify their own.
     pub fn new(
-        settings: GrossErrorSettings,
+        settings: impl IntoValid<Valid = ValidGrossErrorSettings>,
         models: Option<&ArimaModelFile>,
     ) -> Result<Self, GrossErrorError> {
-        settings
-            .validate()
+        let settings = settings
+            .into_valid()
             .map_err(GrossErrorError::InvalidSettings)?;
         let p = GateParams::new(&settings);
         let mut ch = Vec::with_capacity(N_CHANNELS);
