@@ -106,7 +106,7 @@ fn bench(c: &mut Criterion) {
         ),
     ];
     for (name, m) in cases {
-        let mut stage = BiasStage::new(&BiasSettings::default(), Some(&m)).unwrap();
+        let mut stage = BiasStage::new(BiasSettings::default(), Some(&m)).unwrap();
         group.bench_function(name, |b| {
             b.iter(|| {
                 for s in &samples {

@@ -8,6 +8,7 @@ use crate::io::sink::{self, SinkHandle, SinkItem, SinkReport};
 use crate::io::source::{self, SourceEvent};
 use crate::sample::{Sample, channel_names_of, flags};
 use crate::stage::Pipeline;
+use crate::stage::health::PipelineHealth;
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -49,9 +50,8 @@ pub struct Health {
     pub samples_partial: u64,
     /// Health reports published beside the samples.
     pub health_reports: u64,
-    pub stages: Vec<(String, u64)>,
-    /// Each stage's judgement of its own model (`monitor`: "model fits", "effect suspected: …").
-    pub model_health: Vec<(String, String)>,
+    /// Every stage's typed health (the monitor's model-health status included).
+    pub stages: PipelineHealth,
     pub sinks: Vec<SinkReport>,
     /// Why the run ended: "end of input", "signal", ...
     pub ended_by: String,
@@ -158,18 +158,13 @@ impl Health {
         if self.cleaning_stages.is_empty() {
             let _ = writeln!(o, "  cleaning   : {NO_CLEANING}");
         }
-        // Non-zero stage counters only (the JSON summary has them all).
-        let nz: Vec<String> = self
-            .stages
-            .iter()
-            .filter(|(_, v)| *v != 0)
-            .map(|(k, v)| format!("{k}={v}"))
-            .collect();
+        // Non-zero stage counters only (the JSON summary has them all, and the stages' state).
+        let nz = self.stages.nonzero_counters();
         if !nz.is_empty() {
-            let _ = writeln!(o, "  stages     : {}", nz.join(" "));
+            let _ = writeln!(o, "  stages     : {nz}");
         }
-        for (stage, h) in &self.model_health {
-            let _ = writeln!(o, "  model      : {stage}: {h}");
+        if let Some(m) = &self.stages.monitor {
+            let _ = writeln!(o, "  model      : {}", m.status);
         }
         if self.source_stalls > 0 {
             let _ = writeln!(
@@ -257,6 +252,7 @@ impl Health {
             stages: n_stages as u64,
             warming_up: u64::from(self.warming_up_now),
             absent_channels: u64::from(self.absent_channels),
+            ..self.stages.frame_fields()
         }
     }
 
@@ -278,9 +274,10 @@ impl Health {
             self.sink_dropped()
         );
         let line = if self
-            .model_health
-            .iter()
-            .any(|(_, h)| h.starts_with("effect"))
+            .stages
+            .monitor
+            .as_ref()
+            .is_some_and(|m| m.status.starts_with("effect"))
         {
             line + " model=EFFECT_SUSPECTED"
         } else {
@@ -309,7 +306,7 @@ impl Health {
         if self.cleaning_stages.is_empty() {
             line + " cleaning=NONE"
         } else {
-            line
+            format!("{line} {}", self.stages.state_line())
         }
     }
 }
@@ -426,7 +423,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
                 let frame = health.frame(pipeline.cleaning_stage_names().len());
                 health.health_reports += 1;
                 for k in &sinks {
-                    k.offer(SinkItem::Health(frame)).await;
+                    k.offer(SinkItem::Health(Box::new(frame))).await;
                 }
             }
             sig = &mut shutdown => {
@@ -445,7 +442,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     let frame = health.frame(pipeline.cleaning_stage_names().len());
     health.health_reports += 1;
     for k in &sinks {
-        k.offer(SinkItem::Health(frame)).await;
+        k.offer(SinkItem::Health(Box::new(frame))).await;
     }
     // Dropping each sink's sender closes its queue; the task flushes and ends.
     let mut closing: Vec<_> = sinks
@@ -457,8 +454,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
         let _ = tokio::time::timeout(Duration::from_secs(2), task).await;
     }
     health.elapsed_s = started.elapsed().as_secs_f64();
-    health.stages = pipeline.counters();
-    health.model_health = pipeline.model_health();
+    health.stages = pipeline.health();
     health.cleaning_stages = cleaning_stages(&pipeline);
     health.sinks = closing.iter().map(|(n, s, _)| s.report(n)).collect();
     Ok(health)
@@ -480,8 +476,7 @@ async fn publish(out: Vec<Sample>, health: &mut Health, sinks: &[SinkHandle]) {
 
 fn fill(h: &mut Health, p: &Pipeline, sinks: &[SinkHandle], started: Instant) {
     h.elapsed_s = started.elapsed().as_secs_f64();
-    h.stages = p.counters();
-    h.model_health = p.model_health();
+    h.stages = p.health();
     h.cleaning_stages = cleaning_stages(p);
     h.sinks = sinks.iter().map(|s| s.stats.report(&s.name)).collect();
 }

@@ -34,6 +34,113 @@ impl fmt::Display for ConfigErrors {
 }
 impl std::error::Error for ConfigErrors {}
 
+/// Every problem found in one stage's settings, one `key: message` per entry (keys relative to
+/// the stage's settings table, e.g. `stillness.window_s`).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("invalid {section} settings:\n  {}", .errors.join("\n  "))]
+pub struct SettingsErrors {
+    /// The stage (`gross_error`, `bias`).
+    pub section: &'static str,
+    pub errors: Vec<String>,
+}
+
+impl std::ops::Deref for SettingsErrors {
+    type Target = [String];
+    fn deref(&self) -> &[String] {
+        &self.errors
+    }
+}
+
+impl SettingsErrors {
+    /// `Ok(valid)` when `errors` is empty.
+    pub fn check<T>(section: &'static str, errors: Vec<String>, valid: T) -> Result<T, Self> {
+        if errors.is_empty() {
+            Ok(valid)
+        } else {
+            Err(SettingsErrors { section, errors })
+        }
+    }
+
+    /// Record each problem in `errs` under `prefix` (the table's key path), keyed.
+    pub fn push_into(self, errs: &mut Errors, prefix: &str) {
+        for m in self.errors {
+            push_keyed(errs, prefix, m);
+        }
+    }
+}
+
+/// Raw settings and their validated form (linfa's `ParamGuard`): a stage takes anything that
+/// becomes its validated settings — the raw ones are checked by their one `validate`, validated
+/// ones pass as they are — and is built from the validated form only.
+pub trait IntoValid {
+    type Valid;
+    fn into_valid(self) -> Result<Self::Valid, SettingsErrors>;
+}
+
+/// `pub struct $valid($raw)`: settings that passed `$raw::validate(self) -> Result<$valid,
+/// SettingsErrors>` (which builds it with `$valid::checked`), read through `Deref`, with the
+/// [`IntoValid`] conversions of the raw and validated forms, owned and borrowed.
+#[macro_export]
+macro_rules! valid_settings {
+    ($(#[$doc:meta])* $valid:ident, $raw:ty) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, PartialEq)]
+        pub struct $valid($raw);
+
+        impl $valid {
+            /// Only for the raw type's `validate`, once every check has passed.
+            fn checked(raw: $raw) -> Self {
+                $valid(raw)
+            }
+            /// The settings, to change and validate again.
+            pub fn into_inner(self) -> $raw {
+                self.0
+            }
+        }
+
+        impl std::ops::Deref for $valid {
+            type Target = $raw;
+            fn deref(&self) -> &$raw {
+                &self.0
+            }
+        }
+
+        impl PartialEq<$raw> for $valid {
+            fn eq(&self, o: &$raw) -> bool {
+                self.0 == *o
+            }
+        }
+
+        impl $crate::settings::IntoValid for $raw {
+            type Valid = $valid;
+            fn into_valid(self) -> Result<$valid, $crate::settings::SettingsErrors> {
+                self.validate()
+            }
+        }
+
+        impl $crate::settings::IntoValid for &$raw {
+            type Valid = $valid;
+            fn into_valid(self) -> Result<$valid, $crate::settings::SettingsErrors> {
+                self.clone().validate()
+            }
+        }
+
+        impl $crate::settings::IntoValid for $valid {
+            type Valid = $valid;
+            fn into_valid(self) -> Result<$valid, $crate::settings::SettingsErrors> {
+                Ok(self)
+            }
+        }
+
+        impl $crate::settings::IntoValid for &$valid {
+            type Valid = $valid;
+            fn into_valid(self) -> Result<$valid, $crate::settings::SettingsErrors> {
+                Ok(self.clone())
+            }
+        }
+    };
+}
+
 /// Collects errors while validating.
 #[derive(Default)]
 pub struct Errors(Vec<ConfigError>);

@@ -7,8 +7,8 @@ use common::*;
 use imuprep::model::bias_model::{BiasModelFile, Effect};
 use imuprep::rng::Rng;
 use imuprep::sample::flags;
-use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
+use imuprep::stage::bias::health::{BiasChannelState, BiasModelOrigin};
 use imuprep::stage::bias::settings::BiasSettings;
 use std::f64::consts::TAU;
 
@@ -261,7 +261,7 @@ fn rate_random_walk_grows_the_published_sd_by_q_per_second() {
     m.channels[2].ar.clear();
     m.channels[2].innovation_var = 1e-12;
     m.channels[2].effects = vec![Effect::RateRandomWalk { q_per_s: q }];
-    let mut stage = BiasStage::new(&settings_with(), Some(&m)).unwrap();
+    let mut stage = BiasStage::new(settings_with(), Some(&m)).unwrap();
     let run = drive(&mut stage, 60.0, 71, standard_bias(1200), |_| None);
     // Motion of cycle 1: STILL is off from ~38.0 s to 60 s; compare 40 s and 55 s.
     let (a, b) = (4000, 5500);
@@ -284,7 +284,7 @@ fn rate_random_walk_effect_lets_the_filter_follow_a_walking_bias() {
         m.channels[2].ar.clear();
         m.channels[2].innovation_var = 1e-12;
         m.channels[2].effects = effects;
-        BiasStage::new(&settings_with(), Some(&m)).unwrap()
+        BiasStage::new(settings_with(), Some(&m)).unwrap()
     };
     let walk = || {
         let mut r = Rng::new(77);
@@ -351,11 +351,12 @@ fn warm_up_identifies_a_model_at_the_first_stop_then_removes_the_bias() {
             .all(|f| f & flags::BIAS_REMOVED != 0)
     );
     assert!(run.flags[done..].iter().all(|f| f & flags::WARMING_UP == 0));
-    let counters = stage.counters();
-    assert!(
-        counters.contains(&("warmup_fits".to_string(), 3)),
-        "{counters:?}"
-    );
+    let health = stage.health();
+    assert_eq!(health.counters.warmup_fits, 3, "{health:?}");
+    for c in 0..3 {
+        assert_eq!(health.channels[c].state, BiasChannelState::Estimating);
+        assert_eq!(health.channels[c].model, BiasModelOrigin::WarmUp);
+    }
     for axis in 0..3 {
         let (c, b) = run.rms_pair(axis, 8.0);
         eprintln!(
@@ -403,5 +404,5 @@ fn model_rate_must_match() {
         "a matching model is accepted"
     );
     m.channels[0].sample_rate_hz = 200.0;
-    assert!(BiasStage::new(&BiasSettings::default(), Some(&m)).is_err());
+    assert!(BiasStage::new(BiasSettings::default(), Some(&m)).is_err());
 }

@@ -7,7 +7,6 @@ mod common;
 use common::*;
 use imuprep::model::bias_model::Effect;
 use imuprep::rng::Rng;
-use imuprep::stage::Stage;
 use imuprep::stage::bias::BiasStage;
 use imuprep::stage::bias::settings::{BiasSettings, WarmupSettings};
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -98,7 +97,7 @@ fn process_never_allocates_after_construction_except_at_the_warm_up_fit() {
             .channels
             .push(truth_model(name, &[0.9], 1e-6, 1e-3, all(false)));
     }
-    let mut stage = BiasStage::new(&settings_with(), Some(&model)).unwrap();
+    let mut stage = BiasStage::new(settings_with(), Some(&model)).unwrap();
     let input = samples(20_000);
     let before = allocs();
     for s in &input {
@@ -115,16 +114,10 @@ fn process_never_allocates_after_construction_except_at_the_warm_up_fit() {
         ..Default::default()
     };
     let mut stage = BiasStage::new(&settings, None).unwrap();
-    let fits = |st: &BiasStage| {
-        st.counters()
-            .iter()
-            .find(|(k, _)| k == "warmup_fits")
-            .map(|(_, v)| *v)
-            .unwrap()
-    };
+    let fits = |st: &BiasStage| st.health().counters.warmup_fits;
     let mut allocating_samples = 0;
     for s in &input {
-        // (counters() allocates its report: read it outside the measured interval.)
+        // (health() is read outside the measured interval.)
         let f0 = fits(&stage);
         let a0 = allocs();
         std::hint::black_box(stage.process(*s));

@@ -60,7 +60,7 @@ fn mpu6050_static_bench_is_still_and_its_4_5_deg_s_bias_is_removed_with_defaults
         return;
     };
     let input = samples(&text, Some(7));
-    let mut stage = BiasStage::new(&BiasSettings::default(), None).unwrap();
+    let mut stage = BiasStage::new(BiasSettings::default(), None).unwrap();
     let out: Vec<Sample> = input.iter().map(|s| stage.process(*s)).collect();
     // Default thresholds on this consumer sensor (gyro sd ~0.1 °/s per axis, |f| = 1.04 g): the
     // bench must be called still nearly all the time after the first 2 s (window + T_in = 1 s).
@@ -108,7 +108,7 @@ fn ximu3_handheld_rotations_are_never_called_still() {
         return;
     };
     let input = samples(&text, None);
-    let mut stage = BiasStage::new(&BiasSettings::default(), None).unwrap();
+    let mut stage = BiasStage::new(BiasSettings::default(), None).unwrap();
     let (mut still_at_rest, mut rest, mut still_while_rotating) = (0, 0, 0);
     for (k, s) in input.iter().enumerate() {
         let o = stage.process(*s);

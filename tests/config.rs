@@ -109,7 +109,7 @@ fn a_user_file_changes_only_what_it_names() {
     let dg = &d.stages.gross_error.as_ref().unwrap().settings;
     let expected = imuprep::stage::gross_error::GrossErrorSettings {
         k: 5.0,
-        ..dg.clone()
+        ..dg.clone().into_inner()
     };
     assert_eq!(g.settings, expected, "only k differs from the defaults");
     let b = c

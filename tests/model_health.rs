@@ -51,7 +51,7 @@ fn monitor_over(samples: &[Sample], rate_hz: f64) -> MonitorStage {
         .monitor
         .take()
         .expect("the default enables the monitor");
-    cfg.stages.set_sample_rate(rate_hz);
+    cfg.stages.set_sample_rate(rate_hz).unwrap();
     let mut p = cfg.stages.build().unwrap();
     let out = run_through(&mut p, samples);
     let mut m = MonitorStage::new(settings, Some(rate_hz)).unwrap();
@@ -190,7 +190,7 @@ fn real_static_benches_alarm_only_for_real_lines() {
         let hours = samples.len() as f64 / rate / 3600.0;
         let mut cfg = Config::default_embedded().unwrap();
         let settings: MonitorSettings = cfg.stages.monitor.take().unwrap();
-        cfg.stages.set_sample_rate(rate);
+        cfg.stages.set_sample_rate(rate).unwrap();
         let out = run_through(&mut cfg.stages.build().unwrap(), &samples);
         let mut m = MonitorStage::new(settings, Some(rate)).unwrap();
         let mut sink = Vec::new();

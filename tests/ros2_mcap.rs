@@ -492,6 +492,7 @@ fn inline_output_keeps_a_chunk_index_the_mcap_crate_and_rosbags_seek_with() {
     let half = inline(cut, |s| *s);
     let s2 = mcap::Summary::read(&half).unwrap().expect("summary");
     assert!(s2.stats.unwrap().message_count > 0);
+}
 
 /// A gyro-only sensor's bag: the accel triad is "no data" by the message's own convention
 /// (covariance[0] = -1), never a measured zero acceleration (issue 13 item 10).

@@ -4,156 +4,123 @@
 //! Payload: a sequence of u64 little-endian counters in the order of [`HealthFrame::FIELDS`].
 //! A reader takes the fields it knows and ignores any further ones (a later version may append
 //! counters; it never reorders or removes them), so the payload length is `8 × n` with
-//! `n ≥ HealthFrame::FIELDS.len()`. Decoders built before this frame existed count it as an
-//! unknown message type and skip it (see `docs/frame-format.md`).
+//! `n ≥ 26` (version 1: 26 fields; version 2, this build: 30, the stages' health appended; a
+//! version-1 payload reads with the version-2 fields 0). The payload stays within
+//! `MAX_PAYLOAD` (256 bytes, 32 fields), which every decoder accepts. Decoders built before this frame existed
+//! count it as an unknown message type and skip it (see `docs/frame-format.md`).
 
 use super::{HEADER_LEN, MSG_HEALTH, TRAILER_LEN, crc32c, put_header};
 use bytes::{BufMut, BytesMut};
 
-/// The counters of one health report (every one cumulative since the run started, except
-/// `tcp_clients` and `warming_up`, which describe the moment of the report).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct HealthFrame {
+/// Defines [`HealthFrame`] from one list of fields (payload order = declaration order), with
+/// its field names, its payload values and its reading from a payload.
+macro_rules! health_frame {
+    ($($(#[$doc:meta])* $name:ident),+ $(,)?) => {
+        /// The counters of one health report (cumulative since the run started unless the field
+        /// says "now").
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+        pub struct HealthFrame {
+            $($(#[$doc])* pub $name: u64,)+
+        }
+
+        impl HealthFrame {
+            /// Field names in payload order (also the JSON keys).
+            pub const FIELDS: &'static [&'static str] = &[$(stringify!($name)),+];
+
+            fn values(&self) -> Vec<u64> {
+                vec![$(self.$name),+]
+            }
+
+            /// From payload values in field order; fields beyond `v` (an older version's
+            /// payload) are 0.
+            fn from_values(v: &[u64]) -> Self {
+                let mut it = v.iter().copied();
+                HealthFrame {
+                    $($name: it.next().unwrap_or(0),)+
+                }
+            }
+        }
+    };
+}
+
+health_frame! {
+    // Version 1 (26 fields).
     /// Time since the run started, ms (host clock: the only host time imuprep publishes).
-    pub elapsed_ms: u64,
+    elapsed_ms,
     /// Sensor time of the last sample published, ns (aligns the report with the data).
-    pub last_t_ns: u64,
-    pub samples_in: u64,
-    pub samples_out: u64,
-    pub bytes_in: u64,
-    pub frames_ok: u64,
-    pub crc_errors: u64,
-    pub header_errors: u64,
-    pub garbage_bytes: u64,
-    pub resyncs: u64,
-    pub gaps: u64,
-    pub missing_frames: u64,
-    pub duplicates: u64,
-    pub flagged_replaced: u64,
-    pub flagged_suspect: u64,
-    pub flagged_non_finite: u64,
-    pub flagged_saturated: u64,
-    pub flagged_warming_up: u64,
-    pub flagged_bias_removed: u64,
-    pub source_outages: u64,
-    pub source_stalls: u64,
+    last_t_ns,
+    samples_in,
+    samples_out,
+    bytes_in,
+    frames_ok,
+    crc_errors,
+    header_errors,
+    garbage_bytes,
+    resyncs,
+    gaps,
+    missing_frames,
+    duplicates,
+    flagged_replaced,
+    flagged_suspect,
+    flagged_non_finite,
+    flagged_saturated,
+    flagged_warming_up,
+    flagged_bias_removed,
+    source_outages,
+    source_stalls,
     /// Samples every sink (and every TCP client, present or gone) dropped because it was behind.
-    pub sink_dropped: u64,
-    pub sink_errors: u64,
+    sink_dropped,
+    sink_errors,
     /// TCP clients connected now.
-    pub tcp_clients: u64,
+    tcp_clients,
     /// Cleaning stages in the pipeline (0: samples pass uncleaned; the monitor is not one).
-    pub stages: u64,
+    stages,
     /// 1 when the last sample published was flagged warming up (a stage still identifying).
-    pub warming_up: u64,
-    /// Channels the last sample published does not have (bit `c` for channel `c`, gx..az; 0 =
-    /// all present): a partial sensor's absent channels. Appended in field 27; a payload of 26
-    /// counters (older writers) reads as 0.
-    pub absent_channels: u64,
+    warming_up,
+    // Version 2 (32 fields): the stages' health (`stage::health`), absent channels, model health.
+    /// The stages' state now, one bit each (see [`stage_flags`]).
+    stage_flags,
+    /// Gross-error stage: events (runs of successive candidates), summed over channels.
+    gross_error_events,
+    /// Bias stage: still measurements taken by the gyro filters.
+    bias_updates,
+    /// Bias stage: still measurements the consistency guard rejected.
+    bias_rejected_updates,
+    /// Channels the last sample published does not have now (bit `c` for channel `c`, gx..az;
+    /// 0 = all present): a partial sensor's absent channels.
+    absent_channels,
+    /// Model-health monitor: effects suspected so far (offsets and new spectral lines the model
+    /// lacks; the status text is in the JSON summary and the log).
+    model_alarms,
 }
 
 impl HealthFrame {
-    /// Field names in payload order (also the JSON keys).
-    pub const FIELDS: [&'static str; 27] = [
-        "elapsed_ms",
-        "last_t_ns",
-        "samples_in",
-        "samples_out",
-        "bytes_in",
-        "frames_ok",
-        "crc_errors",
-        "header_errors",
-        "garbage_bytes",
-        "resyncs",
-        "gaps",
-        "missing_frames",
-        "duplicates",
-        "flagged_replaced",
-        "flagged_suspect",
-        "flagged_non_finite",
-        "flagged_saturated",
-        "flagged_warming_up",
-        "flagged_bias_removed",
-        "source_outages",
-        "source_stalls",
-        "sink_dropped",
-        "sink_errors",
-        "tcp_clients",
-        "stages",
-        "warming_up",
-        "absent_channels",
-    ];
-
-    /// Counters of the first version of this frame: a shorter payload is a bad payload; the
-    /// fields appended since read as 0 when a payload stops after these.
-    pub const MIN_FIELDS: usize = 26;
-
+    /// Fields of version 1 of the payload (a reader of this version accepts such payloads).
+    pub const FIELDS_V1: usize = 26;
     /// Payload bytes this build writes.
     pub const PAYLOAD: usize = 8 * Self::FIELDS.len();
+}
 
-    fn values(&self) -> [u64; 27] {
-        [
-            self.elapsed_ms,
-            self.last_t_ns,
-            self.samples_in,
-            self.samples_out,
-            self.bytes_in,
-            self.frames_ok,
-            self.crc_errors,
-            self.header_errors,
-            self.garbage_bytes,
-            self.resyncs,
-            self.gaps,
-            self.missing_frames,
-            self.duplicates,
-            self.flagged_replaced,
-            self.flagged_suspect,
-            self.flagged_non_finite,
-            self.flagged_saturated,
-            self.flagged_warming_up,
-            self.flagged_bias_removed,
-            self.source_outages,
-            self.source_stalls,
-            self.sink_dropped,
-            self.sink_errors,
-            self.tcp_clients,
-            self.stages,
-            self.warming_up,
-            self.absent_channels,
-        ]
-    }
+// Every decoder (old ones too) takes a frame of at most MAX_PAYLOAD bytes.
+const _: () = assert!(HealthFrame::PAYLOAD <= super::MAX_PAYLOAD);
 
-    fn from_values(v: &[u64; 27]) -> Self {
-        HealthFrame {
-            elapsed_ms: v[0],
-            last_t_ns: v[1],
-            samples_in: v[2],
-            samples_out: v[3],
-            bytes_in: v[4],
-            frames_ok: v[5],
-            crc_errors: v[6],
-            header_errors: v[7],
-            garbage_bytes: v[8],
-            resyncs: v[9],
-            gaps: v[10],
-            missing_frames: v[11],
-            duplicates: v[12],
-            flagged_replaced: v[13],
-            flagged_suspect: v[14],
-            flagged_non_finite: v[15],
-            flagged_saturated: v[16],
-            flagged_warming_up: v[17],
-            flagged_bias_removed: v[18],
-            source_outages: v[19],
-            source_stalls: v[20],
-            sink_dropped: v[21],
-            sink_errors: v[22],
-            tcp_clients: v[23],
-            stages: v[24],
-            warming_up: v[25],
-            absent_channels: v[26],
-        }
-    }
+/// Bits of [`HealthFrame::stage_flags`]; per-channel groups have bit `c` for channel `c`
+/// (0..6 = `gx` … `az`) above their base.
+pub mod stage_flags {
+    /// The gross-error stage runs.
+    pub const GROSS_ERROR: u64 = 1 << 0;
+    /// The bias stage runs.
+    pub const BIAS: u64 = 1 << 1;
+    /// The bias stage's stillness detector reports rest now.
+    pub const STILL: u64 = 1 << 2;
+    /// Base of: the channel's gross-error gate runs on its ARIMA model.
+    pub const GATE_ACTIVE: u32 = 8;
+    /// Base of: the channel's gross-error gate is warming up (identifying its model).
+    pub const GATE_WARMING: u32 = 16;
+    /// Base of: a bias filter runs on the channel and its estimate is subtracted.
+    pub const BIAS_ESTIMATING: u32 = 24;
+    /// Base of: the gyro channel is warming up (provisional bias, or none yet).
+    pub const BIAS_WARMING: u32 = 32;
 }
 
 /// Append one health frame; `seq` numbers the health reports of a stream (0, 1, 2, …).
@@ -168,16 +135,16 @@ pub fn encode_health(h: &HealthFrame, seq: u32, buf: &mut BytesMut) {
     buf.put_u32_le(c);
 }
 
-/// Parse a health payload: `None` when it is shorter than this build's fields or not a whole
-/// number of counters.
+/// Parse a health payload: `None` when it is shorter than version 1 or not a whole number of
+/// counters. Fields a version-1 payload lacks are 0; fields beyond this build's are ignored.
 pub(crate) fn parse_health(p: &[u8]) -> Option<HealthFrame> {
-    if p.len() < 8 * HealthFrame::MIN_FIELDS || !p.len().is_multiple_of(8) {
+    if p.len() < 8 * HealthFrame::FIELDS_V1 || !p.len().is_multiple_of(8) {
         return None;
     }
-    let mut v = [0u64; 27];
-    for (i, x) in v.iter_mut().enumerate().take(p.len() / 8) {
-        *x = u64::from_le_bytes(p[8 * i..8 * i + 8].try_into().expect("8 bytes"));
-    }
+    let v: Vec<u64> = p
+        .chunks_exact(8)
+        .map(|c| u64::from_le_bytes(c.try_into().expect("8 bytes")))
+        .collect();
     Some(HealthFrame::from_values(&v))
 }
 
@@ -195,24 +162,58 @@ pub fn write_health_json(h: &HealthFrame, out: &mut String) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frame::{HEADER_LEN, TRAILER_LEN};
+
+    fn sample_frame() -> HealthFrame {
+        let v: Vec<u64> = (1..=HealthFrame::FIELDS.len() as u64).collect();
+        HealthFrame::from_values(&v)
+    }
 
     #[test]
-    fn a_report_round_trips_and_an_older_shorter_one_still_reads() {
-        let h = HealthFrame {
-            samples_in: 7,
-            warming_up: 1,
-            absent_channels: 0b111_000,
-            ..HealthFrame::default()
-        };
-        let mut b = BytesMut::new();
-        encode_health(&h, 0, &mut b);
-        let p = &b[HEADER_LEN..b.len() - TRAILER_LEN];
-        assert_eq!(p.len(), HealthFrame::PAYLOAD);
-        assert_eq!(parse_health(p), Some(h));
-        // A writer from before `absent_channels` (26 counters): the field reads as 0.
-        let old = parse_health(&p[..8 * HealthFrame::MIN_FIELDS]).unwrap();
-        assert_eq!(old.absent_channels, 0);
-        assert_eq!((old.samples_in, old.warming_up), (7, 1));
-        assert_eq!(parse_health(&p[..8 * HealthFrame::MIN_FIELDS - 8]), None);
+    fn payload_round_trips_and_json_keys_follow_the_fields() {
+        let h = sample_frame();
+        assert_eq!(HealthFrame::FIELDS.len(), 32);
+        assert_eq!(
+            HealthFrame::FIELDS[HealthFrame::FIELDS_V1 - 1],
+            "warming_up"
+        );
+        let mut buf = BytesMut::new();
+        encode_health(&h, 0, &mut buf);
+        assert_eq!(buf.len(), HEADER_LEN + HealthFrame::PAYLOAD + TRAILER_LEN);
+        let payload = &buf[HEADER_LEN..HEADER_LEN + HealthFrame::PAYLOAD];
+        assert_eq!(parse_health(payload), Some(h));
+        let mut line = String::new();
+        write_health_json(&h, &mut line);
+        let v: serde_json::Value = serde_json::from_str(&line).unwrap();
+        assert_eq!(v["type"], "health");
+        for (i, k) in HealthFrame::FIELDS.iter().enumerate() {
+            assert_eq!(v[k].as_u64(), Some(i as u64 + 1), "{k}");
+        }
+        // The JSON line and the serde form agree.
+        let mut sv = serde_json::to_value(h).unwrap();
+        sv["type"] = "health".into();
+        assert_eq!(sv, v);
+    }
+
+    #[test]
+    fn a_version_1_payload_reads_with_the_stage_fields_zero_and_longer_ones_are_cut() {
+        let h = sample_frame();
+        let mut buf = BytesMut::new();
+        encode_health(&h, 0, &mut buf);
+        let payload = buf[HEADER_LEN..HEADER_LEN + HealthFrame::PAYLOAD].to_vec();
+        let v1 = parse_health(&payload[..8 * HealthFrame::FIELDS_V1]).unwrap();
+        assert_eq!(v1.warming_up, h.warming_up);
+        assert_eq!((v1.stage_flags, v1.bias_rejected_updates), (0, 0));
+        assert_eq!(
+            parse_health(&payload[..8 * HealthFrame::FIELDS_V1 - 8]),
+            None
+        );
+        assert_eq!(
+            parse_health(&payload[..8 * HealthFrame::FIELDS_V1 + 3]),
+            None
+        );
+        let mut longer = payload.clone();
+        longer.extend_from_slice(&7u64.to_le_bytes());
+        assert_eq!(parse_health(&longer), Some(h));
     }
 }

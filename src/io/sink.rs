@@ -45,7 +45,7 @@ pub enum SinkItem {
     Side(Arc<Vec<crate::io::source::SideItem>>),
     /// A health report, written beside the samples by sinks whose format carries it (native
     /// frames, JSON lines); CSV and inline sinks skip it.
-    Health(HealthFrame),
+    Health(Box<HealthFrame>),
     /// Inline sinks only: since the previous item, this many samples and sample carriers were
     /// dropped (the sink was stuck); see the module docs.
     Skip {

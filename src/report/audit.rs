@@ -190,7 +190,9 @@ pub fn run_config(
     samples: &[Sample],
 ) -> Result<Vec<Sample>, String> {
     let mut cfg = cfg.clone();
-    cfg.stages.set_sample_rate(desc.sample_rate_hz);
+    cfg.stages
+        .set_sample_rate(desc.sample_rate_hz)
+        .map_err(|e| e.to_string())?;
     let mut p = cfg.stages.build()?;
     Ok(crate::stage::run_through(&mut p, samples))
 }

@@ -27,7 +27,7 @@ pub fn detectors(
         .stages
         .gross_error
         .clone()
-        .map(|g| (g.settings, g.model))
+        .map(|g| (g.settings.into_inner(), g.model))
         .unwrap_or_default();
     let (samples, truth) = dc::simulate_decoded(&scn, seed)?;
     // Without a fitted model the online stage spends its first `warmup_samples` identifying

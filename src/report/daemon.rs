@@ -36,7 +36,7 @@ pub fn replay_config(
     ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
     // The log declares its rate: the stages use it rather than the config's nominal one.
     if let Ok(Some(d)) = crate::io::csv::read_descriptor(&log) {
-        cfg.stages.set_sample_rate(d.sample_rate_hz);
+        cfg.stages.set_sample_rate(d.sample_rate_hz)?;
     }
     cfg.source = SourceConfig::Replay { path: log, speed };
     Ok(cfg)

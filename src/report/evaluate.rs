@@ -278,14 +278,14 @@ pub fn evaluate_scenario(
     let scn = super::read_scenario(scenario, sets)?;
     let seed = crate::sim::log::effective_seed(&scn, seed);
     let rate = scn.sample_rate_hz();
-    cfg.stages.set_sample_rate(rate);
+    cfg.stages.set_sample_rate(rate)?;
     let pipeline = cfg.stages.build().map_err(|e| anyhow!(e))?;
     let (samples, truth) = simulate(&scn, seed)?;
     let cal = cfg
         .stages
         .bias
         .as_ref()
-        .map(|b| b.settings.clone())
+        .map(|b| b.settings.clone().into_inner())
         .unwrap_or_default();
     let gyro_cal = cal
         .gyro

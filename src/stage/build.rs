@@ -6,10 +6,10 @@
 
 use crate::model::arima::ArimaModelFile;
 use crate::model::bias_model::BiasModelFile;
-use crate::settings::{Errors, clean_serde, lenient, push_keyed, resolve};
+use crate::settings::{Errors, SettingsErrors, clean_serde, lenient, push_keyed, resolve};
 use crate::stage::bias::BiasStage;
-use crate::stage::bias::settings::BiasSettings;
-use crate::stage::gross_error::{GrossErrorSettings, GrossErrorStage};
+use crate::stage::bias::settings::{BiasSettings, ValidBiasSettings};
+use crate::stage::gross_error::{GrossErrorSettings, GrossErrorStage, ValidGrossErrorSettings};
 use crate::stage::monitor::{MonitorSettings, MonitorStage};
 use crate::stage::{Pipeline, Stage};
 use serde::{Deserialize, Serialize};
@@ -63,14 +63,14 @@ struct MonitorSection {
 /// Validated bias stage settings.
 #[derive(Debug, Clone)]
 pub struct BiasConfig {
-    pub settings: BiasSettings,
+    pub settings: ValidBiasSettings,
     pub model: Option<BiasModelFile>,
 }
 
 /// Validated gross-error stage settings.
 #[derive(Debug, Clone)]
 pub struct GrossErrorConfig {
-    pub settings: GrossErrorSettings,
+    pub settings: ValidGrossErrorSettings,
     pub model: Option<ArimaModelFile>,
 }
 
@@ -128,16 +128,20 @@ where
 }
 
 impl StagesConfig {
-    /// Adopt the sensor's declared rate (from a log's descriptor) where the stages need one.
-    pub fn set_sample_rate(&mut self, rate_hz: f64) {
+    /// Adopt the sensor's declared rate (from a log's descriptor) where the stages need one;
+    /// the changed settings are validated again (a rate can make other values invalid).
+    pub fn set_sample_rate(&mut self, rate_hz: f64) -> Result<(), SettingsErrors> {
         if rate_hz > 0.0 && rate_hz.is_finite() {
             self.declared_rate_hz = Some(rate_hz);
         }
         if let Some(b) = self.bias.as_mut()
             && rate_hz > 0.0
         {
-            b.settings.sample_rate_hz = rate_hz;
+            let mut raw = b.settings.clone().into_inner();
+            raw.sample_rate_hz = rate_hz;
+            b.settings = raw.validate()?;
         }
+        Ok(())
     }
 
     /// Read the stage sections of a config table (already laid over the embedded defaults);
@@ -148,11 +152,11 @@ impl StagesConfig {
         let ge: GrossErrorSection = stage_section(table, "gross_error", errs);
         // Settings written in a disabled section are still checked: a mistake must not wait
         // until the day the stage is switched on.
-        if let Err(v) = ge.settings.validate() {
-            for m in v {
-                push_keyed(errs, "gross_error.settings", m);
-            }
-        }
+        let ge_settings = ge
+            .settings
+            .validate()
+            .map_err(|e| e.push_into(errs, "gross_error.settings"))
+            .ok();
         let model = ge.model.as_ref().and_then(|m| {
             load_model(
                 base,
@@ -162,16 +166,13 @@ impl StagesConfig {
                 errs,
             )
         });
-        let gross_error = ge.enabled.then_some(GrossErrorConfig {
-            settings: ge.settings,
-            model,
-        });
+        let ge_model = model;
         let bs: BiasSection = stage_section(table, "bias", errs);
-        if let Err(e) = bs.settings.validate() {
-            for m in e.0 {
-                push_keyed(errs, "bias.settings", m);
-            }
-        }
+        let bias_settings = bs
+            .settings
+            .validate()
+            .map_err(|e| e.push_into(errs, "bias.settings"))
+            .ok();
         let model = match &bs.model {
             Some(BiasModelSource::File(f)) => load_model(
                 base,
@@ -192,21 +193,25 @@ impl StagesConfig {
         };
         // The model's rate is checked against the stage's when the stage is built: replay
         // adopts the log's declared rate first.
-        let bias = bs.enabled.then_some(BiasConfig {
-            settings: bs.settings,
-            model,
-        });
         let ms: MonitorSection = stage_section(table, "monitor", errs);
         if let Err(v) = ms.settings.validate() {
             for m in v {
                 push_keyed(errs, "monitor.settings", m);
             }
         }
-        let monitor = ms.enabled.then_some(ms.settings);
+        let (Some(ge_settings), Some(bias_settings)) = (ge_settings, bias_settings) else {
+            return None;
+        };
         (errs.len() == n).then_some(StagesConfig {
-            gross_error,
-            bias,
-            monitor,
+            gross_error: ge.enabled.then_some(GrossErrorConfig {
+                settings: ge_settings,
+                model: ge_model,
+            }),
+            bias: bs.enabled.then_some(BiasConfig {
+                settings: bias_settings,
+                model,
+            }),
+            monitor: ms.enabled.then_some(ms.settings),
             declared_rate_hz: None,
         })
     }
@@ -215,7 +220,7 @@ impl StagesConfig {
     pub fn build(&self) -> Result<Pipeline, String> {
         let mut stages: Vec<Box<dyn Stage>> = Vec::new();
         if let Some(g) = &self.gross_error {
-            let st = GrossErrorStage::new(g.settings.clone(), g.model.as_ref())
+            let st = GrossErrorStage::new(&g.settings, g.model.as_ref())
                 .map_err(|e| format!("gross_error: {e}"))?;
             stages.push(Box::new(st));
         }
@@ -230,5 +235,30 @@ impl StagesConfig {
             stages.push(Box::new(st));
         }
         Ok(Pipeline::new(stages))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_new_sample_rate_is_validated_again_and_a_bad_one_changes_nothing() {
+        let mut c = StagesConfig {
+            gross_error: None,
+            bias: Some(BiasConfig {
+                settings: BiasSettings::default().validate().unwrap(),
+                model: None,
+            }),
+            monitor: None,
+            declared_rate_hz: None,
+        };
+        c.set_sample_rate(200.0).unwrap();
+        assert_eq!(c.bias.as_ref().unwrap().settings.sample_rate_hz, 200.0);
+        let e = c.set_sample_rate(1e6).unwrap_err();
+        assert!(e.iter().any(|m| m.starts_with("sample_rate_hz:")), "{e}");
+        assert!(e.to_string().starts_with("invalid bias settings:"), "{e}");
+        assert_eq!(c.bias.as_ref().unwrap().settings.sample_rate_hz, 200.0);
+        assert_eq!(c.build().unwrap().stage_names(), ["bias"]);
     }
 }

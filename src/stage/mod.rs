@@ -3,14 +3,16 @@
 //! A stage is plain Rust: no I/O, no clock reads (time arrives in the sample), no allocation and
 //! no `tracing` per sample. One entry point, [`Stage::push`] (with [`Stage::flush`] at the end of
 //! the input); a [`Pipeline`] is itself a stage. Health is read at report intervals through
-//! [`Stage::counters`].
+//! [`Stage::health`] (typed, one struct per stage: [`health`]).
 
 pub mod bias;
 pub mod build;
 pub mod gross_error;
+pub mod health;
 pub mod monitor;
 
 use crate::sample::Sample;
+use crate::stage::health::{PipelineHealth, StageHealth};
 
 /// One synchronous processing step.
 pub trait Stage: Send {
@@ -28,13 +30,10 @@ pub trait Stage: Send {
     fn lookahead(&self) -> usize {
         0
     }
-    /// Named counters for the health report; called at report intervals, never per sample.
-    fn counters(&self) -> Vec<(String, u64)> {
-        Vec::new()
-    }
-    /// The stage's judgement of its own model, for the health report (`None`: it makes none).
-    fn model_health(&self) -> Option<String> {
-        None
+    /// Typed health (counters since the start, state now); called at report intervals, never
+    /// per sample.
+    fn health(&self) -> StageHealth {
+        StageHealth::Silent
     }
     /// Whether the stage changes samples (a monitor only watches them).
     fn cleans(&self) -> bool {
@@ -121,23 +120,13 @@ impl Pipeline {
             .collect()
     }
 
-    /// Each stage's judgement of its own model, keyed by stage name.
-    pub fn model_health(&self) -> Vec<(String, String)> {
-        self.stages
-            .iter()
-            .filter_map(|s| s.model_health().map(|h| (s.name().to_string(), h)))
-            .collect()
-    }
-
-    /// All stages' counters, keyed `stage.counter`.
-    pub fn counters(&self) -> Vec<(String, u64)> {
-        let mut out = Vec::new();
+    /// Every stage's health.
+    pub fn health(&self) -> PipelineHealth {
+        let mut h = PipelineHealth::default();
         for st in &self.stages {
-            for (k, v) in st.counters() {
-                out.push((format!("{}.{}", st.name(), k), v));
-            }
+            h.add(st.health());
         }
-        out
+        h
     }
 }
 
@@ -155,8 +144,8 @@ impl Stage for Pipeline {
     fn lookahead(&self) -> usize {
         self.lookahead
     }
-    fn counters(&self) -> Vec<(String, u64)> {
-        Pipeline::counters(self)
+    fn health(&self) -> StageHealth {
+        StageHealth::Pipeline(Pipeline::health(self))
     }
 }
 

@@ -275,7 +275,7 @@ pub fn slow_q() -> f64 {
 
 /// Stage with the true AR(2) drive-bias model on the three gyros (turn-on bias unknown to it).
 pub fn drive_stage(effects: [Vec<Effect>; 3]) -> BiasStage {
-    BiasStage::new(&settings_with(), Some(&drive_model(effects))).unwrap()
+    BiasStage::new(settings_with(), Some(&drive_model(effects))).unwrap()
 }
 
 /// The true AR(2) drive-bias model on gx, gy, gz with the given effects.

@@ -68,7 +68,9 @@
 //! After a gap longer than 100 samples the delay line is flushed without updates and the detector
 //! restarts.
 
+mod construct;
 pub mod cusum;
+pub mod health;
 pub mod kf;
 pub mod line_canceller;
 pub mod settings;
@@ -80,15 +82,18 @@ use nalgebra::Vector3;
 use crate::model::bias_model::{BiasModelFile, Effect};
 use crate::model::bias_state_space::{BiasStateSpace, StateSpaceError, state_space_from_model};
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
+use crate::settings::IntoValid;
 use crate::stage::Stage;
 use crate::stage::bias::cusum::Cusum;
+use crate::stage::bias::health::{BiasCounters, BiasModelOrigin};
 use crate::stage::bias::kf::{BiasKf, ConstantState, Lead};
 use crate::stage::bias::line_canceller::LineCanceller;
 use crate::stage::bias::settings::{
-    BiasSettings, Calibration, MAX_UPDATE_DELAY, SettingsErrors, WarmupSettings,
+    Calibration, MAX_UPDATE_DELAY, SettingsErrors, ValidBiasSettings, WarmupSettings,
 };
 use crate::stage::bias::stillness::StillnessDetector;
 use crate::stage::bias::temperature::TemperatureComp;
+use crate::stage::health::StageHealth;
 
 /// Most vibration lines cancelled per channel.
 pub const MAX_LINES: usize = 4;
@@ -171,23 +176,8 @@ struct ChannelState {
     bias: f64,
     bias_sd: f64,
     diag: ChannelDiagnostics,
-}
-
-#[derive(Debug, Clone, Copy, Default)]
-struct Counters {
-    samples: u64,
-    still: u64,
-    updates: u64,
-    step_alarms: u64,
-    warmup_fits: u64,
-    warmup_fit_failures: u64,
-    non_finite: u64,
-    long_gaps: u64,
-    white_noise_clamped: u64,
-    ignored_effects: u64,
-    rejected_updates: u64,
-    reanchors: u64,
-    repeats: u64,
+    /// Where the channel's model came from.
+    origin: BiasModelOrigin,
 }
 
 /// The bias stage (6 channels). See the module docs for what it does.
@@ -210,220 +200,10 @@ pub struct BiasStage {
     step_inflation: f64,
     default_step: f64,
     default_rrw_q_per_s: f64,
-    counters: Counters,
+    counters: BiasCounters,
 }
 
 impl BiasStage {
-    /// Build the stage with `model` (from the config's `[bias] model`, a file or inline), or
-    /// without one (each gyro channel identifies its own during warm-up).
-    pub fn new(
-        settings: &BiasSettings,
-        model: Option<&BiasModelFile>,
-    ) -> Result<Self, BiasStageError> {
-        settings.validate()?;
-        let model = match model {
-            Some(m) => {
-                let mut errs = m.validate().err().unwrap_or_default();
-                for (i, ch) in m.channels.iter().enumerate() {
-                    if (ch.sample_rate_hz / settings.sample_rate_hz - 1.0).abs() > 0.01 {
-                        errs.push(format!(
-                            "channels[{i}].sample_rate_hz: {} Hz differs from the stage's {} Hz by more than 1 %",
-                            ch.sample_rate_hz, settings.sample_rate_hz
-                        ));
-                    }
-                }
-                if !errs.is_empty() {
-                    return Err(BiasStageError::Model(errs));
-                }
-                Some(m)
-            }
-            None => None,
-        };
-        let fs = settings.sample_rate_hz;
-        // Validation guarantees invertible calibrations.
-        let cal_err =
-            |k: &str| BiasStageError::Model(vec![format!("{k}: calibration matrix is singular")]);
-        let gyro_cal = settings.gyro.build().ok_or_else(|| cal_err("gyro"))?;
-        let accel_cal = settings.accel.build().ok_or_else(|| cal_err("accel"))?;
-        let mut counters = Counters::default();
-        let empty = ChannelState {
-            temp: None,
-            gsens: None,
-            lines: [None; MAX_LINES],
-            est: None,
-            warm: None,
-            warm_sum: 0.0,
-            warm_sumsq: 0.0,
-            provisional: None,
-            stationary_sd: 0.0,
-            bias: 0.0,
-            bias_sd: 0.0,
-            diag: ChannelDiagnostics::default(),
-        };
-        let mut ch: [ChannelState; N_CHANNELS] = std::array::from_fn(|_| empty.clone());
-        let mut stage_proto = BiasStage {
-            fs,
-            gyro_cal,
-            accel_cal,
-            detector: StillnessDetector::new(&settings.stillness, fs),
-            delay: (settings.update_delay_s * fs).round().clamp(
-                0.0,
-                crate::stage::bias::stillness::window_samples(settings.stillness.window_s, fs)
-                    .min(MAX_UPDATE_DELAY) as f64,
-            ) as usize,
-            ring: [DelayEntry {
-                steps: 0,
-                z: [0.0; 3],
-                usable: [false; 3],
-            }; MAX_UPDATE_DELAY + 1],
-            ring_head: 0,
-            ring_len: 0,
-            lead_steps: 0,
-            ch: std::array::from_fn(|_| empty.clone()),
-            prev: None,
-            warmup: settings.warmup,
-            constant_prior_var: settings.turn_on_bias_sd_rad_s.powi(2),
-            step_arl_samples: settings.step_false_alarm_interval_s * fs,
-            step_inflation: settings.step_inflation_factor,
-            default_step: settings.default_step_rad_s,
-            default_rrw_q_per_s: settings.default_rate_random_walk_q_per_s,
-            counters,
-        };
-        for (c, state) in ch.iter_mut().enumerate() {
-            let name = CHANNEL_NAMES[c];
-            let gyro = c < 3;
-            let m = model.and_then(|m| m.channel(name));
-            match m {
-                Some(m) => {
-                    let ss =
-                        state_space_from_model(m).map_err(|source| BiasStageError::StateSpace {
-                            channel: name.into(),
-                            source,
-                        })?;
-                    if ss.white_noise_clamped {
-                        counters.white_noise_clamped += 1;
-                    }
-                    let mut n_lines = 0;
-                    for e in &m.effects {
-                        match *e {
-                            Effect::Temperature {
-                                t0_c,
-                                c1_per_c,
-                                c2_per_c2,
-                                lag_s,
-                            } => {
-                                state.temp = Some(TemperatureComp::new(
-                                    t0_c, c1_per_c, c2_per_c2, lag_s, fs,
-                                ));
-                            }
-                            Effect::VibrationLine {
-                                freq_hz,
-                                amplitude,
-                                phase_rad,
-                            } => {
-                                if n_lines < MAX_LINES {
-                                    state.lines[n_lines] = Some(LineCanceller::new(
-                                        freq_hz,
-                                        fs,
-                                        settings.vibration_bandwidth_hz,
-                                        amplitude,
-                                        phase_rad,
-                                    ));
-                                    n_lines += 1;
-                                } else {
-                                    counters.ignored_effects += 1;
-                                }
-                            }
-                            Effect::GSensitivity { coeffs_per_m_s2 } => {
-                                state.gsens = Some(coeffs_per_m_s2)
-                            }
-                            Effect::Step { .. } | Effect::RateRandomWalk { .. } if !gyro => {
-                                counters.ignored_effects += 1;
-                            }
-                            Effect::Step { .. } | Effect::RateRandomWalk { .. } => {}
-                        }
-                    }
-                    if gyro {
-                        state.est = Some(stage_proto.channel_kf(ss, &m.effects));
-                    } else {
-                        state.stationary_sd = ss.gamma[0].max(0.0).sqrt();
-                    }
-                }
-                None if gyro => {
-                    state.warm = Some(Vec::with_capacity(settings.warmup.still_samples))
-                }
-                None => {}
-            }
-        }
-        stage_proto.ch = ch;
-        stage_proto.counters = counters;
-        Ok(stage_proto)
-    }
-
-    /// The filter of a gyro channel for state-space model `ss` with the model's effects; a model
-    /// without a rate random walk or a step gets the settings' defaults for them.
-    fn channel_kf(&self, ss: BiasStateSpace, effects: &[Effect]) -> ChannelKf {
-        let declared_rrw = effects
-            .iter()
-            .any(|e| matches!(e, Effect::RateRandomWalk { .. }));
-        let rrw_q_per_s: f64 = if declared_rrw {
-            effects
-                .iter()
-                .map(|e| {
-                    if let Effect::RateRandomWalk { q_per_s } = e {
-                        *q_per_s
-                    } else {
-                        0.0
-                    }
-                })
-                .sum()
-        } else {
-            self.default_rrw_q_per_s
-        };
-        let declared_step = effects
-            .iter()
-            .filter_map(|e| {
-                if let Effect::Step { size, .. } = e {
-                    Some(size.abs())
-                } else {
-                    None
-                }
-            })
-            .fold(f64::INFINITY, f64::min);
-        // The CUSUM is tuned for the smallest step worth catching: a declared step smaller than
-        // the default (diagnose can learn steps of 1e-5 rad/s) would make it fire on noise.
-        let step_size = if declared_step.is_finite() {
-            declared_step.max(self.default_step)
-        } else if self.default_step > 0.0 {
-            self.default_step
-        } else {
-            f64::INFINITY
-        };
-        let has_step = step_size.is_finite();
-        let constant = (self.constant_prior_var > 0.0 || rrw_q_per_s > 0.0 || has_step).then_some(
-            ConstantState {
-                prior_var: self.constant_prior_var,
-                q_per_step: rrw_q_per_s / self.fs,
-            },
-        );
-        let kf = BiasKf::new(&ss, constant);
-        // The CUSUM is tuned for the step in units of the steady innovation sd.
-        let cusum = has_step.then(|| {
-            Cusum::new(
-                step_size / ss.optimal_innovation_var().sqrt(),
-                self.step_arl_samples,
-            )
-        });
-        ChannelKf {
-            lead_nominal: kf.lead(self.delay as u32),
-            kf,
-            ss,
-            cusum,
-            step_size: if has_step { step_size } else { 0.0 },
-            rejected_run: 0,
-        }
-    }
-
     /// Diagnostics of channel `c` (0..6) for the last sample.
     pub fn channel_diagnostics(&self, c: usize) -> ChannelDiagnostics {
         self.ch.get(c).map(|s| s.diag).unwrap_or_default()
@@ -514,7 +294,7 @@ impl BiasStage {
                         st.diag.updated = true;
                         st.diag.innovation = nu;
                         st.diag.innovation_var = s;
-                        self.counters.updates += 1;
+                        self.counters.bias_updates += 1;
                     }
                 } else if !still {
                     est.rejected_run = 0;
@@ -599,6 +379,7 @@ impl BiasStage {
             rejected_run: 0,
         });
         self.ch[c].warm = None;
+        self.ch[c].origin = BiasModelOrigin::WarmUp;
         self.counters.warmup_fits += 1;
     }
 
@@ -658,7 +439,7 @@ impl BiasStage {
         let finite: [bool; N_CHANNELS] = std::array::from_fn(|c| cal[c].is_finite());
         if (0..N_CHANNELS).any(|c| !finite[c] && !s.is_absent(c)) {
             s.flags |= flags::NON_FINITE;
-            self.counters.non_finite += 1;
+            self.counters.non_finite_samples += 1;
         }
         let accel_ok = finite[3] && finite[4] && finite[5];
 
@@ -730,7 +511,7 @@ impl BiasStage {
         };
         if still {
             s.flags |= flags::STILL;
-            self.counters.still += 1;
+            self.counters.still_samples += 1;
         }
 
         // 5. Delayed measurement updates of the gyro filters.
@@ -823,22 +604,7 @@ impl Stage for BiasStage {
         out.push(self.process(s));
     }
 
-    fn counters(&self) -> Vec<(String, u64)> {
-        let c = &self.counters;
-        vec![
-            ("samples".into(), c.samples),
-            ("still_samples".into(), c.still),
-            ("bias_updates".into(), c.updates),
-            ("step_alarms".into(), c.step_alarms),
-            ("warmup_fits".into(), c.warmup_fits),
-            ("warmup_fit_failures".into(), c.warmup_fit_failures),
-            ("non_finite_samples".into(), c.non_finite),
-            ("long_gaps".into(), c.long_gaps),
-            ("white_noise_clamped_channels".into(), c.white_noise_clamped),
-            ("ignored_effects".into(), c.ignored_effects),
-            ("rejected_updates".into(), c.rejected_updates),
-            ("reanchors".into(), c.reanchors),
-            ("repeats".into(), c.repeats),
-        ]
+    fn health(&self) -> StageHealth {
+        StageHealth::Bias(BiasStage::health(self))
     }
 }

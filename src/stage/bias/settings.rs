@@ -189,15 +189,19 @@ impl Default for BiasSettings {
     }
 }
 
-/// Every problem found in the settings, one `key: message` per entry.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("invalid bias settings:\n  {}", .0.join("\n  "))]
-pub struct SettingsErrors(pub Vec<String>);
+pub use crate::settings::SettingsErrors;
+
+crate::valid_settings!(
+    /// Bias settings that passed [`BiasSettings::validate`]: the only form
+    /// [`super::BiasStage`] is built from.
+    ValidBiasSettings,
+    BiasSettings
+);
 
 impl BiasSettings {
-    /// Check every field; returns all problems with their key paths (relative to the `[bias]`
-    /// table, e.g. `stillness.window_s`, `model.channels[0].ar`).
-    pub fn validate(&self) -> Result<(), SettingsErrors> {
+    /// The one validation: every field checked, all problems with their key paths (relative to
+    /// the `[bias.settings]` table, e.g. `stillness.window_s`).
+    pub fn validate(self) -> Result<ValidBiasSettings, SettingsErrors> {
         let mut e = Vec::new();
         let fs = self.sample_rate_hz;
         if !(fs.is_finite() && fs > 0.0 && fs <= 100_000.0) {
@@ -276,11 +280,7 @@ impl BiasSettings {
                 self.step_inflation_factor
             ));
         }
-        if e.is_empty() {
-            Ok(())
-        } else {
-            Err(SettingsErrors(e))
-        }
+        SettingsErrors::check("bias", e, ValidBiasSettings::checked(self))
     }
 }
 
@@ -308,7 +308,7 @@ mod tests {
             time_constant_s = 0.0
         "#;
         let s: BiasSettings = toml::from_str(text).unwrap();
-        let errs = s.validate().unwrap_err().0;
+        let errs = s.validate().unwrap_err().errors;
         let all = errs.join("\n");
         for key in [
             "update_delay_s:",
@@ -354,8 +354,9 @@ mod tests {
             time_constant_s = 60.0
         "#;
         let s: BiasSettings = toml::from_str(text).unwrap();
-        s.validate().unwrap();
-        assert_eq!(s.gyro.bias, [0.001, -0.002, 0.0]);
+        let v = s.clone().validate().unwrap();
+        assert_eq!(v, s, "validation changes nothing");
+        assert_eq!(v.gyro.bias, [0.001, -0.002, 0.0]);
     }
 
     #[test]

@@ -36,6 +36,7 @@
 pub mod confirm;
 pub mod gate;
 pub mod guard;
+pub mod health;
 pub mod settings;
 mod verdict;
 
@@ -47,12 +48,15 @@ use guard::JumpGuard;
 
 pub use settings::{
     GrossErrorSettings, MAX_CONTEXT, MAX_LOOKAHEAD, MAX_MEDIAN_WINDOW, MAX_POST, Replacement,
+    ValidGrossErrorSettings,
 };
 use verdict::RATE_WINDOW;
 
 use crate::model::arima::{ArimaError, ArimaModelFile};
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
+use crate::settings::{IntoValid, SettingsErrors};
 use crate::stage::Stage;
+use crate::stage::health::StageHealth;
 
 /// The flags a repeat copies from the sample it repeats, besides its values.
 const VERDICT_FLAGS: u32 = flags::REPLACED
@@ -76,8 +80,8 @@ const MAX_EVENT: usize = 64;
 /// Why the stage could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum GrossErrorError {
-    #[error("invalid gross_error settings: {}", .0.join("; "))]
-    InvalidSettings(Vec<String>),
+    #[error(transparent)]
+    InvalidSettings(SettingsErrors),
     #[error(transparent)]
     Model(#[from] ArimaError),
 }
@@ -122,7 +126,7 @@ struct Held {
 /// The gross-error stage (module docs).
 #[derive(Debug, Clone)]
 pub struct GrossErrorStage {
-    s: GrossErrorSettings,
+    s: ValidGrossErrorSettings,
     p: GateParams,
     ch: Vec<Channel>,
     last_seq: Option<u32>,
@@ -146,11 +150,11 @@ impl GrossErrorStage {
     /// Build the stage. Channels with a model in `models` (matched by name) start active; the
     /// other enabled channels warm up and identify their own.
     pub fn new(
-        settings: GrossErrorSettings,
+        settings: impl IntoValid<Valid = ValidGrossErrorSettings>,
         models: Option<&ArimaModelFile>,
     ) -> Result<Self, GrossErrorError> {
-        settings
-            .validate()
+        let settings = settings
+            .into_valid()
             .map_err(GrossErrorError::InvalidSettings)?;
         let p = GateParams::new(&settings);
         let mut ch = Vec::with_capacity(N_CHANNELS);
@@ -573,37 +577,7 @@ impl Stage for GrossErrorStage {
         self.s.lookahead_samples
     }
 
-    fn counters(&self) -> Vec<(String, u64)> {
-        let mut out = vec![
-            ("gaps_bridged".to_string(), self.gaps_bridged),
-            ("gaps_reset".to_string(), self.gaps_reset),
-            ("held_samples".to_string(), self.delayed),
-            ("longest_hold".to_string(), self.max_delay),
-            ("repeats".to_string(), self.repeats),
-        ];
-        for (c, ch) in self.ch.iter().enumerate() {
-            if ch.gate.mode == Mode::Disabled {
-                continue;
-            }
-            let n = CHANNEL_NAMES[c];
-            let k = &ch.gate.counters;
-            for (name, v) in [
-                ("replaced", k.replaced),
-                ("runs", k.runs),
-                ("confirmed", k.confirmed),
-                ("suspect_events", k.suspect_events),
-                ("suspect", k.suspect),
-                ("level_changes", k.level_changes),
-                ("released", k.released),
-                ("non_finite", k.non_finite),
-                ("implausible", k.implausible),
-                ("saturated", k.saturated),
-                ("warmup", k.warmup),
-                ("fallback_models", k.fallback_models),
-            ] {
-                out.push((format!("{n}.{name}"), v));
-            }
-        }
-        out
+    fn health(&self) -> StageHealth {
+        StageHealth::GrossError(GrossErrorStage::health(self))
     }
 }

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::arima::{IdentifySettings, MAX_D, MAX_P, MAX_Q};
 use crate::sample::N_CHANNELS;
+use crate::settings::SettingsErrors;
 
 /// Largest median window of the paper's replacement option.
 pub const MAX_MEDIAN_WINDOW: usize = 5;
@@ -146,9 +147,16 @@ impl Default for GrossErrorSettings {
     }
 }
 
+crate::valid_settings!(
+    /// Gross-error settings that passed [`GrossErrorSettings::validate`]: the only form
+    /// [`super::GrossErrorStage`] is built from.
+    ValidGrossErrorSettings,
+    GrossErrorSettings
+);
+
 impl GrossErrorSettings {
-    /// Every problem at once, each naming its key.
-    pub fn validate(&self) -> Result<(), Vec<String>> {
+    /// The one validation: every problem at once, each naming its key.
+    pub fn validate(self) -> Result<ValidGrossErrorSettings, SettingsErrors> {
         let mut e = Vec::new();
         let pos = |v: f64| v.is_finite() && v > 0.0;
         for (name, v) in [
@@ -272,6 +280,6 @@ impl GrossErrorSettings {
                 id.min_len()
             ));
         }
-        if e.is_empty() { Ok(()) } else { Err(e) }
+        SettingsErrors::check("gross_error", e, ValidGrossErrorSettings::checked(self))
     }
 }

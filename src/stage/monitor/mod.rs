@@ -23,6 +23,7 @@ pub mod step;
 
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use crate::stage::Stage;
+use crate::stage::health::StageHealth;
 use line::{LineDetector, LineEvent};
 pub use settings::MonitorSettings;
 use std::collections::VecDeque;
@@ -81,6 +82,21 @@ impl std::fmt::Display for Alarm {
 struct Channel {
     level: LevelDetector,
     line: LineDetector,
+}
+
+/// The monitor's health: its counters since the start and its status now.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct MonitorHealth {
+    /// Offsets the model does not explain, raised so far.
+    pub offset_alarms: u64,
+    /// New spectral lines raised so far (a returning line is not counted again).
+    pub line_alarms: u64,
+    /// Channels whose offset test has learned enough to be armed now.
+    pub armed_channels: u64,
+    /// Still samples watched.
+    pub still_samples: u64,
+    /// "model fits …", "learning …" or "effect suspected: …".
+    pub status: String,
 }
 
 /// The model-health monitor (a pass-through stage).
@@ -278,17 +294,14 @@ impl Stage for MonitorStage {
         out.push(s);
     }
 
-    fn counters(&self) -> Vec<(String, u64)> {
-        vec![
-            ("offset_alarms".into(), self.offset_alarms),
-            ("line_alarms".into(), self.line_alarms),
-            ("armed_channels".into(), self.armed_channels() as u64),
-            ("still_samples".into(), self.still_samples),
-        ]
-    }
-
-    fn model_health(&self) -> Option<String> {
-        Some(self.status())
+    fn health(&self) -> StageHealth {
+        StageHealth::Monitor(MonitorHealth {
+            offset_alarms: self.offset_alarms,
+            line_alarms: self.line_alarms,
+            armed_channels: self.armed_channels() as u64,
+            still_samples: self.still_samples,
+            status: self.status(),
+        })
     }
 
     fn cleans(&self) -> bool {
@@ -354,7 +367,10 @@ mod tests {
         let a: Vec<&Alarm> = m.alarms().collect();
         assert_eq!(a.len(), 1, "{a:?}");
         assert_eq!(a[0].channel, 2);
-        assert_eq!(m.counters()[0].1, 1);
+        let StageHealth::Monitor(h) = m.health() else {
+            panic!()
+        };
+        assert_eq!((h.offset_alarms, h.line_alarms), (1, 0));
     }
 
     #[test]

@@ -1,0 +1,167 @@
+//! Typed health of the bias stage ([`BiasStage::health`]).
+
+use serde::Serialize;
+
+use super::BiasStage;
+use crate::sample::N_CHANNELS;
+
+/// Counted by the bias stage since the run started.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct BiasCounters {
+    /// Samples processed.
+    pub samples: u64,
+    /// Samples the stillness detector called still (flag `STILL`).
+    pub still_samples: u64,
+    /// Still measurements taken by a gyro filter (summed over channels).
+    pub bias_updates: u64,
+    /// CUSUM step alarms (each inflated a random-constant state; summed over channels).
+    pub step_alarms: u64,
+    /// Warm-up models fitted (one per gyro channel without a model, once).
+    pub warmup_fits: u64,
+    /// Warm-up stretches that could not be fitted (constant values) and were started again.
+    pub warmup_fit_failures: u64,
+    /// Samples with a non-finite channel after calibration (flag `NON_FINITE`).
+    pub non_finite_samples: u64,
+    /// Gaps over 100 samples: delay line flushed without updates, stillness restarted.
+    pub long_gaps: u64,
+    /// Channels of the model file whose white-noise variance was clamped (at build).
+    pub white_noise_clamped_channels: u64,
+    /// Effects of the model file the stage cannot apply (too many lines; steps or random walks
+    /// on accel channels), at build.
+    pub ignored_effects: u64,
+    /// Still measurements the consistency guard rejected (beyond 4 σ of the prediction).
+    pub rejected_updates: u64,
+    /// Times a gyro estimate re-anchored after 2 s of disagreeing still measurements.
+    pub reanchors: u64,
+    /// Stale repeats (`REPEATED`): given the current bias, no measurement.
+    pub repeats: u64,
+}
+
+impl BiasCounters {
+    /// Every counter, named as the summary prints it, in a fixed order.
+    pub fn named(&self) -> [(&'static str, u64); 13] {
+        [
+            ("samples", self.samples),
+            ("still_samples", self.still_samples),
+            ("bias_updates", self.bias_updates),
+            ("step_alarms", self.step_alarms),
+            ("warmup_fits", self.warmup_fits),
+            ("warmup_fit_failures", self.warmup_fit_failures),
+            ("non_finite_samples", self.non_finite_samples),
+            ("long_gaps", self.long_gaps),
+            (
+                "white_noise_clamped_channels",
+                self.white_noise_clamped_channels,
+            ),
+            ("ignored_effects", self.ignored_effects),
+            ("rejected_updates", self.rejected_updates),
+            ("reanchors", self.reanchors),
+            ("repeats", self.repeats),
+        ]
+    }
+}
+
+/// Where a channel's bias model came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BiasModelOrigin {
+    /// No model (yet): an accel channel without one, or a gyro channel still warming up.
+    None,
+    /// `[bias] model` (a file from `imuprep fit` / `diagnose`, or inline).
+    File,
+    /// Fitted by the stage on its first still stretch (module docs, warm-up).
+    WarmUp,
+}
+
+/// What the stage does to a channel now.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BiasChannelState {
+    /// Calibration and the model's effects only (accel channels: module docs, point 6).
+    CalibrationOnly,
+    /// A gyro channel collecting its warm-up stretch; nothing estimated is subtracted yet.
+    WarmingUp,
+    /// Warming up, with the running mean of the still stretch subtracted (flag `BIAS_REMOVED`).
+    Provisional,
+    /// A bias filter runs and its estimate is subtracted (flag `BIAS_REMOVED`).
+    Estimating,
+}
+
+impl BiasChannelState {
+    /// A gyro channel still collecting its warm-up stretch (provisional bias or none yet).
+    pub fn warming_up(self) -> bool {
+        matches!(
+            self,
+            BiasChannelState::WarmingUp | BiasChannelState::Provisional
+        )
+    }
+}
+
+/// Health of one channel of the bias stage.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BiasChannelHealth {
+    pub state: BiasChannelState,
+    pub model: BiasModelOrigin,
+    /// Deterministic effects applied (temperature, g-sensitivity, vibration lines).
+    pub effects: u32,
+    /// Stochastic bias estimate published with the last sample, rad/s (gyro) or m/s² (accel);
+    /// the published `bias` of the sample is this plus the effects.
+    pub bias: f64,
+    /// Its 1-σ, same unit (accel with a model: the stationary σ of the bias nobody subtracted).
+    pub bias_sd: f64,
+    /// Step alarms of this channel.
+    pub step_alarms: u64,
+}
+
+/// Health of the bias stage: counters since the run started, the detector and each channel now.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BiasHealth {
+    #[serde(flatten)]
+    pub counters: BiasCounters,
+    /// The stillness detector reports rest now.
+    pub still: bool,
+    /// Per channel, `gx` … `az` (a map keyed by channel name in JSON).
+    #[serde(serialize_with = "crate::stage::health::by_channel")]
+    pub channels: [BiasChannelHealth; N_CHANNELS],
+}
+
+impl BiasHealth {
+    /// Every counter, named as the summary prints it.
+    pub fn counters(&self, f: &mut dyn FnMut(&str, u64)) {
+        for (k, v) in self.counters.named() {
+            f(k, v);
+        }
+    }
+}
+
+impl BiasStage {
+    /// Health now (module [`crate::stage::health`]).
+    pub fn health(&self) -> BiasHealth {
+        BiasHealth {
+            counters: self.counters,
+            still: self.detector.is_still(),
+            channels: std::array::from_fn(|c| {
+                let st = &self.ch[c];
+                let state = if st.est.is_some() {
+                    BiasChannelState::Estimating
+                } else if st.warm.is_some() && st.provisional.is_some() {
+                    BiasChannelState::Provisional
+                } else if st.warm.is_some() {
+                    BiasChannelState::WarmingUp
+                } else {
+                    BiasChannelState::CalibrationOnly
+                };
+                BiasChannelHealth {
+                    state,
+                    model: st.origin,
+                    effects: u32::from(st.temp.is_some())
+                        + u32::from(st.gsens.is_some())
+                        + st.lines.iter().flatten().count() as u32,
+                    bias: st.bias,
+                    bias_sd: st.bias_sd,
+                    step_alarms: st.diag.step_alarms,
+                }
+            }),
+        }
+    }
+}
