@@ -1,9 +1,9 @@
 //! Inputs the fuzz targets (fuzz/) found to crash, kept as regression tests. Needs
 //! `--features ros2` (the MCAP decoder).
 //!
-//! The three of the 2026-11-24 run (10.3 M executions) all panic inside the `mcap` crate
-//! (read.rs:176) under `frame::mcap`, owned by the protocol work: ignored until that decoder
-//! guards the call; run with `--ignored` to see them.
+//! The three of the 2026-11-24 run (10.3 M executions) all panicked inside the `mcap` crate
+//! (read.rs:176, an attachment body sliced before its length is checked) under `frame::mcap`;
+//! the decoder now hands the crate only the records it uses (schema, channel, chunk).
 #![cfg(feature = "ros2")]
 
 use imuprep::frame::mcap::{McapDecoder, McapOptions};
@@ -17,7 +17,6 @@ fn fixture(name: &str) -> Vec<u8> {
 }
 
 #[test]
-#[ignore = "panics in the mcap crate via frame::mcap (protocol helper's scope)"]
 fn mcap_fuzz_crashes_do_not_panic() {
     for name in ["mcap_0.bin", "auto_0.bin", "auto_1.bin"] {
         let data = fixture(name);
