@@ -2,6 +2,7 @@
 //! (residual spectrum before/after, Allan deviation before/after, each effect over the residual).
 
 use super::diagnose::{ChannelDiagnosis, Findings, TestMetrics};
+use super::spectrum::Psd;
 use super::svg::{Plot, Series, render};
 use crate::model::bias_model::Effect;
 use serde::Serialize;
@@ -226,32 +227,36 @@ pub fn channel_text(c: &ChannelDiagnosis) -> String {
     o
 }
 
+/// A log-log plot of two residual spectra, before and after (the DC bin left out).
+pub fn spectrum_plot(title: String, before: (&str, &Psd), after: (&str, &Psd)) -> String {
+    let skip0 = |v: &Vec<f64>| v.iter().skip(1).copied().collect::<Vec<f64>>();
+    let series = [before, after]
+        .into_iter()
+        .map(|(label, p)| Series {
+            label: label.into(),
+            x: skip0(&p.freq_hz),
+            y: skip0(&p.density),
+        })
+        .collect();
+    let plot = Plot {
+        title,
+        x_label: "frequency (Hz)".into(),
+        y_label: "PSD (units²/Hz)".into(),
+        log_x: true,
+        log_y: true,
+        series,
+    };
+    render(&plot, 800, 480)
+}
+
 /// SVG plots of one channel: (file stem, svg text).
 pub fn channel_plots(c: &ChannelDiagnosis) -> Vec<(String, String)> {
     let mut out = Vec::new();
     let p = &c.plots;
     if let (Some(a), Some(b)) = (&p.spectrum_before, &p.spectrum_after) {
-        let skip0 = |v: &Vec<f64>| v.iter().skip(1).copied().collect::<Vec<f64>>();
-        let plot = Plot {
-            title: format!("{}: residual spectrum (test, Welch)", c.channel),
-            x_label: "frequency (Hz)".into(),
-            y_label: "PSD (units²/Hz)".into(),
-            log_x: true,
-            log_y: true,
-            series: vec![
-                Series {
-                    label: "first model".into(),
-                    x: skip0(&a.freq_hz),
-                    y: skip0(&a.density),
-                },
-                Series {
-                    label: "final model".into(),
-                    x: skip0(&b.freq_hz),
-                    y: skip0(&b.density),
-                },
-            ],
-        };
-        out.push((format!("{}_spectrum", c.channel), render(&plot, 800, 480)));
+        let title = format!("{}: residual spectrum (test, Welch)", c.channel);
+        let svg = spectrum_plot(title, ("first model", a), ("final model", b));
+        out.push((format!("{}_spectrum", c.channel), svg));
     }
     if !p.allan_before.is_empty() {
         let plot = Plot {

@@ -2,7 +2,7 @@
 //! the effects of the model file (`effects`), each with its span and held-out test, then every
 //! candidate not kept with its reason, so report, summary and model file agree.
 
-use super::diagnose_report::effect_text;
+use super::diagnose_report::{effect_text, spectrum_plot};
 use super::diagnose_wander::WanderKind;
 use super::diagnose_whole::WholeDiagnosis;
 use super::svg::{Plot, Series, render};
@@ -164,28 +164,10 @@ pub fn whole_text(d: &WholeDiagnosis) -> String {
 pub fn whole_plots(d: &WholeDiagnosis) -> Vec<(String, String)> {
     let mut out = Vec::new();
     let p = &d.plots;
-    let skip0 = |v: &Vec<f64>| v.iter().skip(1).copied().collect::<Vec<f64>>();
     if let (Some(a), Some(b)) = (&p.spectrum_before, &p.spectrum_after) {
-        let plot = Plot {
-            title: format!("{}: open-loop residual spectrum (Welch)", d.channel),
-            x_label: "frequency (Hz)".into(),
-            y_label: "PSD (units²/Hz)".into(),
-            log_x: true,
-            log_y: true,
-            series: vec![
-                Series {
-                    label: "intercept only".into(),
-                    x: skip0(&a.freq_hz),
-                    y: skip0(&a.density),
-                },
-                Series {
-                    label: "with the effects".into(),
-                    x: skip0(&b.freq_hz),
-                    y: skip0(&b.density),
-                },
-            ],
-        };
-        out.push((format!("{}_spectrum", d.channel), render(&plot, 800, 480)));
+        let title = format!("{}: open-loop residual spectrum (Welch)", d.channel);
+        let svg = spectrum_plot(title, ("intercept only", a), ("with the effects", b));
+        out.push((format!("{}_spectrum", d.channel), svg));
     }
     if !p.allan_before.is_empty() && !p.allan_after.is_empty() {
         let s = |v: &Vec<(f64, f64)>, l: &str| Series {

@@ -67,6 +67,30 @@ pub fn diagnose(
     )
 }
 
+/// The other channels of `series` than `c`, named (candidate exogenous inputs).
+pub fn others_of(series: &[Vec<f64>], c: usize) -> Vec<(String, &[f64])> {
+    (0..series.len().min(CHANNEL_NAMES.len()))
+        .filter(|j| *j != c)
+        .map(|j| (CHANNEL_NAMES[j].to_string(), series[j].as_slice()))
+        .collect()
+}
+
+/// Channel `c`'s input to the diagnose methods, with its exogenous series.
+pub fn channel_input<'a>(
+    series: &'a [Vec<f64>],
+    temp: Option<&'a [f64]>,
+    others: &'a [(String, &'a [f64])],
+    rate_hz: f64,
+    c: usize,
+) -> ChannelInput<'a> {
+    ChannelInput {
+        name: CHANNEL_NAMES[c],
+        values: &series[c],
+        rate_hz,
+        exogenous: exogenous(series, temp, others, c),
+    }
+}
+
 /// The exogenous inputs of channel `c`: temperature, the specific force (gyro channels) and
 /// the other five axes.
 pub fn exogenous<'a>(
@@ -121,16 +145,8 @@ pub fn diagnose_samples(
     let mut added_all: Added = Vec::new();
     for c in chans {
         let name = CHANNEL_NAMES[c];
-        let others: Vec<(String, &[f64])> = (0..6)
-            .filter(|j| *j != c)
-            .map(|j| (CHANNEL_NAMES[j].to_string(), series[j].as_slice()))
-            .collect();
-        let input = ChannelInput {
-            name,
-            values: &series[c],
-            rate_hz: rate,
-            exogenous: exogenous(&series, temp.as_deref(), &others, c),
-        };
+        let others = others_of(&series, c);
+        let input = channel_input(&series, temp.as_deref(), &others, rate, c);
         let d = match diagnose_channel(&input, &settings) {
             Ok(d) => d,
             Err(e) => {

@@ -9,9 +9,8 @@ use anyhow::{Result, anyhow, ensure};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
-use super::diagnose::{Added, effects_text, exogenous};
+use super::diagnose::{Added, channel_input, effects_text, others_of};
 use super::parse_channels;
-use crate::analysis::diagnose::ChannelInput;
 use crate::analysis::diagnose_whole::{WholeDiagnosis, WholeSettings, diagnose_whole};
 use crate::analysis::diagnose_whole_report::{effect_lines, whole_plots, whole_text};
 use crate::model::bias_model::{BiasModelFile, ChannelBiasModel};
@@ -78,16 +77,8 @@ pub fn diagnose_whole_samples(
     let mut added_all: Added = Vec::new();
     for c in chans {
         let name = CHANNEL_NAMES[c];
-        let others: Vec<(String, &[f64])> = (0..6)
-            .filter(|j| *j != c)
-            .map(|j| (CHANNEL_NAMES[j].to_string(), series[j].as_slice()))
-            .collect();
-        let input = ChannelInput {
-            name,
-            values: &series[c],
-            rate_hz: rate,
-            exogenous: exogenous(&series, temp.as_deref(), &others, c),
-        };
+        let others = others_of(&series, c);
+        let input = channel_input(&series, temp.as_deref(), &others, rate, c);
         let start = bar.position();
         let d = match diagnose_whole(&input, &settings, &mut |stage| {
             bar.set_message(format!("{name}: {stage}"));
