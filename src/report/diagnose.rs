@@ -124,21 +124,15 @@ pub fn diagnose_samples(
     out_dir: &Path,
     progress: &mut dyn Write,
 ) -> Result<Added> {
-    let end = samples.len();
-    ensure!(end > 0, "the chosen stretch is empty");
-    let chans = parse_channels(channels)?;
-    let series: Vec<Vec<f64>> = (0..6)
-        .map(|c| samples.iter().map(|s| s.channel(c)).collect())
-        .collect();
-    let temp: Option<Vec<f64>> = samples.iter().map(|s| s.temp_c).collect();
-    std::fs::create_dir_all(out_dir.join("plots"))?;
+    let Prepared {
+        chans,
+        series,
+        temp,
+        source,
+    } = prepare(log, samples, rate, from_s, channels, out_dir)?;
     let settings = DiagnoseSettings::default();
     let mut report = DiagnoseReport {
-        source: format!(
-            "{} [{from_s} s .. +{:.1} s at {rate} Hz]",
-            log.display(),
-            end as f64 / rate
-        ),
+        source,
         channels: vec![],
     };
     let mut model = BiasModelFile::default();
@@ -180,28 +174,92 @@ pub fn diagnose_samples(
         for (stem, svg) in channel_plots(&d) {
             std::fs::write(out_dir.join("plots").join(format!("{stem}.svg")), svg)?;
         }
-        model.channels.push(ChannelBiasModel {
-            channel: name.to_string(),
-            method: "burg".into(),
-            sample_rate_hz: rate,
-            mean: d.intercept,
-            ar: d.ar.clone(),
-            innovation_var: d.innovation_var,
-            white_noise_var: 0.0,
-            effects: d.effects.clone(),
-            ..Default::default()
-        });
+        model.channels.push(channel_model(
+            name,
+            rate,
+            (d.intercept, &d.ar, d.innovation_var),
+            d.effects.clone(),
+        ));
         added_all.push((
             name.to_string(),
             d.iterations.iter().map(|it| it.effect.clone()).collect(),
         ));
         report.channels.push(d);
     }
-    std::fs::write(out_dir.join("report.txt"), report.to_text())?;
-    std::fs::write(
-        out_dir.join("report.json"),
-        report.to_json().map_err(|e| anyhow!(e.to_string()))?,
-    )?;
+    let json = report.to_json().map_err(|e| anyhow!(e.to_string()))?;
+    write_outputs(out_dir, &report.to_text(), &json, &model, progress)?;
+    Ok(added_all)
+}
+
+/// What both diagnose loops start from: the channels asked for, every channel's series and the
+/// temperature (when every sample has one), the report's source line; `out_dir/plots` made.
+pub struct Prepared {
+    pub chans: Vec<usize>,
+    pub series: Vec<Vec<f64>>,
+    pub temp: Option<Vec<f64>>,
+    pub source: String,
+}
+
+/// [`Prepared`] for `samples` (the stretch starting `from_s` into `log`).
+pub fn prepare(
+    log: &Path,
+    samples: &[Sample],
+    rate: f64,
+    from_s: f64,
+    channels: &[String],
+    out_dir: &Path,
+) -> Result<Prepared> {
+    ensure!(!samples.is_empty(), "the chosen stretch is empty");
+    let chans = parse_channels(channels)?;
+    let series: Vec<Vec<f64>> = (0..6)
+        .map(|c| samples.iter().map(|s| s.channel(c)).collect())
+        .collect();
+    let temp: Option<Vec<f64>> = samples.iter().map(|s| s.temp_c).collect();
+    std::fs::create_dir_all(out_dir.join("plots"))?;
+    let source = format!(
+        "{} [{from_s} s .. +{:.1} s at {rate} Hz]",
+        log.display(),
+        samples.len() as f64 / rate
+    );
+    Ok(Prepared {
+        chans,
+        series,
+        temp,
+        source,
+    })
+}
+
+/// One channel of the model file a diagnosis writes: its Burg AR part `(mean, ar,
+/// innovation variance)` and its effects.
+pub fn channel_model(
+    name: &str,
+    rate: f64,
+    (mean, ar, innovation_var): (f64, &[f64], f64),
+    effects: Vec<Effect>,
+) -> ChannelBiasModel {
+    ChannelBiasModel {
+        channel: name.to_string(),
+        method: "burg".into(),
+        sample_rate_hz: rate,
+        mean,
+        ar: ar.to_vec(),
+        innovation_var,
+        white_noise_var: 0.0,
+        effects,
+        ..Default::default()
+    }
+}
+
+/// `report.txt`, `report.json` and `bias.toml` into `out_dir`, said on `progress`.
+pub fn write_outputs(
+    out_dir: &Path,
+    text: &str,
+    json: &str,
+    model: &BiasModelFile,
+    progress: &mut dyn Write,
+) -> Result<()> {
+    std::fs::write(out_dir.join("report.txt"), text)?;
+    std::fs::write(out_dir.join("report.json"), json)?;
     std::fs::write(
         out_dir.join("bias.toml"),
         model.to_toml_string().map_err(|e| anyhow!(e.to_string()))?,
@@ -211,5 +269,5 @@ pub fn diagnose_samples(
         "wrote {0}/report.txt, {0}/report.json, {0}/bias.toml and {0}/plots/",
         out_dir.display()
     )?;
-    Ok(added_all)
+    Ok(())
 }

@@ -5,15 +5,16 @@
 use std::io::Write;
 use std::path::Path;
 
-use anyhow::{Result, anyhow, ensure};
+use anyhow::{Result, anyhow};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
-use super::diagnose::{Added, channel_input, effects_text, others_of};
-use super::parse_channels;
+use super::diagnose::{
+    Added, Prepared, channel_input, channel_model, effects_text, others_of, prepare, write_outputs,
+};
 use crate::analysis::diagnose_whole::{WholeDiagnosis, WholeSettings, diagnose_whole};
 use crate::analysis::diagnose_whole_report::{effect_lines, whole_plots, whole_text};
-use crate::model::bias_model::{BiasModelFile, ChannelBiasModel};
+use crate::model::bias_model::BiasModelFile;
 use crate::sample::{CHANNEL_NAMES, Sample};
 
 /// The report of one run.
@@ -50,20 +51,15 @@ pub fn diagnose_whole_samples(
     out_dir: &Path,
     progress: &mut dyn Write,
 ) -> Result<Added> {
-    ensure!(!samples.is_empty(), "the chosen stretch is empty");
-    let chans = parse_channels(channels)?;
-    let series: Vec<Vec<f64>> = (0..6)
-        .map(|c| samples.iter().map(|s| s.channel(c)).collect())
-        .collect();
-    let temp: Option<Vec<f64>> = samples.iter().map(|s| s.temp_c).collect();
-    std::fs::create_dir_all(out_dir.join("plots"))?;
+    let Prepared {
+        chans,
+        series,
+        temp,
+        source,
+    } = prepare(log, samples, rate, from_s, channels, out_dir)?;
     let settings = WholeSettings::default();
     let mut report = WholeReport {
-        source: format!(
-            "{} [{from_s} s .. +{:.1} s at {rate} Hz]",
-            log.display(),
-            samples.len() as f64 / rate
-        ),
+        source,
         method: METHOD,
         channels: vec![],
     };
@@ -110,34 +106,17 @@ pub fn diagnose_whole_samples(
             std::fs::write(out_dir.join("plots").join(format!("{stem}.svg")), svg)?;
         }
         let effects: Vec<_> = d.effects.iter().map(|e| e.effect.clone()).collect();
-        model.channels.push(ChannelBiasModel {
-            channel: name.to_string(),
-            method: "burg".into(),
-            sample_rate_hz: rate,
-            mean: d.intercept,
-            ar: d.ar.clone(),
-            innovation_var: d.innovation_var,
-            white_noise_var: 0.0,
-            effects: effects.clone(),
-            ..Default::default()
-        });
+        model.channels.push(channel_model(
+            name,
+            rate,
+            (d.intercept, &d.ar, d.innovation_var),
+            effects.clone(),
+        ));
         added_all.push((name.to_string(), effects));
         report.channels.push(d);
     }
     bar.finish_and_clear();
-    std::fs::write(out_dir.join("report.txt"), report.to_text())?;
-    std::fs::write(
-        out_dir.join("report.json"),
-        serde_json::to_string_pretty(&report).map_err(|e| anyhow!(e.to_string()))?,
-    )?;
-    std::fs::write(
-        out_dir.join("bias.toml"),
-        model.to_toml_string().map_err(|e| anyhow!(e.to_string()))?,
-    )?;
-    writeln!(
-        progress,
-        "wrote {0}/report.txt, {0}/report.json, {0}/bias.toml and {0}/plots/",
-        out_dir.display()
-    )?;
+    let json = serde_json::to_string_pretty(&report).map_err(|e| anyhow!(e.to_string()))?;
+    write_outputs(out_dir, &report.to_text(), &json, &model, progress)?;
     Ok(added_all)
 }
