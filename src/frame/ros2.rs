@@ -113,6 +113,12 @@ fn u32_at(d: &[u8], o: usize, le: bool) -> u32 {
 
 /// Where the f64 block starts, and the byte order; checks every length.
 fn layout(d: &[u8]) -> Result<(usize, bool, usize), CdrError> {
+    header_layout(d, F64_BLOCK)
+}
+
+/// After a `std_msgs/Header` (stamp, frame id): where the 8-aligned data starts, the byte
+/// order and the frame id's length; checks that `need` bytes follow.
+fn header_layout(d: &[u8], need: usize) -> Result<(usize, bool, usize), CdrError> {
     if d.len() < 16 {
         return Err(CdrError::Short(d.len()));
     }
@@ -128,7 +134,7 @@ fn layout(d: &[u8]) -> Result<(usize, bool, usize), CdrError> {
     }
     // Align to 8 counted from the end of the encapsulation header.
     let block = 4 + (end - 4).div_ceil(8) * 8;
-    if block + F64_BLOCK > d.len() {
+    if block + need > d.len() {
         return Err(CdrError::Short(d.len()));
     }
     Ok((block, le, n))
@@ -157,23 +163,7 @@ pub fn decode_imu_fast(d: &[u8]) -> Result<(i32, u32, [f64; N_CHANNELS], usize, 
 /// A CDR `sensor_msgs/msg/Temperature`: header stamp (sec, nanosec) and `temperature` (°C);
 /// the `variance` after it is not needed.
 pub fn decode_temperature(d: &[u8]) -> Result<(i32, u32, f64), CdrError> {
-    if d.len() < 16 {
-        return Err(CdrError::Short(d.len()));
-    }
-    let le = match (d[0], d[1]) {
-        (0, 1) => true,
-        (0, 0) => false,
-        (a, b) => return Err(CdrError::Encapsulation(a, b)),
-    };
-    let n = u32_at(d, 12, le) as usize;
-    let end = 16usize.checked_add(n).ok_or(CdrError::FrameId(n))?;
-    if end > d.len() {
-        return Err(CdrError::FrameId(n));
-    }
-    let at = 4 + (end - 4).div_ceil(8) * 8;
-    if at + 16 > d.len() {
-        return Err(CdrError::Short(d.len()));
-    }
+    let (at, le, _) = header_layout(d, 16)?;
     Ok((u32_at(d, 4, le) as i32, u32_at(d, 8, le), f64_at(d, at, le)))
 }
 
