@@ -514,3 +514,69 @@ fn an_absent_triad_is_no_data_in_the_imu_message() {
     assert!(m.angular_velocity_covariance[0] >= 0.0);
     assert_eq!(m.angular_velocity, [0.1, 0.2, 0.3]);
 }
+
+/// The decoder reads the convention back (issue 13 item 10): a gyro-only and an accel-only
+/// bag from the sink decode with the other triad absent — NaN, `absent` set on every sample and
+/// in the descriptor, not counted non-finite — and the present triad as written.
+#[test]
+fn a_triad_with_covariance_minus_one_decodes_as_absent_channels() {
+    let flu = Descriptor {
+        axes: AxisConvention::Flu,
+        ..Descriptor::default()
+    };
+    let src = sink_input();
+    for absent in [0b111_000u8, 0b000_111] {
+        let v: Vec<Sample> = src
+            .iter()
+            .map(|s| {
+                let mut s = *s;
+                s.absent = absent;
+                for c in 0..6 {
+                    if s.is_absent(c) {
+                        s.set_channel(c, f64::NAN);
+                    }
+                }
+                s
+            })
+            .collect();
+        let bag = encode_bag(&flu, &v, McapSinkOptions::default()).unwrap();
+        let f = decode_bytes(&bag, &ProtocolConfig::auto());
+        assert_eq!(f.protocol, Protocol::Mcap);
+        assert_eq!(f.samples.len(), v.len(), "{absent:#b}");
+        assert_eq!(f.descriptor.unwrap().absent, absent);
+        assert_eq!(
+            f.stats.non_finite, 0,
+            "{absent:#b}: absent counted non-finite"
+        );
+        for (a, b) in v.iter().zip(&f.samples) {
+            assert_eq!(b.absent, absent);
+            assert!(!b.has(flags::NON_FINITE));
+            for c in 0..6 {
+                if b.is_absent(c) {
+                    assert!(b.channel(c).is_nan(), "{absent:#b} ch {c}");
+                } else {
+                    assert_eq!(b.channel(c), a.channel(c), "{absent:#b} ch {c}");
+                }
+            }
+        }
+    }
+    // One message says it, whatever numbers the vector holds: those are not data.
+    let mut m = imuprep::io::mcap_sink::ImuBagWriter::new(
+        std::io::Cursor::new(Vec::new()),
+        McapSinkOptions::default(),
+    )
+    .unwrap()
+    .imu_msg(&src[0]);
+    m.linear_acceleration_covariance[0] = -1.0;
+    m.linear_acceleration = [1.0, 2.0, 3.0];
+    let mut cdr = Vec::new();
+    ros2::encode_imu(&m, &mut cdr);
+    let fast = ros2::decode_imu_fast(&cdr).unwrap();
+    assert_eq!(fast.absent, 0b111_000);
+    assert_eq!(fast.channels[3..], [1.0, 2.0, 3.0]);
+    m.linear_acceleration_covariance[0] = 0.0;
+    m.angular_velocity_covariance[0] = -1.0;
+    cdr.clear();
+    ros2::encode_imu(&m, &mut cdr);
+    assert_eq!(ros2::decode_imu_fast(&cdr).unwrap().absent, 0b000_111);
+}

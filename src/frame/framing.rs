@@ -202,9 +202,9 @@ impl Stamper {
         self.descriptor
     }
 
-    /// Finish `s` (its `t_ns`, channels and temperature set). Returns the descriptor when this
-    /// sample made the rate known (`base` fills everything but the rate): the decoder sends it
-    /// on beside the sample.
+    /// Finish `s` (its `t_ns`, channels, temperature and absent channels set). Returns the
+    /// descriptor when this sample made the rate known (`base` fills everything but the rate
+    /// and the absent mask, which is this sample's): the decoder sends it on beside the sample.
     #[inline]
     pub fn stamp(
         &mut self,
@@ -217,8 +217,10 @@ impl Stamper {
         if self.descriptor.is_none()
             && let Some(r) = self.tracker.rate_hz()
         {
+            // The channels absent when the rate became known are the stream's absent ones.
             let d = Descriptor {
                 sample_rate_hz: r,
+                absent: s.absent,
                 ..base()
             };
             self.descriptor = Some(d);

@@ -14,6 +14,13 @@
 //! temperature field in c°C). The instance is SCALED_IMU → 0, SCALED_IMU2 → 1, SCALED_IMU3 → 2,
 //! and the `id` field of HIGHRES_IMU / RAW_IMU.
 //!
+//! HIGHRES_IMU's `fields_updated` says which fields a message carries (bits 0–2 accel x/y/z,
+//! 3–5 gyro x/y/z, 12 temperature): a channel whose bit no message of the stream has set yet is
+//! absent ([`Sample::absent`]; a gyro-only or accel-only sensor), never a value. Once set, a
+//! clear bit means "not new since the last message" (senders update the sensors at different
+//! rates) and the value is read as sent. A stream whose `fields_updated` is 0 (a sender that
+//! does not fill it, or a v2 frame whose trailing zeros cut it off) has every field.
+//!
 //! Several systems, components, messages and instances may share a link: one IMU stream
 //! (system id, component id, message, instance) is selected — by the options, or else the
 //! first one seen — and the others pass through like any non-IMU message; the summary lists
@@ -29,7 +36,7 @@
 
 use super::framing::{Framer, Stamper};
 use super::mavlink_crc::CRC_EXTRA;
-use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
+use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder, mark_absent};
 use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
@@ -51,6 +58,10 @@ const IFLAG_SIGNED: u8 = 0x01;
 const SIGNATURE_LEN: usize = 13;
 /// Standard gravity, m/s² per g (1 mG = 9.80665e-3 m/s²).
 const MG_M_S2: f64 = 9.80665e-3;
+/// HIGHRES_IMU `fields_updated` bit of channel `c` (gx gy gz ax ay az): gyro 3..6, accel 0..3.
+const HIGHRES_CHANNEL_BITS: [u16; 6] = [1 << 3, 1 << 4, 1 << 5, 1 << 0, 1 << 1, 1 << 2];
+/// HIGHRES_IMU `fields_updated` bit of the temperature.
+const HIGHRES_TEMP_BIT: u16 = 1 << 12;
 
 /// Slice-by-16 tables (8 KiB): the byte-at-a-time table was three quarters of the decode time.
 const X25: Crc<u16, Table<16>> = Crc::<u16, Table<16>>::new(&CRC_16_MCRF4XX);
@@ -178,6 +189,8 @@ pub struct MavlinkDecoder {
     eof: bool,
     v1: u64,
     v2: u64,
+    /// HIGHRES_IMU `fields_updated` bits the selected stream has set so far.
+    seen_fields: u16,
 }
 
 impl Default for MavlinkDecoder {
@@ -200,6 +213,7 @@ impl MavlinkDecoder {
             eof: false,
             v1: 0,
             v2: 0,
+            seen_fields: 0,
         }
     }
 
@@ -217,14 +231,16 @@ impl MavlinkDecoder {
                 || (self.opts.gyro_scale_rad_s > 0.0 && self.opts.accel_scale_m_s2 > 0.0))
     }
 
-    /// The sample an IMU frame carries (payload zero-extended), and its stream.
-    fn imu(&self, fr: &Frame) -> Option<(StreamKey, Sample)> {
+    /// The sample an IMU frame carries (payload zero-extended), its stream, and the fields it
+    /// has (HIGHRES_IMU `fields_updated`; every bit for the other messages and for 0).
+    fn imu(&self, fr: &Frame) -> Option<(StreamKey, Sample, u16)> {
         let full = full_len(fr.msgid)?;
         let mut p = [0u8; LEN_HIGHRES];
         let n = fr.payload.len().min(full);
         p[..n].copy_from_slice(&fr.payload[..n]);
         let mut s = Sample::default();
         let instance;
+        let mut fields = u16::MAX;
         match fr.msgid {
             MSG_HIGHRES_IMU => {
                 s.t_ns = u64::from_le_bytes(p[0..8].try_into().ok()?).saturating_mul(1000);
@@ -232,6 +248,10 @@ impl MavlinkDecoder {
                 s.set_channels(&[v(3), v(4), v(5), v(0), v(1), v(2)]);
                 let t = f32_at(&p, 56);
                 s.temp_c = t.is_finite().then_some(t as f64);
+                fields = match u16::from_le_bytes([p[60], p[61]]) {
+                    0 => u16::MAX,
+                    f => f,
+                };
                 instance = p[62];
             }
             MSG_SCALED_IMU | MSG_SCALED_IMU2 | MSG_SCALED_IMU3 => {
@@ -264,7 +284,7 @@ impl MavlinkDecoder {
             msgid: fr.msgid,
             instance,
         };
-        Some((key, s))
+        Some((key, s, fields))
     }
 
     /// Handle one good frame (checksum verified or unverifiable).
@@ -278,7 +298,7 @@ impl MavlinkDecoder {
         } else {
             self.v1 += 1;
         }
-        let Some((key, mut s)) = self.imu(&fr) else {
+        let Some((key, mut s, fields)) = self.imu(&fr) else {
             return self.other(frame);
         };
         match self.streams.iter_mut().find(|(k, _)| *k == key) {
@@ -290,6 +310,16 @@ impl MavlinkDecoder {
         }
         if self.selected != Some(key) {
             return self.other(frame);
+        }
+        self.seen_fields |= fields;
+        let absent = HIGHRES_CHANNEL_BITS
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| self.seen_fields & **b == 0)
+            .fold(0u8, |m, (c, _)| m | 1 << c);
+        mark_absent(&mut s, absent);
+        if self.seen_fields & HIGHRES_TEMP_BIT == 0 {
+            s.temp_c = None;
         }
         // A descriptor learned on a frame goes out right after that frame's sample.
         let learned = self
@@ -513,16 +543,32 @@ pub fn encode_v2(seq: u8, sysid: u8, compid: u8, msgid: u32, payload: &[u8], out
 }
 
 /// HIGHRES_IMU payload for a sample (time in µs, values as f32, the given instance id).
+/// `fields_updated` has the bits of the present channels and of the temperature when there is
+/// one; an absent channel's bit is clear and its field NaN (so a reader that ignores the bits
+/// sees no number either), a missing temperature likewise.
 pub fn highres_payload(s: &Sample, instance: u8) -> Vec<u8> {
     let mut p = Vec::with_capacity(LEN_HIGHRES);
     p.extend_from_slice(&(s.t_ns / 1000).to_le_bytes());
     let ch = s.channels();
     for c in [3, 4, 5, 0, 1, 2] {
-        p.extend_from_slice(&(ch[c] as f32).to_le_bytes());
+        let v = if s.is_absent(c) {
+            f32::NAN
+        } else {
+            ch[c] as f32
+        };
+        p.extend_from_slice(&v.to_le_bytes());
     }
     p.extend_from_slice(&[0u8; 24]); // mag, pressures
-    p.extend_from_slice(&(s.temp_c.unwrap_or(0.0) as f32).to_le_bytes());
-    p.extend_from_slice(&0x003Fu16.to_le_bytes()); // fields_updated: acc + gyro
+    p.extend_from_slice(&(s.temp_c.map_or(f32::NAN, |t| t as f32)).to_le_bytes());
+    let mut fields = HIGHRES_CHANNEL_BITS
+        .iter()
+        .enumerate()
+        .filter(|(c, _)| !s.is_absent(*c))
+        .fold(0u16, |m, (_, b)| m | b);
+    if s.temp_c.is_some() {
+        fields |= HIGHRES_TEMP_BIT;
+    }
+    p.extend_from_slice(&fields.to_le_bytes());
     p.push(instance);
     p
 }

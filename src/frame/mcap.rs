@@ -22,6 +22,8 @@
 //! the stamp is zero, or always with `time = "log"`); sequence and gap flags come from it.
 //! The sample carries angular velocity and linear acceleration; orientation and the three
 //! covariance matrices stay in the carrier (the original message), so inline output keeps them.
+//! A vector whose covariance has −1 in element 0 ("data not available", the message's own
+//! convention, as the MCAP sink writes a triad the sensor lacks) gives three absent channels.
 
 use super::framing::{Framer, Stamper};
 use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
@@ -223,7 +225,7 @@ impl McapDecoder {
     /// A sample from a message record of the selected channel.
     fn message(&mut self, rec: Bytes, log_time: u64) -> Decoded {
         let data = &rec[9 + 22..];
-        let (sec, nsec, ch, g, le) = match ros2::decode_imu_fast(data) {
+        let m = match ros2::decode_imu_fast(data) {
             Ok(x) => x,
             Err(_) => {
                 self.bad_cdr += 1;
@@ -231,13 +233,16 @@ impl McapDecoder {
                 return self.other(rec);
             }
         };
-        let t_ns = self.time_of(sec, nsec, log_time);
+        let (g, le) = (m.angular_velocity_at, m.little_endian);
+        let t_ns = self.time_of(m.sec, m.nanosec, log_time);
         let mut s = Sample {
             t_ns,
             temp_c: self.temperature_at(t_ns),
             ..Sample::default()
         };
-        s.set_channels(&ch);
+        s.set_channels(&m.channels);
+        // A vector the message declares not available (covariance[0] = −1): absent channels.
+        super::protocol::mark_absent(&mut s, m.absent);
         let learned = self
             .stamper
             .stamp(&mut s, &mut self.f.stats, || Descriptor {

@@ -217,11 +217,27 @@ impl ProtocolDecoder for super::FrameDecoder {
     }
 }
 
+/// Mark the channels of `mask` absent on `s` (bit `c` for channel `c`): NaN, and
+/// [`Sample::absent`], so they count as no measurement rather than as a non-finite value.
+#[inline]
+pub fn mark_absent(s: &mut Sample, mask: u8) {
+    s.absent = mask & crate::sample::ALL_CHANNELS;
+    for c in 0..crate::sample::N_CHANNELS {
+        if s.is_absent(c) {
+            s.set_channel(c, f64::NAN);
+        }
+    }
+}
+
 /// Flag non-finite channels, and saturated ones against the descriptor's ranges (same rule as
-/// the native decoder).
+/// the native decoder). Absent channels ([`Sample::absent`]) are neither.
 pub fn flag_values(s: &mut Sample, d: Option<&Descriptor>, stats: &mut DecoderStats) {
     let ch = s.channels();
-    if ch.iter().any(|v| !v.is_finite()) {
+    if ch
+        .iter()
+        .enumerate()
+        .any(|(c, v)| !v.is_finite() && !s.is_absent(c))
+    {
         s.flags |= flags::NON_FINITE;
         stats.non_finite += 1;
     }
@@ -232,7 +248,7 @@ pub fn flag_values(s: &mut Sample, d: Option<&Descriptor>, stats: &mut DecoderSt
             } else {
                 d.accel_range_m_s2
             } as f64;
-            if range > 0.0 && v.abs() >= range {
+            if range > 0.0 && v.abs() >= range && !s.is_absent(c) {
                 s.flags |= flags::sat_ch(c);
             }
         }

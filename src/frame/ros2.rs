@@ -140,16 +140,34 @@ fn header_layout(d: &[u8], need: usize) -> Result<(usize, bool, usize), CdrError
     Ok((block, le, n))
 }
 
-/// The IMU vectors only (the hot path): time, angular velocity, linear acceleration, and the
-/// offset of `angular_velocity.x`.
+/// What [`decode_imu_fast`] reads of a `sensor_msgs/msg/Imu`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuFast {
+    pub sec: i32,
+    pub nanosec: u32,
+    /// gx gy gz ax ay az.
+    pub channels: [f64; N_CHANNELS],
+    /// Channels the message says it has no data for (bit `c` for channel `c`): a vector whose
+    /// covariance's element 0 is −1, the message's own "not available" convention.
+    pub absent: u8,
+    /// Byte offset of `angular_velocity.x`.
+    pub angular_velocity_at: usize,
+    pub little_endian: bool,
+}
+
+/// Covariance element 0 that says "this vector's data is not available" (`sensor_msgs/Imu`).
+pub const COVARIANCE_NOT_AVAILABLE: f64 = -1.0;
+
+/// The IMU vectors only (the hot path): time, angular velocity, linear acceleration, which of
+/// them the message declares not available, and the offset of `angular_velocity.x`.
 #[inline]
-pub fn decode_imu_fast(d: &[u8]) -> Result<(i32, u32, [f64; N_CHANNELS], usize, bool), CdrError> {
+pub fn decode_imu_fast(d: &[u8]) -> Result<ImuFast, CdrError> {
     let (block, le, _) = layout(d)?;
     let sec = u32_at(d, 4, le) as i32;
     let nanosec = u32_at(d, 8, le);
     let g = block + ANGVEL_FROM_BLOCK;
     let a = g + LINACC_FROM_ANGVEL;
-    let ch = [
+    let channels = [
         f64_at(d, g, le),
         f64_at(d, g + 8, le),
         f64_at(d, g + 16, le),
@@ -157,7 +175,23 @@ pub fn decode_imu_fast(d: &[u8]) -> Result<(i32, u32, [f64; N_CHANNELS], usize, 
         f64_at(d, a + 8, le),
         f64_at(d, a + 16, le),
     ];
-    Ok((sec, nanosec, ch, g, le))
+    // Each vector is followed by its covariance.
+    let not_available = |v: usize| f64_at(d, v + 24, le) == COVARIANCE_NOT_AVAILABLE;
+    let mut absent = 0;
+    if not_available(g) {
+        absent |= 0b000_111;
+    }
+    if not_available(a) {
+        absent |= 0b111_000;
+    }
+    Ok(ImuFast {
+        sec,
+        nanosec,
+        channels,
+        absent,
+        angular_velocity_at: g,
+        little_endian: le,
+    })
 }
 
 /// A CDR `sensor_msgs/msg/Temperature`: header stamp (sec, nanosec) and `temperature` (°C);

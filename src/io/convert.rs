@@ -4,6 +4,14 @@
 //! samples; samples become a native log, canonical CSV, or a fresh stream in a protocol: UBX
 //! ESF-RAW (one message per sample), MAVLink v2 HIGHRES_IMU (system 1, component 1, instance 0)
 //! or a ULog with `sensor_combined`.
+//!
+//! Absent channels (a gyro-only or accel-only log) are said the way each protocol can, and its
+//! decoder reads them back as absent: UBX leaves their data words out, HIGHRES_IMU clears their
+//! `fields_updated` bits (NaN in the field), the ROS 2 bag sets the vector's covariance[0] to −1.
+//! ULog `sensor_combined` can say only "no accelerometer" (PX4's invalid relative time stamp):
+//! a gyro-only log is written that way, any other absence is refused with the channels named
+//! ([`ulog::sensor_combined_cannot_carry`]) rather than written as numbers a PX4 tool would
+//! take for measurements.
 
 use crate::frame::detect::{DecodedFile, ProtocolConfig, decode_bytes};
 use crate::frame::{Descriptor, mavlink, ubx, ulog};
@@ -35,8 +43,9 @@ pub fn read_any(path: &Path, c: &ProtocolConfig) -> std::io::Result<DecodedFile>
     Ok(decode_bytes(&bytes, c))
 }
 
-/// The samples as a byte stream in `to` (not CSV). Fails only for `Mcap` (a build without ROS 2
-/// support, or the bag writer's own error).
+/// The samples as a byte stream in `to` (not CSV). Fails for `Mcap` in a build without ROS 2
+/// support (or on the bag writer's own error), and for `Ulog` when some sample lacks channels
+/// `sensor_combined` cannot mark absent.
 pub fn encode_stream(
     to: ExportFormat,
     d: &Descriptor,
@@ -60,7 +69,16 @@ pub fn encode_stream(
                 mavlink::encode_v2(i as u8, 1, 1, mavlink::MSG_HIGHRES_IMU, &p, &mut out);
             }
         }
-        ExportFormat::Ulog => ulog::encode_sensor_combined_log(samples, &mut out),
+        ExportFormat::Ulog => {
+            let absent = samples.iter().fold(d.absent, |m, s| m | s.absent);
+            if let Some(why) = ulog::sensor_combined_cannot_carry(absent) {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    format!("export --to ulog: {why}"),
+                ));
+            }
+            ulog::encode_sensor_combined_log(samples, &mut out)
+        }
         ExportFormat::Mcap => {
             #[cfg(feature = "ros2")]
             {

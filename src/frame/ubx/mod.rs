@@ -7,8 +7,10 @@
 //! One sample is the set of blocks with the same time tag: ESF-RAW packs several sets
 //! per message (each block carries its own 24-bit sensor time tag), ESF-MEAS sends one time tag
 //! per message, or gyro and accel of one time tag in two messages (ZED-F9R) which are joined
-//! here. A set missing an axis still becomes a sample, with that channel NaN (flagged
-//! non-finite, counted as partial).
+//! here. A channel no set of the stream has carried yet is absent ([`Sample::absent`]: a
+//! gyro-only or accel-only sensor, or an export of one, sends no data words for it). A set
+//! missing an axis the stream has carried before still becomes a sample, with that channel NaN
+//! (flagged non-finite, counted as partial).
 //!
 //! Time: the time tags are counters of `tag_bits` bits and `tick_us` per count (configurable;
 //! the defaults are an assumption to check against the receiver's manual: ESF-RAW 24 bits of
@@ -26,7 +28,7 @@ pub use esf::*;
 pub use port::{MAX_PAYLOAD, SYNC};
 
 use super::framing::{Framer, Front, Stamper};
-use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
+use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder, mark_absent};
 use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
@@ -125,6 +127,8 @@ pub struct UbxDecoder {
     meas_pending: Option<Partial>,
     raw_msgs: u64,
     meas_msgs: u64,
+    /// Channels (bit `c`) some set of the stream has carried.
+    seen: u8,
 }
 
 impl Default for UbxDecoder {
@@ -145,6 +149,7 @@ impl UbxDecoder {
             meas_pending: None,
             raw_msgs: 0,
             meas_msgs: 0,
+            seen: 0,
         }
     }
 
@@ -164,12 +169,19 @@ impl UbxDecoder {
         };
         let mut partial = false;
         for (c, val) in vals.iter().take(6).enumerate() {
-            let v = val.unwrap_or_else(|| {
-                partial = true;
-                f64::NAN
-            });
-            s.set_channel(c, v);
+            match val {
+                Some(v) => {
+                    self.seen |= 1 << c;
+                    s.set_channel(c, *v);
+                }
+                // Missing after the stream carried it: a partial set (NaN, non-finite).
+                None => {
+                    partial |= self.seen & (1 << c) != 0;
+                    s.set_channel(c, f64::NAN);
+                }
+            }
         }
+        mark_absent(&mut s, !self.seen);
         s.temp_c = vals[6];
         if partial {
             self.f.stats.partial_samples += 1;

@@ -47,6 +47,10 @@ pub fn is_format(body: &[u8]) -> bool {
     parse_format(body).is_some()
 }
 
+/// PX4's `sensor_combined.RELATIVE_TIMESTAMP_INVALID`: a relative time stamp with this value
+/// says the associated sensor values are invalid.
+pub const RELATIVE_TIMESTAMP_INVALID: i32 = i32::MAX;
+
 /// Where the IMU values of a subscribed topic sit in its data message (offsets from the start
 /// of the fields, after msg_id).
 #[derive(Clone, Copy, Debug, Default)]
@@ -57,6 +61,9 @@ pub struct Layout {
     pub xyz: usize,
     /// sensor_combined: offset of `accelerometer_m_s2`.
     pub accel: Option<usize>,
+    /// sensor_combined: offset of `accelerometer_timestamp_relative` (int32;
+    /// [`RELATIVE_TIMESTAMP_INVALID`] there = the accelerometer values are invalid).
+    pub accel_rel: Option<usize>,
     pub temp: Option<usize>,
     /// Bytes of fields needed.
     pub need: usize,
@@ -150,11 +157,13 @@ impl Formats {
             }
         };
         let temp = at("temperature", "float", 1);
+        let accel_rel = accel.and(at("accelerometer_timestamp_relative", "int32_t", 1));
         let need = [
             time + 8,
             xyz + 12,
             accel.map_or(0, |a| a + 12),
             temp.map_or(0, |t| t + 4),
+            accel_rel.map_or(0, |r| r + 4),
         ]
         .into_iter()
         .max()
@@ -163,6 +172,7 @@ impl Formats {
             time,
             xyz,
             accel,
+            accel_rel,
             temp,
             need,
         })

@@ -19,6 +19,12 @@
 //! (µs since boot; `timestamp_sample` when the topic has it), sequence and gap flags come from
 //! them.
 //!
+//! `sensor_combined` says "no accelerometer values" with PX4's own marker,
+//! `accelerometer_timestamp_relative = RELATIVE_TIMESTAMP_INVALID`: while no message of the
+//! stream has had valid accelerometer values the accel channels are absent ([`Sample::absent`]:
+//! a gyro-only sensor, or the export of one); after that, an invalid marker makes those values
+//! NaN (non-finite, a partial sample) rather than data.
+//!
 //! Written by hand: the `px4-ulog` crate parses with callbacks and stops at the first bad
 //! message (with asserts on its buffers), where this decoder must count, resynchronise and
 //! keep every message's bytes for pass-through.
@@ -26,7 +32,7 @@
 mod format;
 
 use super::framing::{Framer, Stamper};
-use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
+use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder, mark_absent};
 use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
@@ -82,6 +88,8 @@ pub struct UlogDecoder {
     accel_layout: Layout,
     pending: Option<Decoded>,
     found_topics: Vec<String>,
+    /// sensor_combined: some message of the stream had valid accelerometer values.
+    accel_seen: bool,
 }
 
 /// `sizes` entry of a msg_id without a subscription.
@@ -116,6 +124,7 @@ impl UlogDecoder {
             accel_layout: Layout::default(),
             pending: None,
             found_topics: Vec::new(),
+            accel_seen: false,
         }
     }
 
@@ -177,6 +186,7 @@ impl UlogDecoder {
         t_us: u64,
         ch: [f64; 6],
         temp: Option<f64>,
+        absent: u8,
         carrier: Carrier,
     ) -> Decoded {
         let mut s = Sample {
@@ -185,6 +195,7 @@ impl UlogDecoder {
             ..Sample::default()
         };
         s.set_channels(&ch);
+        mark_absent(&mut s, absent);
         let learned = self
             .stamper
             .stamp(&mut s, &mut self.f.stats, || Descriptor {
@@ -217,7 +228,23 @@ impl UlogDecoder {
         match role {
             Role::Combined => {
                 let g = xyz(l.xyz);
-                let a = xyz(l.accel.expect("combined layout has accel"));
+                let mut a = xyz(l.accel.expect("combined layout has accel"));
+                let invalid = l.accel_rel.is_some_and(|o| {
+                    i32::from_le_bytes([f[o], f[o + 1], f[o + 2], f[o + 3]])
+                        == format::RELATIVE_TIMESTAMP_INVALID
+                });
+                let mut absent = 0;
+                if invalid {
+                    if self.accel_seen {
+                        // Invalid after valid ones: this message's accel is no measurement.
+                        a = [f64::NAN; 3];
+                        self.f.stats.partial_samples += 1;
+                    } else {
+                        absent = 0b111_000;
+                    }
+                } else {
+                    self.accel_seen = true;
+                }
                 let off = [
                     (DATA_FIELDS + l.xyz) as u16,
                     (DATA_FIELDS + l.accel.unwrap_or(0)) as u16,
@@ -233,7 +260,7 @@ impl UlogDecoder {
                     offsets: off,
                     raw_scale: None,
                 };
-                self.sample_from(t, [g[0], g[1], g[2], a[0], a[1], a[2]], temp, c)
+                self.sample_from(t, [g[0], g[1], g[2], a[0], a[1], a[2]], temp, absent, c)
             }
             Role::Gyro | Role::Accel => {
                 if role == Role::Gyro {
@@ -288,7 +315,7 @@ impl UlogDecoder {
             offsets: off,
             raw_scale: None,
         };
-        self.sample_from(t, [gv[0], gv[1], gv[2], av[0], av[1], av[2]], temp, c)
+        self.sample_from(t, [gv[0], gv[1], gv[2], av[0], av[1], av[2]], temp, 0, c)
     }
 
     /// One item from the front of `buf`; `None` = need more bytes.
@@ -455,8 +482,28 @@ pub fn encode_message(ty: u8, body: &[u8], out: &mut BytesMut) {
     out.extend_from_slice(body);
 }
 
-/// A minimal ULog with `sensor_combined` samples (for tests and benchmarks): header, format,
-/// subscription, one data message per sample.
+/// Why `sensor_combined` cannot carry these absent channels (`None` = it can): it says "no
+/// accelerometer values" with PX4's own marker (`accelerometer_timestamp_relative =
+/// RELATIVE_TIMESTAMP_INVALID`), but has no way to say the same of the gyro (its time stamp is
+/// the gyro's) nor of a single axis.
+pub fn sensor_combined_cannot_carry(absent: u8) -> Option<String> {
+    const ACCEL: u8 = 0b111_000;
+    if absent == 0 || absent == ACCEL {
+        return None;
+    }
+    let names = crate::sample::channel_names_of(absent).join(", ");
+    Some(format!(
+        "the log has no {names}: ULog sensor_combined can mark only the whole accelerometer \
+         invalid (PX4's RELATIVE_TIMESTAMP_INVALID), not the gyro nor a single axis, and writing \
+         NaN or zeros there would pass as measurements; export to mavlink (fields_updated), ubx \
+         (data words left out), csv or native instead"
+    ))
+}
+
+/// A minimal ULog with `sensor_combined` samples (for tests, benchmarks and export): header,
+/// format, subscription, one data message per sample. A sample whose accelerometer is absent
+/// has `accelerometer_timestamp_relative = RELATIVE_TIMESTAMP_INVALID` and NaN there; other
+/// absent channels are written NaN (check [`sensor_combined_cannot_carry`] first).
 pub fn encode_sensor_combined_log(samples: &[Sample], out: &mut BytesMut) {
     out.extend_from_slice(&MAGIC);
     out.extend_from_slice(&[1]);
@@ -473,13 +520,26 @@ pub fn encode_sensor_combined_log(samples: &[Sample], out: &mut BytesMut) {
         b.extend_from_slice(&1u16.to_le_bytes());
         b.extend_from_slice(&(s.t_ns / 1000).to_le_bytes());
         let ch = s.channels();
-        for v in &ch[..3] {
-            b.extend_from_slice(&(*v as f32).to_le_bytes());
+        let value = |c: usize| {
+            if s.is_absent(c) {
+                f32::NAN
+            } else {
+                ch[c] as f32
+            }
+        };
+        for c in 0..3 {
+            b.extend_from_slice(&value(c).to_le_bytes());
         }
         b.extend_from_slice(&4000u32.to_le_bytes());
-        b.extend_from_slice(&0i32.to_le_bytes());
-        for v in &ch[3..] {
-            b.extend_from_slice(&(*v as f32).to_le_bytes());
+        let accel_absent = (3..6).all(|c| s.is_absent(c));
+        let rel = if accel_absent {
+            format::RELATIVE_TIMESTAMP_INVALID
+        } else {
+            0
+        };
+        b.extend_from_slice(&rel.to_le_bytes());
+        for c in 3..6 {
+            b.extend_from_slice(&value(c).to_le_bytes());
         }
         b.extend_from_slice(&4000u32.to_le_bytes());
         b.extend_from_slice(&[0, 0, 1, 1]);
