@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use super::{load_span, parse_channels};
+use super::{load_span, parse_channels, present_channels};
 use crate::analysis::allan_report::{AllanReport, allan_report};
 use crate::analysis::{allan_export, allan_terms::FitSettings};
 
@@ -22,8 +22,11 @@ pub struct AllanRun {
 pub fn allan(log: &Path, channels: &[String], skip_s: f64, out_dir: &Path) -> Result<AllanRun> {
     let (rate, samples) = load_span(log, skip_s)?;
     let chans = parse_channels(channels)?;
+    // A partial sensor's absent channels are said in the report, never analysed as NaN.
+    let (chans, absent) = present_channels(log, &samples, &chans)?;
     let source = log.display().to_string();
-    let report = allan_report(&source, &samples, rate, &chans, &FitSettings::default())?;
+    let mut report = allan_report(&source, &samples, rate, &chans, &FitSettings::default())?;
+    report.skipped.extend(absent);
     let written = allan_export::write_outputs(&report, out_dir).map_err(anyhow::Error::msg)?;
     let written = written
         .iter()

@@ -8,7 +8,7 @@ use anyhow::{Result, anyhow, ensure};
 use serde::Serialize;
 
 use super::detector_compare::{self as dc, DetectorReport};
-use super::{load_span, parse_channels, read_scenario};
+use super::{load_span, parse_channels, present_channels, read_scenario};
 use crate::analysis::bias_compare::{CompareReport, CompareSettings, SensorKind, compare_channel};
 use crate::config::Config;
 use crate::sample::CHANNEL_NAMES;
@@ -63,6 +63,10 @@ impl fmt::Display for DetectorReport {
 #[serde(transparent)]
 pub struct BiasCompareReport {
     pub channels: Vec<CompareReport>,
+    /// Channels asked for but absent in the log (a partial sensor), with the reason; said in
+    /// the text, left out of the JSON array (which lists the channels compared).
+    #[serde(skip)]
+    pub skipped: Vec<(String, String)>,
 }
 
 impl BiasCompareReport {
@@ -76,6 +80,9 @@ impl fmt::Display for BiasCompareReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for r in &self.channels {
             writeln!(f, "{}", r.to_text_table())?;
+        }
+        for (c, why) in &self.skipped {
+            writeln!(f, "{c}: skipped: {why}")?;
         }
         Ok(())
     }
@@ -91,6 +98,7 @@ pub fn bias_models(
 ) -> Result<BiasCompareReport> {
     let (rate, samples) = load_span(log, skip_s)?;
     let chans = parse_channels(channels)?;
+    let (chans, skipped) = present_channels(log, &samples, &chans)?;
     let temp: Vec<f64> = samples.iter().filter_map(|s| s.temp_c).collect();
     let have_temp = temp_exo && temp.len() == samples.len();
     ensure!(
@@ -119,5 +127,8 @@ pub fn bias_models(
             &settings,
         )?);
     }
-    Ok(BiasCompareReport { channels: out })
+    Ok(BiasCompareReport {
+        channels: out,
+        skipped,
+    })
 }

@@ -1,5 +1,7 @@
 //! `imuprep fit`: the ARIMA model per channel (gross-error stage) and the AR bias model per
 //! channel (bias stage) from one span of a recording, written as `arima.toml` and `bias.toml`.
+//! A partial sensor's absent channels ([`Sample::absent`]) get no model and are named in the
+//! report and in both files' header; a log with no channel present is an error.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -7,13 +9,13 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, anyhow, ensure};
 use serde::Serialize;
 
-use super::load_span_to;
+use super::{load_span_to, present_channels};
 use crate::model::arima::{ArimaModelFile, IdentifySettings, identify};
 use crate::model::bias_model::{BiasModelFile, ChannelBiasModel, MAX_FILE_AR_ORDER};
 use crate::model::fos::FosSettings;
 use crate::model::fos_model::{FosModel, FosModelSpec};
 use crate::model::{ArFit, ModelError};
-use crate::sample::{CHANNEL_NAMES, Sample};
+use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample};
 use crate::stage::bias::stillness::{StillnessDetector, StillnessSettings};
 
 /// How `fit` estimates the bias model.
@@ -81,7 +83,8 @@ pub fn longest_still_stretch(samples: &[Sample], rate: f64) -> StillStretch {
     for (i, s) in samples.iter().enumerate() {
         let g = [s.gyro[0], s.gyro[1], s.gyro[2]];
         let a = [s.accel[0], s.accel[1], s.accel[2]];
-        if det.update(&g, &a, &[None; 3]) {
+        // Absent channels take no part (a gyro-only sensor's stillness is its gyros').
+        if det.update_present(&g, &a, &[None; 3], s.absent) {
             still_total += 1;
             let start = *run_start.get_or_insert(i);
             if i + 1 - start > best.1 {
@@ -138,6 +141,8 @@ pub struct FitReport {
     pub still: StillStretch,
     /// Why no bias model was fitted (no still stretch long enough), if so.
     pub bias_skipped: Option<String>,
+    /// Channels absent in the log (a partial sensor), with the reason: no model for them.
+    pub absent: Vec<(String, String)>,
     pub bias: Vec<BiasRow>,
     pub bias_path: PathBuf,
 }
@@ -154,10 +159,14 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
     let n = ((o.train_s * rate).round() as usize).min(samples.len());
     std::fs::create_dir_all(out_dir)?;
     let series = |c: usize| -> Vec<f64> { samples[..n].iter().map(|s| s.channel(c)).collect() };
+    let (present, absent) =
+        present_channels(log, &samples[..n], &(0..N_CHANNELS).collect::<Vec<_>>())?;
+    let header = absent_header(&absent);
 
     let mut file = ArimaModelFile::default();
     let mut arima = Vec::new();
-    for (c, name) in CHANNEL_NAMES.iter().enumerate() {
+    for &c in &present {
+        let name = CHANNEL_NAMES[c];
         let id = identify(&series(c), &IdentifySettings::default())
             .map_err(|e| anyhow!("{name}: {e}"))?;
         let m = id.to_channel_model(name);
@@ -177,7 +186,7 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
     let arima_path = out_dir.join("arima.toml");
     std::fs::write(
         &arima_path,
-        file.to_toml_string().map_err(|e| anyhow!("{e}"))?,
+        header.clone() + &file.to_toml_string().map_err(|e| anyhow!("{e}"))?,
     )?;
 
     // The bias model describes the sensor's bias, not the vehicle's motion: fit it only where
@@ -205,7 +214,8 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
     };
     let mut bias = BiasModelFile::default();
     let mut rows = Vec::new();
-    for (c, name) in CHANNEL_NAMES.iter().enumerate() {
+    for &c in &present {
+        let name = CHANNEL_NAMES[c];
         if bias_skipped.is_some() {
             break;
         }
@@ -222,10 +232,10 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
     bias.validate()
         .map_err(|e| anyhow!("bias model: {}", e.join("; ")))?;
     let bias_path = out_dir.join("bias.toml");
-    let mut text = match &bias_skipped {
-        Some(why) => format!("# imuprep fit: {why}\n"),
-        None => String::new(),
-    };
+    let mut text = header;
+    if let Some(why) = &bias_skipped {
+        text += &format!("# imuprep fit: {why}\n");
+    }
     text += &bias.to_toml_string().map_err(|e| anyhow!(e.to_string()))?;
     std::fs::write(&bias_path, text)?;
     Ok(FitReport {
@@ -237,9 +247,18 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
         bias_order,
         still,
         bias_skipped,
+        absent,
         bias: rows,
         bias_path,
     })
+}
+
+/// The model files' first line when channels were left out: which, and why.
+fn absent_header(absent: &[(String, String)]) -> String {
+    absent
+        .iter()
+        .map(|(c, why)| format!("# imuprep fit: {c}: no model: {why}\n"))
+        .collect()
 }
 
 /// One channel's bias model by `method`; the FOS terms chosen when the method is `fos`.
@@ -319,6 +338,9 @@ impl fmt::Display for FitReport {
                 r.ljung_box_q,
                 r.ljung_box_p
             )?;
+        }
+        for (c, why) in &self.absent {
+            writeln!(f, "{c:<4} not fitted: {why}")?;
         }
         let p = self.arima_path.display();
         writeln!(f, "wrote {p} (use it as [gross_error] model = \"{p}\")")?;

@@ -81,6 +81,54 @@ pub fn parse_channels(channels: &[String]) -> Result<Vec<usize>> {
         .collect()
 }
 
+/// The channels of `chans` a log's `samples` have, and why each other one is left out (a partial
+/// sensor's absent channels: [`Sample::absent`]). A channel absent in any sample is left out:
+/// the analyses need every sample of a channel. An error, naming the channels, when none of
+/// `chans` is present.
+pub fn present_channels(
+    log: &Path,
+    samples: &[Sample],
+    chans: &[usize],
+) -> Result<(Vec<usize>, Vec<(String, String)>)> {
+    let mut present = Vec::new();
+    let mut left_out = Vec::new();
+    for &c in chans {
+        let n = samples.iter().filter(|s| s.is_absent(c)).count();
+        let name = crate::sample::CHANNEL_NAMES[c];
+        match n {
+            0 => present.push(c),
+            n if n == samples.len() => left_out.push((
+                name.to_string(),
+                "absent: the log has no such channel (a partial sensor); nothing to analyse".into(),
+            )),
+            n => left_out.push((
+                name.to_string(),
+                format!("absent in {n} of {} samples: not analysed", samples.len()),
+            )),
+        }
+    }
+    ensure!(
+        !present.is_empty(),
+        "{}: no channel to analyse: {} absent in this log (it has {})",
+        log.display(),
+        left_out
+            .iter()
+            .map(|(n, _)| n.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+        {
+            let all = samples.iter().fold(0u8, |m, s| m | s.absent);
+            let have = crate::sample::channel_names_of(!all & crate::sample::ALL_CHANNELS);
+            if have.is_empty() {
+                "no sensor channel".to_string()
+            } else {
+                have.join(", ")
+            }
+        }
+    );
+    Ok((present, left_out))
+}
+
 /// A scenario file with `--set KEY=VALUE` overrides applied.
 pub fn read_scenario(p: &Path, sets: &[String]) -> Result<crate::sim::Scenario> {
     let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
