@@ -81,6 +81,9 @@ pub fn parse_channels(channels: &[String]) -> Result<Vec<usize>> {
         .collect()
 }
 
+/// A channel left out of an analysis, and why.
+pub type LeftOut = (String, String);
+
 /// The channels of `chans` a log's `samples` have, and why each other one is left out (a partial
 /// sensor's absent channels: [`Sample::absent`]). A channel absent in any sample is left out:
 /// the analyses need every sample of a channel. An error, naming the channels, when none of
@@ -89,7 +92,7 @@ pub fn present_channels(
     log: &Path,
     samples: &[Sample],
     chans: &[usize],
-) -> Result<(Vec<usize>, Vec<(String, String)>)> {
+) -> Result<(Vec<usize>, Vec<LeftOut>)> {
     let mut present = Vec::new();
     let mut left_out = Vec::new();
     for &c in chans {
