@@ -14,6 +14,15 @@
 //! - `decode_100k_samples`: the whole input copied into a fresh buffer every iteration, then
 //!   decoded. For a 35 MB bag most of that time is the kernel handing out and zeroing fresh
 //!   pages for the copy, not decoding (kept to compare with earlier runs).
+//!
+//! Groups `ubx_rework_64k_reads` (wall time) and `ubx_rework_64k_reads_cpu` (the thread's CPU
+//! time, which a loaded machine inflates far less): the UBX decoder before the per-sample
+//! rework (`support/ubx_before.rs`, kept verbatim as the in-run baseline) and now, on the same
+//! stream and reads, one right after the other. `cargo bench --bench protocols -- ubx_rework`.
+//! For a count that load does not move, `--test` runs each routine once, so the instructions
+//! of one 100 000-sample decode are those of `valgrind --tool=cachegrind --cache-sim=no BENCH
+//! --bench --test ubx_rework_64k_reads/before` minus those with a filter that matches nothing
+//! (the stream set-up); `cg_annotate` splits them by function.
 
 use bytes::BytesMut;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -24,6 +33,13 @@ use imuprep::frame::{Decoded, FrameDecoder, ProtocolDecoder, encode_sample};
 use imuprep::rng::Rng;
 use imuprep::sample::Sample;
 use std::hint::black_box;
+
+#[path = "support/thread_cpu.rs"]
+mod thread_cpu;
+#[path = "support/ubx_before.rs"]
+mod ubx_before;
+use criterion::measurement::Measurement;
+use thread_cpu::ThreadCpu;
 
 const N: usize = 100_000;
 
@@ -150,6 +166,29 @@ fn bench(c: &mut Criterion) {
         });
         g.finish();
     }
+    ubx_rework(c, "ubx_rework_64k_reads", &ubx_b);
+    let mut cpu = Criterion::default()
+        .with_measurement(ThreadCpu)
+        .configure_from_args();
+    ubx_rework(&mut cpu, "ubx_rework_64k_reads_cpu", &ubx_b);
+}
+
+/// The UBX decoder before the rework and now, same stream, same reads, one after the other.
+fn ubx_rework<M: Measurement>(c: &mut Criterion<M>, name: &str, ubx_b: &[u8]) {
+    let mut g = c.benchmark_group(name);
+    g.throughput(Throughput::Elements(N as u64));
+    g.bench_function("before", |b| {
+        b.iter(|| {
+            black_box(count_reads(
+                Box::<ubx_before::UbxDecoderBefore>::default(),
+                ubx_b,
+            ))
+        })
+    });
+    g.bench_function("after", |b| {
+        b.iter(|| black_box(count_reads(Box::<UbxDecoder>::default(), ubx_b)))
+    });
+    g.finish();
 }
 
 criterion_group!(benches, bench);

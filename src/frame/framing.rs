@@ -11,7 +11,7 @@
 //! counted once when they arrive ([`Framer::arrived`]) however often the decoder is called on
 //! the same buffer.
 
-use super::protocol::{TimeTracker, flag_values};
+use super::protocol::{Decoded, TimeTracker, flag_values};
 use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
 use bytes::{Buf, Bytes, BytesMut};
@@ -49,9 +49,26 @@ pub struct Framer {
     counted: usize,
     /// Inside a run of garbage (a run counts one resynchronisation).
     in_garbage: bool,
+    /// An item made in the last call and held back for the next one (the descriptor learned on
+    /// the sample that call handed out: [`Stamper::finish`]).
+    held: Option<Decoded>,
 }
 
 impl Framer {
+    /// At the start of every decode call: count the bytes appended since the last call, and
+    /// hand out the item held back by the last call, if any (it goes first).
+    #[inline]
+    pub fn begin(&mut self, buf: &BytesMut) -> Option<Decoded> {
+        self.arrived(buf);
+        self.held.take()
+    }
+
+    /// The item held back for the next call ([`Stamper::finish`]), taken now.
+    #[inline]
+    pub fn take_held(&mut self) -> Option<Decoded> {
+        self.held.take()
+    }
+
     /// At the start of every decode call: count the bytes appended since the last call.
     #[inline]
     pub fn arrived(&mut self, buf: &BytesMut) {
@@ -230,6 +247,16 @@ impl Stamper {
         flag_values(s, self.descriptor.as_ref(), stats);
         stats.samples += 1;
         new
+    }
+
+    /// [`Self::stamp`] for a decoder that hands the sample out now: the descriptor it learned
+    /// is held in the framer and goes out at the start of the next call ([`Framer::begin`]),
+    /// right after the sample.
+    #[inline]
+    pub fn finish(&mut self, s: &mut Sample, f: &mut Framer, base: impl FnOnce() -> Descriptor) {
+        if let Some(d) = self.stamp(s, &mut f.stats, base) {
+            f.held = Some(Decoded::Descriptor(d));
+        }
     }
 }
 

@@ -34,7 +34,7 @@
 //! checksum, while the crate generates every dialect message (≈ 20 s more cold build for the
 //! common dialect alone) and parses into typed values, where pass-through needs the bytes.
 
-use super::framing::{Framer, Stamper};
+use super::framing::{Fault, Framer, Stamper};
 use super::mavlink_crc::CRC_EXTRA;
 use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder, mark_absent};
 use super::{DecoderStats, Descriptor};
@@ -185,7 +185,6 @@ pub struct MavlinkDecoder {
     streams: Vec<(StreamKey, u64)>,
     f: Framer,
     stamper: Stamper,
-    pending_desc: Option<Descriptor>,
     eof: bool,
     v1: u64,
     v2: u64,
@@ -209,7 +208,6 @@ impl MavlinkDecoder {
             selected: None,
             streams: Vec::new(),
             f: Framer::default(),
-            pending_desc: None,
             eof: false,
             v1: 0,
             v2: 0,
@@ -322,15 +320,10 @@ impl MavlinkDecoder {
             s.temp_c = None;
         }
         // A descriptor learned on a frame goes out right after that frame's sample.
-        let learned = self
-            .stamper
-            .stamp(&mut s, &mut self.f.stats, || Descriptor {
-                device_id: (key.sysid as u32) << 16
-                    | (key.compid as u32) << 8
-                    | key.instance as u32,
-                ..Descriptor::default()
-            });
-        self.pending_desc = self.pending_desc.or(learned);
+        self.stamper.finish(&mut s, &mut self.f, || Descriptor {
+            device_id: (key.sysid as u32) << 16 | (key.compid as u32) << 8 | key.instance as u32,
+            ..Descriptor::default()
+        });
         Decoded::Sample(
             s,
             Some(Carrier {
@@ -367,13 +360,12 @@ impl MavlinkDecoder {
             let signed = v2 && buf[2] & IFLAG_SIGNED != 0;
             if v2 && buf[2] & !IFLAG_SIGNED != 0 {
                 // An incompatibility flag this decoder does not know: the frame cannot be read.
-                self.f.stats.unknown_type += 1;
-                self.f.fault(buf);
+                self.f.bad(buf, Fault::UnknownType);
                 continue;
             }
             let total = hdr + len + 2 + if signed { SIGNATURE_LEN } else { 0 };
             if buf.len() < total {
-                buf.reserve(total - buf.len());
+                self.f.need(buf, Some(total));
                 return None;
             }
             let msgid = if v2 {
@@ -385,8 +377,7 @@ impl MavlinkDecoder {
             match crc_extra(msgid) {
                 Some(extra) => {
                     if checksum(&buf[1..hdr + len], extra) != crc {
-                        self.f.stats.crc_errors += 1;
-                        self.f.fault(buf);
+                        self.f.bad(buf, Fault::Crc);
                         continue;
                     }
                 }
@@ -396,8 +387,7 @@ impl MavlinkDecoder {
                         return None;
                     }
                     if buf.len() > total && buf[total] != STX_V1 && buf[total] != STX_V2 {
-                        self.f.stats.unknown_type += 1;
-                        self.f.fault(buf);
+                        self.f.bad(buf, Fault::UnknownType);
                         continue;
                     }
                     self.f.stats.unverified += 1;
@@ -414,11 +404,7 @@ impl ProtocolDecoder for MavlinkDecoder {
         Protocol::Mavlink
     }
     fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        self.f.arrived(buf);
-        if let Some(d) = self.pending_desc.take() {
-            return Some(Decoded::Descriptor(d));
-        }
-        self.step(buf)
+        self.f.begin(buf).or_else(|| self.step(buf))
     }
     fn end_of_input(&mut self) {
         // A frame with an unknown id at the very end is trusted without a frame after it.

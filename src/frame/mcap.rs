@@ -25,7 +25,7 @@
 //! A vector whose covariance has −1 in element 0 ("data not available", the message's own
 //! convention, as the MCAP sink writes a triad the sensor lacks) gives three absent channels.
 
-use super::framing::{Framer, Stamper};
+use super::framing::{Fault, Framer, Stamper};
 use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
 use super::ros2;
 use super::{DecoderStats, Descriptor};
@@ -114,7 +114,6 @@ pub struct McapDecoder {
     bad_temp: u64,
     /// Records of the chunk being read (uncompressed), and the read position in them.
     chunk: Option<(Bytes, usize)>,
-    pending: Option<Decoded>,
     chunks: u64,
     unsupported: Vec<String>,
     bad_cdr: u64,
@@ -142,7 +141,6 @@ impl McapDecoder {
             temp_msgs: 0,
             bad_temp: 0,
             chunk: None,
-            pending: None,
             chunks: 0,
             unsupported: Vec::new(),
             bad_cdr: 0,
@@ -243,15 +241,10 @@ impl McapDecoder {
         s.set_channels(&m.channels);
         // A vector the message declares not available (covariance[0] = −1): absent channels.
         super::protocol::mark_absent(&mut s, m.absent);
-        let learned = self
-            .stamper
-            .stamp(&mut s, &mut self.f.stats, || Descriptor {
-                axes: super::AxisConvention::Flu,
-                ..Descriptor::default()
-            });
-        if let Some(d) = learned {
-            self.pending = Some(Decoded::Descriptor(d));
-        }
+        self.stamper.finish(&mut s, &mut self.f, || Descriptor {
+            axes: super::AxisConvention::Flu,
+            ..Descriptor::default()
+        });
         self.f.stats.frames_ok += 1;
         let at = 9 + 22 + g;
         let c = Carrier {
@@ -457,8 +450,7 @@ impl McapDecoder {
                     _ => true,
                 };
             if !plausible {
-                self.f.stats.header_errors += 1;
-                self.f.fault(buf);
+                self.f.bad(buf, Fault::Header);
                 continue;
             }
             let total = 9 + n as usize;
@@ -475,8 +467,7 @@ impl McapDecoder {
                 }
                 Err(()) => {
                     // Not a record after all: step one byte.
-                    self.f.stats.bad_payload += 1;
-                    self.f.fault(buf);
+                    self.f.bad(buf, Fault::Payload);
                 }
             }
         }
@@ -525,11 +516,7 @@ impl ProtocolDecoder for McapDecoder {
         Protocol::Mcap
     }
     fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        self.f.arrived(buf);
-        if let Some(p) = self.pending.take() {
-            return Some(p);
-        }
-        self.step(buf)
+        self.f.begin(buf).or_else(|| self.step(buf))
     }
     fn discard_tail(&mut self, buf: &mut BytesMut) {
         // A record cut short: count it once, then look for records after its first byte.

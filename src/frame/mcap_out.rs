@@ -9,7 +9,8 @@
 //! came. The input's own indexes, statistics and summary point at its own offsets: they are
 //! dropped, and at the input's data-end record (or at the end of the output when the input was
 //! cut short) this writer closes the file itself: data end, a summary (schemas, channels,
-//! statistics, chunk indexes), the summary offsets, the footer and the closing magic. Chunk and
+//! statistics, chunk indexes, attachment and metadata indexes pointing at where this writer put
+//! those records), the summary offsets, the footer and the closing magic. Chunk and
 //! summary CRC-32s are written; the data-section CRC is 0 ("not computed"), as the format allows.
 //!
 //! Written by hand rather than with the `mcap` crate's writer: that one needs a seekable output
@@ -33,7 +34,9 @@ const OP_CHUNK: u8 = 0x06;
 const OP_MESSAGE_INDEX: u8 = 0x07;
 const OP_CHUNK_INDEX: u8 = 0x08;
 const OP_ATTACHMENT: u8 = 0x09;
+const OP_ATTACHMENT_INDEX: u8 = 0x0A;
 const OP_METADATA: u8 = 0x0C;
+const OP_METADATA_INDEX: u8 = 0x0D;
 const OP_STATISTICS: u8 = 0x0B;
 const OP_SUMMARY_OFFSET: u8 = 0x0E;
 const OP_DATA_END: u8 = 0x0F;
@@ -70,6 +73,9 @@ pub struct McapStream {
     chunks: u32,
     attachments: u32,
     metadata: u32,
+    /// Attachment and metadata index records, for the summary.
+    attachment_index: Vec<u8>,
+    metadata_index: Vec<u8>,
 }
 
 impl Default for McapStream {
@@ -89,6 +95,8 @@ impl Default for McapStream {
             chunks: 0,
             attachments: 0,
             metadata: 0,
+            attachment_index: Vec::new(),
+            metadata_index: Vec::new(),
         }
     }
 }
@@ -103,6 +111,43 @@ fn u64_at(b: &[u8], o: usize) -> u64 {
 
 fn widen(t: Option<(u64, u64)>, x: u64) -> Option<(u64, u64)> {
     Some(t.map_or((x, x), |(a, b)| (a.min(x), b.max(x))))
+}
+
+/// A length-prefixed (u32) string field at `o` of `b`: its bytes with the prefix, and the
+/// offset after it; `None` when it runs past the end.
+fn string_at(b: &[u8], o: usize) -> Option<(&[u8], usize)> {
+    let n = u32::from_le_bytes(b.get(o..o + 4)?.try_into().ok()?) as usize;
+    let end = o.checked_add(4)?.checked_add(n)?;
+    Some((b.get(o..end)?, end))
+}
+
+/// The attachment index body for attachment record `b` (opcode and length included) written
+/// at offset `at`: offset, length, log time, create time, data size, name, media type. `None`
+/// for a body too short for its fields (the record still passes through, unindexed).
+fn attachment_index(b: &[u8], at: u64) -> Option<Vec<u8>> {
+    let body = b.get(9..)?;
+    let times = body.get(..16)?;
+    let (name, o) = string_at(body, 16)?;
+    let (media, o) = string_at(body, o)?;
+    let data_size = body.get(o..o + 8)?;
+    let mut i = Vec::with_capacity(40 + name.len() + media.len());
+    i.extend_from_slice(&at.to_le_bytes());
+    i.extend_from_slice(&(b.len() as u64).to_le_bytes());
+    i.extend_from_slice(times);
+    i.extend_from_slice(data_size);
+    i.extend_from_slice(name);
+    i.extend_from_slice(media);
+    Some(i)
+}
+
+/// The metadata index body for metadata record `b` written at `at`: offset, length, name.
+fn metadata_index(b: &[u8], at: u64) -> Option<Vec<u8>> {
+    let (name, _) = string_at(b.get(9..)?, 0)?;
+    let mut i = Vec::with_capacity(16 + name.len());
+    i.extend_from_slice(&at.to_le_bytes());
+    i.extend_from_slice(&(b.len() as u64).to_le_bytes());
+    i.extend_from_slice(name);
+    Some(i)
 }
 
 /// Append a record: opcode, u64 length, body.
@@ -155,9 +200,20 @@ impl McapStream {
             0x02 | 0x07 | 0x08 | 0x0A | 0x0B | 0x0D | 0x0E => {}
             _ => {
                 self.close_chunk(out);
+                let at = self.written;
                 match op {
-                    OP_ATTACHMENT => self.attachments += 1,
-                    OP_METADATA => self.metadata += 1,
+                    OP_ATTACHMENT => {
+                        self.attachments += 1;
+                        if let Some(i) = attachment_index(b, at) {
+                            record(&mut self.attachment_index, OP_ATTACHMENT_INDEX, &i);
+                        }
+                    }
+                    OP_METADATA => {
+                        self.metadata += 1;
+                        if let Some(i) = metadata_index(b, at) {
+                            record(&mut self.metadata_index, OP_METADATA_INDEX, &i);
+                        }
+                    }
                     _ => {}
                 }
                 self.emit(b, out);
@@ -277,6 +333,10 @@ impl McapStream {
         group(&mut summary, OP_STATISTICS, &stats);
         let chunk_index = std::mem::take(&mut self.chunk_index);
         group(&mut summary, OP_CHUNK_INDEX, &chunk_index);
+        let attachment_index = std::mem::take(&mut self.attachment_index);
+        group(&mut summary, OP_ATTACHMENT_INDEX, &attachment_index);
+        let metadata_index = std::mem::take(&mut self.metadata_index);
+        group(&mut summary, OP_METADATA_INDEX, &metadata_index);
         let summary_offset_start = summary_start + summary.len() as u64;
         for (op, start, len) in groups {
             let mut b = vec![op];

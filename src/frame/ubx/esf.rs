@@ -50,14 +50,35 @@ pub const ACCEL_LSB_M_S2: f64 = 1.0 / 1024.0;
 pub const TEMP_LSB_C: f64 = 0.01;
 
 /// 8-bit Fletcher checksum over `bytes` (UBX: class, id, length and payload).
+///
+/// Eight bytes at a time: after bytes x0..x7 the running sums are `a + Σxⱼ` and
+/// `b + 8a + Σ(8-j)xⱼ`, so the 16 dependent byte additions become two per block. Both block
+/// sums come from one 64-bit load: the even and the odd bytes spread into four 16-bit lanes
+/// each, and a multiply by lane weights gathers their weighted sum in the top lane (at most
+/// 255·20 = 5100, and every lower lane at most 255·12, so no lane carries into the next).
+/// Only the low byte of each running sum is the checksum; wrapping u32 arithmetic keeps it.
 #[inline]
 pub fn checksum(bytes: &[u8]) -> [u8; 2] {
-    let (mut a, mut b) = (0u8, 0u8);
-    for &x in bytes {
-        a = a.wrapping_add(x);
+    const LANES: u64 = 0x00FF_00FF_00FF_00FF;
+    const ONES: u64 = 0x0001_0001_0001_0001;
+    // Top lane = lane0·w3 + lane1·w2 + lane2·w1 + lane3·w0 for weights w0 | w1<<16 | …
+    const EVEN: u64 = 2 | 4 << 16 | 6 << 32 | 8 << 48; // x0·8 + x2·6 + x4·4 + x6·2
+    const ODD: u64 = 1 | 3 << 16 | 5 << 32 | 7 << 48; // x1·7 + x3·5 + x5·3 + x7·1
+    let (mut a, mut b) = (0u32, 0u32);
+    let mut blocks = bytes.chunks_exact(8);
+    for c in &mut blocks {
+        let w = u64::from_le_bytes(c.try_into().expect("8 bytes"));
+        let (e, o) = (w & LANES, (w >> 8) & LANES);
+        let s = ((e + o).wrapping_mul(ONES) >> 48) as u32;
+        let t = ((e.wrapping_mul(EVEN) >> 48) + (o.wrapping_mul(ODD) >> 48)) as u32;
+        b = b.wrapping_add(a.wrapping_mul(8)).wrapping_add(t);
+        a = a.wrapping_add(s);
+    }
+    for &x in blocks.remainder() {
+        a = a.wrapping_add(x as u32);
         b = b.wrapping_add(a);
     }
-    [a, b]
+    [a as u8, b as u8]
 }
 
 /// Sign-extend the 24-bit value field of a data word.
@@ -66,17 +87,32 @@ pub fn value24(word: u32) -> i32 {
     ((word << 8) as i32) >> 8
 }
 
+/// Per data type (0..=255): the slot it fills (0..6 = gx gy gz ax ay az, 6 = temperature,
+/// `NOT_IMU` = none) and one count in imuprep units (gyro rad/s, accel m/s², temperature °C).
+/// One indexed load per data word instead of two matches. The gyro count is 2⁻¹² deg/s times
+/// π/180 as `to_radians` multiplies; scaling by a power of two is exact, so `raw × count` is
+/// the same double as `(raw × 2⁻¹²).to_radians()`.
+pub const TYPES: [(u8, f64); 256] = {
+    let mut t = [(NOT_IMU, 0.0); 256];
+    let gyro = GYRO_LSB_DEG_S * (std::f64::consts::PI / 180.0);
+    t[TYPE_GYRO_X as usize] = (0, gyro);
+    t[TYPE_GYRO_Y as usize] = (1, gyro);
+    t[TYPE_GYRO_Z as usize] = (2, gyro);
+    t[TYPE_ACCEL_X as usize] = (3, ACCEL_LSB_M_S2);
+    t[TYPE_ACCEL_Y as usize] = (4, ACCEL_LSB_M_S2);
+    t[TYPE_ACCEL_Z as usize] = (5, ACCEL_LSB_M_S2);
+    t[TYPE_GYRO_TEMP as usize] = (6, TEMP_LSB_C);
+    t
+};
+/// Slot of a data type that is not IMU data ([`TYPES`]).
+pub const NOT_IMU: u8 = u8::MAX;
+
 /// Physical value of a data word's field for a data type, in imuprep units (gyro rad/s, accel
 /// m/s², temperature °C); `None` for types that are not IMU data.
 #[inline]
 pub fn physical(ty: u8, raw: i32) -> Option<f64> {
-    let v = raw as f64;
-    match ty {
-        TYPE_GYRO_X | TYPE_GYRO_Y | TYPE_GYRO_Z => Some((v * GYRO_LSB_DEG_S).to_radians()),
-        TYPE_ACCEL_X | TYPE_ACCEL_Y | TYPE_ACCEL_Z => Some(v * ACCEL_LSB_M_S2),
-        TYPE_GYRO_TEMP => Some(v * TEMP_LSB_C),
-        _ => None,
-    }
+    let (slot, lsb) = TYPES[ty as usize];
+    (slot != NOT_IMU).then_some(raw as f64 * lsb)
 }
 
 /// Inverse of [`physical`]: the 24-bit field for a value, rounded to the protocol's resolution
@@ -97,16 +133,8 @@ pub fn raw_of(ty: u8, v: f64) -> Option<i32> {
 /// Which channel (0..6) a data type fills, 6 for the temperature.
 #[inline]
 pub fn slot_of(ty: u8) -> Option<usize> {
-    match ty {
-        TYPE_GYRO_X => Some(0),
-        TYPE_GYRO_Y => Some(1),
-        TYPE_GYRO_Z => Some(2),
-        TYPE_ACCEL_X => Some(3),
-        TYPE_ACCEL_Y => Some(4),
-        TYPE_ACCEL_Z => Some(5),
-        TYPE_GYRO_TEMP => Some(6),
-        _ => None,
-    }
+    let slot = TYPES[ty as usize].0;
+    (slot != NOT_IMU).then_some(slot as usize)
 }
 
 /// ESF-RAW payload (4 reserved bytes, then 8-byte blocks) → (time tag, block index range) per
@@ -287,5 +315,54 @@ mod tests {
         let g: Vec<(u32, Range<usize>)> = raw_groups(&p).collect();
         assert_eq!(g, vec![(5, 0..3), (9, 3..5), (5, 5..6)]);
         assert_eq!(raw_groups(&p[..4]).count(), 0);
+    }
+
+    #[test]
+    fn blockwise_checksum_equals_the_byte_loop() {
+        let bytewise = |bytes: &[u8]| {
+            let (mut a, mut b) = (0u8, 0u8);
+            for &x in bytes {
+                a = a.wrapping_add(x);
+                b = b.wrapping_add(a);
+            }
+            [a, b]
+        };
+        // Every length 0..600 (all remainders, many blocks) of a seeded byte stream, and runs
+        // of 0xFF, where the u32 sums wrap the most.
+        let mut rng = crate::rng::Rng::new(14);
+        let bytes: Vec<u8> = (0..600).map(|_| (rng.uniform() * 256.0) as u8).collect();
+        for n in 0..bytes.len() {
+            assert_eq!(checksum(&bytes[..n]), bytewise(&bytes[..n]), "length {n}");
+        }
+        let ff = vec![0xFFu8; 70_000];
+        assert_eq!(checksum(&ff), bytewise(&ff));
+    }
+
+    #[test]
+    fn type_table_gives_the_same_doubles_as_the_unit_formulas() {
+        // The formulas the table replaced, compared bit for bit over the whole 24-bit range
+        // (every 97th value and both ends).
+        let formula = |ty: u8, v: f64| match ty {
+            TYPE_GYRO_X | TYPE_GYRO_Y | TYPE_GYRO_Z => Some((v * GYRO_LSB_DEG_S).to_radians()),
+            TYPE_ACCEL_X | TYPE_ACCEL_Y | TYPE_ACCEL_Z => Some(v * ACCEL_LSB_M_S2),
+            TYPE_GYRO_TEMP => Some(v * TEMP_LSB_C),
+            _ => None,
+        };
+        for ty in 0..=255u8 {
+            for raw in (-8_388_608..=8_388_607)
+                .step_by(97)
+                .chain([8_388_607, -1, 0, 1])
+            {
+                let want = formula(ty, raw as f64).map(f64::to_bits);
+                assert_eq!(
+                    physical(ty, raw).map(f64::to_bits),
+                    want,
+                    "type {ty} raw {raw}"
+                );
+                if formula(ty, 1.0).is_none() {
+                    break; // the whole range for the IMU types, one value for the others
+                }
+            }
+        }
     }
 }

@@ -96,8 +96,34 @@ impl TagClock {
             self.ticks = tag as i64;
         }
         self.last = Some(tag);
-        (self.ticks.max(0) as f64 * self.tick_ns).round() as u64
+        round_ns(self.ticks.max(0) as f64 * self.tick_ns)
     }
+}
+
+/// `x.round() as u64` (half away from zero, saturating, NaN → 0) without `f64::round`, which
+/// is a libm call on x86-64 without SSE4.1 (a few % of the decode time, once per sample). For
+/// x ≥ 0 the fraction `x - trunc(x)` is exact; below 0 both give 0.
+#[inline]
+fn round_ns(x: f64) -> u64 {
+    let t = x as u64;
+    if x - t as f64 >= 0.5 {
+        t.saturating_add(1)
+    } else {
+        t
+    }
+}
+
+/// The ESF-RAW message whose samples are being handed out, one per decode call, straight to
+/// the caller (not through the queue: a sample with its carrier is a few hundred bytes, and
+/// each move through the queue was a copy).
+#[derive(Clone, Debug)]
+struct RawMsg {
+    frame: Bytes,
+    /// Next block to read.
+    block: usize,
+    /// Index of the next sample among the message's `slots`.
+    slot: u16,
+    slots: u16,
 }
 
 /// Values of one time tag being assembled: channels and temperature; `None` = not yet seen.
@@ -124,6 +150,7 @@ pub struct UbxDecoder {
     raw_clock: TagClock,
     meas_clock: TagClock,
     ready: VecDeque<Decoded>,
+    raw: Option<RawMsg>,
     meas_pending: Option<Partial>,
     raw_msgs: u64,
     meas_msgs: u64,
@@ -146,6 +173,7 @@ impl UbxDecoder {
             raw_clock: TagClock::new(opts.raw_tag_bits, opts.raw_tick_us),
             meas_clock: TagClock::new(opts.meas_tag_bits, opts.meas_tick_us),
             ready: VecDeque::new(),
+            raw: None,
             meas_pending: None,
             raw_msgs: 0,
             meas_msgs: 0,
@@ -162,11 +190,9 @@ impl UbxDecoder {
         }
     }
 
-    fn emit(&mut self, tag_t_ns: u64, vals: [Option<f64>; 7], carrier: Carrier) {
-        let mut s = Sample {
-            t_ns: tag_t_ns,
-            ..Sample::default()
-        };
+    /// Finish a sample (its `t_ns` set) with the values of one time tag; the descriptor it
+    /// made known, if any, is held for the next call ([`Stamper::finish`]).
+    fn fill(&mut self, s: &mut Sample, vals: [Option<f64>; 7]) {
         let mut partial = false;
         for (c, val) in vals.iter().take(6).enumerate() {
             match val {
@@ -186,14 +212,21 @@ impl UbxDecoder {
         if partial {
             self.f.stats.partial_samples += 1;
         }
-        // The descriptor learned on a sample goes out just before it.
-        if let Some(d) = self
-            .stamper
-            .stamp(&mut s, &mut self.f.stats, Descriptor::default)
-        {
-            self.ready.push_back(Decoded::Descriptor(d));
-        }
+        self.stamper.finish(s, &mut self.f, Descriptor::default);
+    }
+
+    /// An ESF-MEAS sample into the queue (its pair's messages may follow it there); the
+    /// descriptor learned on it goes right after it.
+    fn emit(&mut self, tag_t_ns: u64, vals: [Option<f64>; 7], carrier: Carrier) {
+        let mut s = Sample {
+            t_ns: tag_t_ns,
+            ..Sample::default()
+        };
+        self.fill(&mut s, vals);
         self.ready.push_back(Decoded::Sample(s, Some(carrier)));
+        if let Some(d) = self.f.take_held() {
+            self.ready.push_back(d);
+        }
     }
 
     fn flush_meas(&mut self) {
@@ -206,7 +239,8 @@ impl UbxDecoder {
         }
     }
 
-    /// ESF-RAW: blocks grouped by time tag, one sample per group.
+    /// ESF-RAW: checked and counted here; its samples (blocks grouped by time tag) are handed
+    /// out one per call by [`Self::next_raw`].
     fn esf_raw(&mut self, frame: Bytes) {
         let p = &frame[6..frame.len() - 2];
         if p.len() < 4 || !(p.len() - 4).is_multiple_of(8) {
@@ -214,45 +248,79 @@ impl UbxDecoder {
             self.other(frame);
             return;
         }
-        self.raw_msgs += 1;
-        self.f.stats.frames_ok += 1;
-        // The samples go into the queue as they are made; their carriers learn how many the
-        // message holds once all are made (one pass over the blocks).
-        let first = self.ready.len();
-        let mut slots = 0u16;
-        for (i, (tag, range)) in raw_groups(p).enumerate() {
-            slots = i as u16 + 1;
-            let mut vals = [None; 7];
-            for b in range {
-                let o = 4 + 8 * b;
-                let word = u32::from_le_bytes([p[o], p[o + 1], p[o + 2], p[o + 3]]);
-                let ty = (word >> 24) as u8;
-                if let (Some(k), Some(v)) = (slot_of(ty), physical(ty, value24(word))) {
-                    vals[k] = Some(v);
-                }
-            }
-            let t = self.raw_clock.t_ns(tag);
-            let carrier = Carrier {
-                frame: frame.clone(),
-                frame2: None,
-                between: None,
-                slot: i as u16,
-                slots: 0,
-                offsets: [0; 4],
-                raw_scale: None,
-            };
-            self.emit(t, vals, carrier);
-        }
-        for item in self.ready.range_mut(first..) {
-            if let Decoded::Sample(_, Some(c)) = item {
-                c.slots = slots;
-            }
-        }
+        // Groups = blocks whose time tag differs from the block before (the first counts).
+        let mut last = None;
+        let slots = p[4..]
+            .chunks_exact(8)
+            .filter(|b| {
+                let tag = Some([b[4], b[5], b[6], b[7]]);
+                std::mem::replace(&mut last, tag) != tag
+            })
+            .count();
         if slots == 0 {
             // A raw message without blocks carries no sample: keep its bytes.
-            self.f.stats.frames_ok -= 1;
             self.other(frame);
+            return;
         }
+        self.raw_msgs += 1;
+        self.f.stats.frames_ok += 1;
+        self.raw = Some(RawMsg {
+            frame,
+            block: 0,
+            slot: 0,
+            slots: slots.min(u16::MAX as usize) as u16,
+        });
+    }
+
+    /// The next sample of the ESF-RAW message being read: one group of blocks with the same
+    /// time tag, each data word looked up in [`TYPES`]. The sample is made in the item that is
+    /// returned (a sample with its carrier is a few hundred bytes; each move is a copy).
+    fn next_raw(&mut self) -> Option<Decoded> {
+        let m = self.raw.as_mut()?;
+        let blocks = &m.frame[6 + 4 + 8 * m.block..m.frame.len() - 2];
+        let word = |b: &[u8], o: usize| u32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]);
+        let tag = word(blocks, 4);
+        let mut vals = [None; 7];
+        let mut used = 0;
+        for b in blocks.chunks_exact(8) {
+            if word(b, 4) != tag {
+                break;
+            }
+            let w = word(b, 0);
+            let (k, lsb) = TYPES[(w >> 24) as usize];
+            if k != NOT_IMU {
+                vals[k as usize] = Some(value24(w) as f64 * lsb);
+            }
+            used += 1;
+        }
+        let (slot, slots) = (m.slot, m.slots);
+        let frame = if 8 * used >= blocks.len() {
+            // The message's last sample takes its bytes.
+            self.raw.take().map(|m| m.frame)?
+        } else {
+            m.block += used;
+            m.slot += 1;
+            m.frame.clone()
+        };
+        let mut d = Decoded::Sample(
+            Sample {
+                t_ns: self.raw_clock.t_ns(tag),
+                ..Sample::default()
+            },
+            Some(Carrier {
+                frame,
+                frame2: None,
+                between: None,
+                slot,
+                slots,
+                offsets: [0; 4],
+                raw_scale: None,
+            }),
+        );
+        if let Decoded::Sample(s, _) = &mut d {
+            self.fill(s, vals);
+        }
+        Some(d)
     }
 
     /// ESF-MEAS: one time tag per message; gyro and accel may come in two messages.
@@ -356,9 +424,14 @@ impl ProtocolDecoder for UbxDecoder {
         Protocol::Ubx
     }
     fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        self.f.arrived(buf);
+        if let Some(d) = self.f.begin(buf) {
+            return Some(d);
+        }
         loop {
             if let Some(d) = self.ready.pop_front() {
+                return Some(d);
+            }
+            if let Some(d) = self.next_raw() {
                 return Some(d);
             }
             if buf.is_empty() || !self.step(buf) {
