@@ -207,7 +207,7 @@ impl UbxDecoder {
                 }
             }
         }
-        mark_absent(&mut s, !self.seen);
+        mark_absent(s, !self.seen);
         s.temp_c = vals[6];
         if partial {
             self.f.stats.partial_samples += 1;
