@@ -257,8 +257,7 @@ fn diagnose_works_on_the_present_channels_and_names_the_absent_ones() {
             }
             let text = common::run_cli(&args);
             no_nan_in(&out);
-            for c in 0..6 {
-                let n = NAMES[c];
+            for (c, n) in NAMES.iter().enumerate() {
                 if cols.contains(&c) {
                     assert!(
                         !text.contains(&format!("{n}: cannot diagnose: non-finite")),
