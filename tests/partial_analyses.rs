@@ -7,7 +7,6 @@
 mod common;
 
 use imuprep::rng::Rng;
-use std::fmt::Write as _;
 use std::path::Path;
 use std::process::Command;
 
@@ -35,33 +34,8 @@ fn data() -> Vec<[f64; 6]> {
 
 /// Import the channels `cols` of the data as a log `name.log` in `dir`.
 fn log_of(dir: &Path, name: &str, cols: &[usize]) -> String {
-    let d = data();
-    let mut s = String::from("t_s");
-    for c in cols {
-        s.push(',');
-        s.push_str(NAMES[*c]);
-    }
-    s.push('\n');
-    for (i, v) in d.iter().enumerate() {
-        let _ = write!(s, "{:.2}", i as f64 / FS);
-        for c in cols {
-            let _ = write!(s, ",{:.7}", v[*c]);
-        }
-        s.push('\n');
-    }
-    let csv = dir.join(format!("{name}.csv"));
-    std::fs::write(&csv, s).unwrap();
-    let log = dir.join(format!("{name}.log"));
-    common::run_cli(&[
-        "import",
-        csv.to_str().unwrap(),
-        "-o",
-        log.to_str().unwrap(),
-        "--gyro-unit",
-        "rad/s",
-        "--accel-unit",
-        "m/s2",
-    ]);
+    let csv = common::channels_csv(&data(), cols, FS);
+    let log = common::import_csv(dir, name, &csv);
     log.to_str().unwrap().to_string()
 }
 
