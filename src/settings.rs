@@ -291,20 +291,44 @@ pub fn push_keyed(errs: &mut Errors, prefix: &str, message: String) {
     }
 }
 
-/// Deserialise one top-level section, recording its error under its name.
+/// Deserialise one top-level section, recording every key at fault under `section.key`: the
+/// first error serde reports hides the rest of the section (an unknown key stops it before a
+/// bad value is checked), so each key it names is recorded and left out, and the rest is tried
+/// again — the remainder, when it then parses, is returned so its values are validated in the
+/// same run. An error that names no key of the section is recorded under the section's name.
 pub fn section<T: serde::de::DeserializeOwned>(
     table: &toml::Table,
     key: &str,
     errs: &mut Errors,
 ) -> Option<T> {
-    let v = table.get(key)?;
-    match v.clone().try_into::<T>() {
-        Ok(t) => Some(t),
-        Err(e) => {
-            errs.push(key, clean_serde(&e.to_string()));
-            None
+    let mut v = table.get(key)?.clone();
+    loop {
+        let e = match v.clone().try_into::<T>() {
+            Ok(t) => return Some(t),
+            Err(e) => clean_serde(&e.to_string()),
+        };
+        let at = faulty_key(&e).filter(|k| v.as_table().is_some_and(|t| t.contains_key(k)));
+        match (at, v.as_table_mut()) {
+            (Some(k), Some(t)) => {
+                errs.push(format!("{key}.{k}"), e);
+                t.remove(&k);
+            }
+            _ => {
+                errs.push(key, e);
+                return None;
+            }
         }
     }
+}
+
+/// The section key a serde message blames: "unknown field `k`", or "… in `k`" / "… in `k.sub`".
+fn faulty_key(message: &str) -> Option<String> {
+    let quoted = |from: &str| -> Option<String> {
+        let rest = &message[message.find(from)? + from.len()..];
+        let k = &rest[..rest.find('`')?];
+        Some(k.split(['.', '[']).next().unwrap_or(k).to_string())
+    };
+    quoted("unknown field `").or_else(|| quoted(" in `"))
 }
 
 /// serde's TOML messages span lines; keep them on one.

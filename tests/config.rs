@@ -35,8 +35,8 @@ bind = "not-an-address"   # mistake 3
     let e = Config::from_toml_str(text, Path::new(".")).unwrap_err();
     let paths: Vec<&str> = e.0.iter().map(|x| x.path.as_str()).collect();
     assert_eq!(e.0.len(), 3, "{e}");
-    assert!(paths.contains(&"source"), "{e}");
-    assert!(e.to_string().contains("sped"), "{e}");
+    // By key path (issue 13 item 6): the unknown key itself, not only its section.
+    assert!(paths.contains(&"source.sped"), "{e}");
     assert!(paths.contains(&"health.interval_s"), "{e}");
     assert!(paths.contains(&"sinks[0].bind"), "{e}");
 }

@@ -221,27 +221,15 @@ fn ulog_invalid_accel_after_valid_ones_is_no_measurement() {
 #[test]
 fn export_then_import_keeps_the_absent_channels() {
     let dir = tempfile::tempdir().unwrap();
-    let csv = dir.path().join("g.csv");
-    let mut text = String::from("t_s,gx,gy,gz\n");
-    for (i, s) in common::samples(300, 5).iter().enumerate() {
-        text.push_str(&format!(
-            "{:.3},{:.6},{:.6},{:.6}\n",
-            i as f64 * 0.005,
-            s.gyro[0],
-            s.gyro[1],
-            s.gyro[2]
-        ));
-    }
-    std::fs::write(&csv, text).unwrap();
-    let log = dir.path().join("g.log");
-    common::run_cli(&[
-        "import",
-        csv.to_str().unwrap(),
-        "-o",
-        log.to_str().unwrap(),
-        "--gyro-unit",
-        "rad/s",
-    ]);
+    let data: Vec<[f64; 6]> = common::samples(300, 5)
+        .iter()
+        .map(|s| s.channels())
+        .collect();
+    let log = common::import_csv(
+        dir.path(),
+        "g",
+        &common::channels_csv(&data, &[0, 1, 2], 100.0),
+    );
     let (_, orig, _) = imuprep::io::log::read_log(&log).unwrap();
     for to in ["ubx", "mavlink", "ulog"] {
         let out = dir.path().join(format!("g.{to}"));
@@ -278,21 +266,11 @@ fn export_then_import_keeps_the_absent_channels() {
         }
     }
     // An accel-only log cannot go to ULog: a clear error naming the channels, no file.
-    let acsv = dir.path().join("a.csv");
-    std::fs::write(
-        &acsv,
-        "t_s,ax,ay,az\n0,0,0,9.8\n0.005,0,0,9.8\n0.01,0,0,9.8\n",
-    )
-    .unwrap();
-    let alog = dir.path().join("a.log");
-    common::run_cli(&[
-        "import",
-        acsv.to_str().unwrap(),
-        "-o",
-        alog.to_str().unwrap(),
-        "--accel-unit",
-        "m/s2",
-    ]);
+    let alog = common::import_csv(
+        dir.path(),
+        "a",
+        &common::channels_csv(&data, &[3, 4, 5], 100.0),
+    );
     let out = dir.path().join("a.ulg");
     let r = Command::new(common::bin())
         .args(["export", alog.to_str().unwrap(), "-o"])

@@ -69,21 +69,7 @@ fn scenario() -> Vec<[f64; 6]> {
 
 /// The scenario as CSV with time column `t_s` and the channels `cols` (indices into gx..az).
 fn write_csv(path: &Path, data: &[[f64; 6]], cols: &[usize]) {
-    let names = ["gx", "gy", "gz", "ax", "ay", "az"];
-    let mut s = String::from("t_s");
-    for c in cols {
-        s.push(',');
-        s.push_str(names[*c]);
-    }
-    s.push('\n');
-    for (i, v) in data.iter().enumerate() {
-        let _ = write!(s, "{:.2}", i as f64 / FS);
-        for c in cols {
-            let _ = write!(s, ",{:.7}", v[*c]);
-        }
-        s.push('\n');
-    }
-    std::fs::write(path, s).unwrap();
+    std::fs::write(path, common::channels_csv(data, cols, FS)).unwrap();
 }
 
 /// What one import + replay produced.

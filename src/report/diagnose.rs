@@ -10,7 +10,7 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow, ensure};
 
-use super::{load_span_to, parse_channels};
+use super::{load_span_to, parse_channels, present_channels};
 use crate::analysis::diagnose::{ChannelInput, DiagnoseSettings, diagnose_channel};
 use crate::analysis::diagnose_report::{DiagnoseReport, channel_plots, effect_text};
 use crate::analysis::exogenous::Exogenous;
@@ -69,8 +69,9 @@ pub fn diagnose(
 
 /// The other channels of `series` than `c`, named (candidate exogenous inputs).
 pub fn others_of(series: &[Vec<f64>], c: usize) -> Vec<(String, &[f64])> {
+    // An absent channel has no series (see [`prepare`]): no input to the others.
     (0..series.len().min(CHANNEL_NAMES.len()))
-        .filter(|j| *j != c)
+        .filter(|j| *j != c && !series[*j].is_empty())
         .map(|j| (CHANNEL_NAMES[j].to_string(), series[j].as_slice()))
         .collect()
 }
@@ -91,8 +92,8 @@ pub fn channel_input<'a>(
     }
 }
 
-/// The exogenous inputs of channel `c`: temperature, the specific force (gyro channels) and
-/// the other five axes.
+/// The exogenous inputs of channel `c`: temperature, the specific force (gyro channels, when
+/// the accelerometers are all present) and the other present axes.
 pub fn exogenous<'a>(
     series: &'a [Vec<f64>],
     temp: Option<&'a [f64]>,
@@ -101,7 +102,7 @@ pub fn exogenous<'a>(
 ) -> Exogenous<'a> {
     Exogenous {
         temperature_c: temp,
-        specific_force_m_s2: (c < 3).then(|| {
+        specific_force_m_s2: (c < 3 && series[3..6].iter().all(|v| !v.is_empty())).then(|| {
             [
                 series[3].as_slice(),
                 series[4].as_slice(),
@@ -129,7 +130,11 @@ pub fn diagnose_samples(
         series,
         temp,
         source,
+        left_out,
     } = prepare(log, samples, rate, from_s, channels, out_dir)?;
+    for (name, why) in &left_out {
+        writeln!(progress, "{name}: skipped: {why}")?;
+    }
     let settings = DiagnoseSettings::default();
     let mut report = DiagnoseReport {
         source,
@@ -191,13 +196,16 @@ pub fn diagnose_samples(
     Ok(added_all)
 }
 
-/// What both diagnose loops start from: the channels asked for, every channel's series and the
-/// temperature (when every sample has one), the report's source line; `out_dir/plots` made.
+/// What both diagnose loops start from: the channels asked for that the log has, every
+/// channel's series (empty for a channel absent in the log: a partial sensor) and the
+/// temperature (when every sample has one), the report's source line, the channels left out
+/// and why; `out_dir/plots` made.
 pub struct Prepared {
     pub chans: Vec<usize>,
     pub series: Vec<Vec<f64>>,
     pub temp: Option<Vec<f64>>,
     pub source: String,
+    pub left_out: Vec<super::LeftOut>,
 }
 
 /// [`Prepared`] for `samples` (the stretch starting `from_s` into `log`).
@@ -210,9 +218,16 @@ pub fn prepare(
     out_dir: &Path,
 ) -> Result<Prepared> {
     ensure!(!samples.is_empty(), "the chosen stretch is empty");
-    let chans = parse_channels(channels)?;
+    let (chans, left_out) = present_channels(log, samples, &parse_channels(channels)?)?;
+    let absent = samples.iter().fold(0u8, |m, s| m | s.absent);
     let series: Vec<Vec<f64>> = (0..6)
-        .map(|c| samples.iter().map(|s| s.channel(c)).collect())
+        .map(|c| {
+            if absent & (1 << c) != 0 {
+                Vec::new()
+            } else {
+                samples.iter().map(|s| s.channel(c)).collect()
+            }
+        })
         .collect();
     let temp: Option<Vec<f64>> = samples.iter().map(|s| s.temp_c).collect();
     std::fs::create_dir_all(out_dir.join("plots"))?;
@@ -226,6 +241,7 @@ pub fn prepare(
         series,
         temp,
         source,
+        left_out,
     })
 }
 

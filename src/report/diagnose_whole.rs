@@ -56,7 +56,11 @@ pub fn diagnose_whole_samples(
         series,
         temp,
         source,
+        left_out,
     } = prepare(log, samples, rate, from_s, channels, out_dir)?;
+    for (name, why) in &left_out {
+        writeln!(progress, "{name}: skipped: {why}")?;
+    }
     let settings = WholeSettings::default();
     let mut report = WholeReport {
         source,

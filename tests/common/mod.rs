@@ -105,3 +105,42 @@ pub fn white_arima(channel: &str, sigma: f64) -> imuprep::model::arima::ArimaCha
         diagnostics: None,
     }
 }
+
+/// CSV text of the channels `cols` (indices into gx..az) of `data` at `fs` Hz: a `t_s` column
+/// (2 decimals) and the channels (7 decimals), as a partial sensor's logger writes them.
+pub fn channels_csv(data: &[[f64; 6]], cols: &[usize], fs: f64) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::from("t_s");
+    for c in cols {
+        s.push(',');
+        s.push_str(imuprep::sample::CHANNEL_NAMES[*c]);
+    }
+    s.push('\n');
+    for (i, v) in data.iter().enumerate() {
+        let _ = write!(s, "{:.2}", i as f64 / fs);
+        for c in cols {
+            let _ = write!(s, ",{:.7}", v[*c]);
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// Write `csv` as `dir/name.csv` and import it (gyro in rad/s, accel in m/s²) into
+/// `dir/name.log`, which is returned.
+pub fn import_csv(dir: &std::path::Path, name: &str, csv: &str) -> PathBuf {
+    let path = dir.join(format!("{name}.csv"));
+    std::fs::write(&path, csv).unwrap();
+    let log = dir.join(format!("{name}.log"));
+    run_cli(&[
+        "import",
+        path.to_str().unwrap(),
+        "-o",
+        log.to_str().unwrap(),
+        "--gyro-unit",
+        "rad/s",
+        "--accel-unit",
+        "m/s2",
+    ]);
+    log
+}
