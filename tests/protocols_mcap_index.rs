@@ -4,8 +4,9 @@
 //! Needs `--features ros2` (the input bag is written with the `mcap` crate).
 #![cfg(feature = "ros2")]
 
+mod common;
+
 use bytes::BytesMut;
-use imuprep::frame::inline::InlineEncoder;
 use imuprep::frame::mcap::McapDecoder;
 use imuprep::frame::{Decoded, Protocol};
 use std::borrow::Cow;
@@ -65,17 +66,7 @@ fn bag() -> (
 fn inline(bytes: &[u8]) -> Vec<u8> {
     let mut d = McapDecoder::default();
     let (items, _) = imuprep::frame::protocol::decode_chunked(&mut d, bytes, 100);
-    let mut enc = InlineEncoder::new(Protocol::Mcap, 0.0, 0.0);
-    let mut out = BytesMut::new();
-    for it in &items {
-        match it {
-            Decoded::Sample(s, c) => enc.sample(c.as_ref(), s, &mut out),
-            Decoded::Other(b) => enc.other(b, &mut out),
-            Decoded::Descriptor(_) => {}
-        }
-    }
-    enc.flush(&mut out);
-    out.to_vec()
+    common::inline_identity(Protocol::Mcap, &items, 0.0, 0.0)
 }
 
 #[test]
