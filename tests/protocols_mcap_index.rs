@@ -4,8 +4,9 @@
 //! Needs `--features ros2` (the input bag is written with the `mcap` crate).
 #![cfg(feature = "ros2")]
 
+mod common;
+
 use bytes::BytesMut;
-use imuprep::frame::inline::InlineEncoder;
 use imuprep::frame::mcap::McapDecoder;
 use imuprep::frame::{Decoded, Protocol};
 use std::borrow::Cow;
@@ -65,17 +66,7 @@ fn bag() -> (
 fn inline(bytes: &[u8]) -> Vec<u8> {
     let mut d = McapDecoder::default();
     let (items, _) = imuprep::frame::protocol::decode_chunked(&mut d, bytes, 100);
-    let mut enc = InlineEncoder::new(Protocol::Mcap, 0.0, 0.0);
-    let mut out = BytesMut::new();
-    for it in &items {
-        match it {
-            Decoded::Sample(s, c) => enc.sample(c.as_ref(), s, &mut out),
-            Decoded::Other(b) => enc.other(b, &mut out),
-            Decoded::Descriptor(_) => {}
-        }
-    }
-    enc.flush(&mut out);
-    out.to_vec()
+    common::inline_identity(Protocol::Mcap, &items, 0.0, 0.0)
 }
 
 #[test]
@@ -144,4 +135,106 @@ fn a_bag_without_attachments_gets_no_empty_index_groups() {
     let summary = mcap::Summary::read(&out).unwrap().expect("a summary");
     assert!(summary.attachment_indexes.is_empty() && summary.metadata_indexes.is_empty());
     assert!(!inline(&input).is_empty());
+}
+
+const BAG: &[u8] = include_bytes!("reference/mcap_bag.mcap");
+const LZ4_BAG: &str = "tests/reference/mcap_inline_lz4.mcap";
+const LZ4_ROSBAGS: &str = "tests/reference/mcap_inline_lz4_rosbags.csv";
+const EXPECTED: &str = include_str!("reference/mcap_expected.csv");
+
+/// The rosbags bag re-chunked by a [`McapStream`] with compression `c` (identity: every
+/// record as it came).
+fn restream(c: imuprep::frame::mcap_out::ChunkCompression) -> Vec<u8> {
+    let mut d = McapDecoder::default();
+    let (items, _) = imuprep::frame::protocol::decode_chunked(&mut d, BAG, 4096);
+    let mut st = imuprep::frame::mcap_out::McapStream::with_compression(c);
+    let mut out = BytesMut::new();
+    for it in &items {
+        match it {
+            Decoded::Sample(_, Some(c)) => st.message(&c.frame, &mut out),
+            Decoded::Other(b) => st.other(b, &mut out),
+            _ => {}
+        }
+    }
+    st.finish(&mut out);
+    out.to_vec()
+}
+
+/// (compression, uncompressed size, uncompressed CRC, stored bytes) of every chunk record.
+fn chunks(bytes: &[u8]) -> Vec<(String, u64, u32, Vec<u8>)> {
+    let summary = mcap::Summary::read(bytes).unwrap().expect("a summary");
+    summary
+        .chunk_indexes
+        .iter()
+        .map(|ci| {
+            let at = ci.chunk_start_offset as usize;
+            let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+            match mcap::parse_record(bytes[at], &bytes[at + 9..at + 9 + len]).unwrap() {
+                mcap::records::Record::Chunk { header, data } => (
+                    header.compression,
+                    header.uncompressed_size,
+                    header.uncompressed_crc,
+                    data.into_owned(),
+                ),
+                r => panic!("chunk index points at {r:?}"),
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn lz4_chunks_hold_the_same_records_and_rosbags_reads_them() {
+    use imuprep::frame::mcap_out::ChunkCompression;
+    use std::io::Read;
+    let plain = restream(ChunkCompression::None);
+    let lz4 = restream(ChunkCompression::Lz4);
+    if std::env::var_os("IMUPREP_BLESS").is_some() {
+        std::fs::write(LZ4_BAG, &lz4).unwrap();
+    }
+    // The committed bag is the one rosbags read (check_mcap_inline.py, see its docstring).
+    assert_eq!(
+        std::fs::read(LZ4_BAG).unwrap(),
+        lz4,
+        "run with IMUPREP_BLESS=1"
+    );
+    let (p, z) = (chunks(&plain), chunks(&lz4));
+    assert_eq!(p.len(), z.len());
+    for (p, z) in p.iter().zip(&z) {
+        assert_eq!((p.0.as_str(), z.0.as_str()), ("", "lz4"));
+        // Same uncompressed size and CRC; the LZ4 frame (decoded by lz4_flex) gives exactly
+        // the uncompressed chunk's records, in fewer bytes.
+        assert_eq!((p.1, p.2), (z.1, z.2));
+        let mut back = Vec::new();
+        lz4_flex::frame::FrameDecoder::new(&z.3[..])
+            .read_to_end(&mut back)
+            .unwrap();
+        assert_eq!(back, p.3);
+        assert!(z.3.len() < p.3.len(), "{} vs {}", z.3.len(), p.3.len());
+    }
+    // rosbags (through the summary and chunk indexes, decompressing LZ4) reads the Imu rows it
+    // read from the original bag.
+    let rows = std::fs::read_to_string(LZ4_ROSBAGS).unwrap();
+    let got_rows: Vec<&str> = rows.lines().skip(1).collect();
+    let want: Vec<&str> = EXPECTED.lines().skip(1).collect();
+    assert_eq!(got_rows, want);
+    // A build that reads LZ4 (the `mcap` crate's reader, and imuprep's decoder through it)
+    // gets the same messages from both.
+    #[cfg(feature = "ros2-compression")]
+    {
+        let msgs = |b: &[u8]| -> Vec<(u64, Vec<u8>)> {
+            mcap::MessageStream::new(b)
+                .unwrap()
+                .map(|m| m.map(|m| (m.log_time, m.data.into_owned())).unwrap())
+                .collect()
+        };
+        assert_eq!(msgs(&lz4), msgs(&plain));
+        let (a, _) =
+            imuprep::frame::protocol::decode_chunked(&mut McapDecoder::default(), &lz4, 999);
+        let (b, _) =
+            imuprep::frame::protocol::decode_chunked(&mut McapDecoder::default(), &plain, 999);
+        assert_eq!(
+            imuprep::frame::protocol::samples_of(&a),
+            imuprep::frame::protocol::samples_of(&b)
+        );
+    }
 }

@@ -2,6 +2,7 @@
 //! PX4 logs read by pyulog; inline re-encoding preserves every message and every byte. The
 //! fixtures and the scripts that made them are in tests/reference/.
 mod common;
+use common::inline_identity;
 
 use bytes::BytesMut;
 use imuprep::frame::inline::InlineEncoder;
@@ -31,21 +32,6 @@ fn rows(csv: &str) -> Vec<Vec<String>> {
         .skip(1)
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect()
-}
-
-/// Identity inline re-encoding: every item back through the encoder with its own values.
-fn inline_identity(p: Protocol, items: &[Decoded], gs: f64, as_: f64) -> Vec<u8> {
-    let mut enc = InlineEncoder::new(p, gs, as_);
-    let mut out = BytesMut::new();
-    for it in items {
-        match it {
-            Decoded::Sample(s, c) => enc.sample(c.as_ref(), s, &mut out),
-            Decoded::Other(b) => enc.other(b, &mut out),
-            Decoded::Descriptor(_) => {}
-        }
-    }
-    enc.flush(&mut out);
-    out.to_vec()
 }
 
 #[test]

@@ -13,6 +13,10 @@
 //! those records), the summary offsets, the footer and the closing magic. Chunk and
 //! summary CRC-32s are written; the data-section CRC is 0 ("not computed"), as the format allows.
 //!
+//! Chunks are uncompressed by default; [`McapStream::with_compression`] writes LZ4-frame chunks
+//! instead (`lz4`, as the MCAP format names it; `lz4_flex`, pure Rust, in `ros2` builds). The
+//! chunk CRC is over the uncompressed records either way, as the format defines it.
+//!
 //! Written by hand rather than with the `mcap` crate's writer: that one needs a seekable output
 //! and assigns its own schema and channel ids, where the inline output keeps the input's records
 //! byte for byte (compiled in every build; no dependency).
@@ -40,6 +44,40 @@ const OP_METADATA_INDEX: u8 = 0x0D;
 const OP_STATISTICS: u8 = 0x0B;
 const OP_SUMMARY_OFFSET: u8 = 0x0E;
 const OP_DATA_END: u8 = 0x0F;
+
+/// How the inline output compresses its chunks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ChunkCompression {
+    /// Records as they are (the format's empty compression name).
+    #[default]
+    None,
+    /// LZ4 frame format (`lz4`).
+    #[cfg(feature = "ros2")]
+    Lz4,
+}
+
+impl ChunkCompression {
+    /// The chunk's records as stored, and the format's name for the compression.
+    fn apply(self, records: &[u8]) -> (std::borrow::Cow<'_, [u8]>, &'static str) {
+        match self {
+            ChunkCompression::None => (records.into(), ""),
+            #[cfg(feature = "ros2")]
+            ChunkCompression::Lz4 => {
+                use std::io::Write;
+                let mut e = lz4_flex::frame::FrameEncoder::new(Vec::new());
+                // Writing into a Vec cannot fail.
+                e.write_all(records).expect("lz4 into memory");
+                (e.finish().expect("lz4 into memory").into(), "lz4")
+            }
+        }
+    }
+}
+
+/// Append a string field: u32 length, bytes.
+fn put_str(out: &mut Vec<u8>, s: &str) {
+    out.extend_from_slice(&(s.len() as u32).to_le_bytes());
+    out.extend_from_slice(s.as_bytes());
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
@@ -76,6 +114,7 @@ pub struct McapStream {
     /// Attachment and metadata index records, for the summary.
     attachment_index: Vec<u8>,
     metadata_index: Vec<u8>,
+    compression: ChunkCompression,
 }
 
 impl Default for McapStream {
@@ -97,6 +136,7 @@ impl Default for McapStream {
             metadata: 0,
             attachment_index: Vec::new(),
             metadata_index: Vec::new(),
+            compression: ChunkCompression::None,
         }
     }
 }
@@ -158,6 +198,14 @@ fn record(out: &mut Vec<u8>, op: u8, body: &[u8]) {
 }
 
 impl McapStream {
+    /// A stream whose chunks are compressed with `c`.
+    pub fn with_compression(c: ChunkCompression) -> Self {
+        McapStream {
+            compression: c,
+            ..Self::default()
+        }
+    }
+
     fn emit(&mut self, b: &[u8], out: &mut bytes::BytesMut) {
         out.extend_from_slice(b);
         self.written += b.len() as u64;
@@ -245,14 +293,15 @@ impl McapStream {
         }
         let records = std::mem::take(&mut self.chunk);
         let (t0, t1) = self.chunk_times.take().unwrap_or((0, 0));
-        let mut body = Vec::with_capacity(records.len() + 40);
+        let (stored, compression) = self.compression.apply(&records);
+        let mut body = Vec::with_capacity(stored.len() + 40);
         body.extend_from_slice(&t0.to_le_bytes());
         body.extend_from_slice(&t1.to_le_bytes());
         body.extend_from_slice(&(records.len() as u64).to_le_bytes());
         body.extend_from_slice(&CRC32.checksum(&records).to_le_bytes());
-        body.extend_from_slice(&0u32.to_le_bytes()); // compression "" (none)
-        body.extend_from_slice(&(records.len() as u64).to_le_bytes());
-        body.extend_from_slice(&records);
+        put_str(&mut body, compression);
+        body.extend_from_slice(&(stored.len() as u64).to_le_bytes());
+        body.extend_from_slice(&stored);
         let chunk_start = self.written;
         let mut rec = Vec::with_capacity(body.len() + 9);
         record(&mut rec, OP_CHUNK, &body);
@@ -282,8 +331,8 @@ impl McapStream {
         ci.extend_from_slice(&(offsets.len() as u32).to_le_bytes());
         ci.extend_from_slice(&offsets);
         ci.extend_from_slice(&(self.written - index_start).to_le_bytes());
-        ci.extend_from_slice(&0u32.to_le_bytes()); // compression ""
-        ci.extend_from_slice(&(records.len() as u64).to_le_bytes()); // compressed size
+        put_str(&mut ci, compression);
+        ci.extend_from_slice(&(stored.len() as u64).to_le_bytes()); // compressed size
         ci.extend_from_slice(&(records.len() as u64).to_le_bytes()); // uncompressed size
         record(&mut self.chunk_index, OP_CHUNK_INDEX, &ci);
         self.chunks += 1;

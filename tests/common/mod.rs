@@ -144,3 +144,23 @@ pub fn import_csv(dir: &std::path::Path, name: &str, csv: &str) -> PathBuf {
     ]);
     log
 }
+
+/// Identity inline re-encoding: every item back through the encoder with its own values.
+pub fn inline_identity(
+    p: imuprep::frame::Protocol,
+    items: &[imuprep::frame::Decoded],
+    gs: f64,
+    as_: f64,
+) -> Vec<u8> {
+    let mut enc = imuprep::frame::inline::InlineEncoder::new(p, gs, as_);
+    let mut out = bytes::BytesMut::new();
+    for it in items {
+        match it {
+            imuprep::frame::Decoded::Sample(s, c) => enc.sample(c.as_ref(), s, &mut out),
+            imuprep::frame::Decoded::Other(b) => enc.other(b, &mut out),
+            imuprep::frame::Decoded::Descriptor(_) => {}
+        }
+    }
+    enc.flush(&mut out);
+    out.to_vec()
+}

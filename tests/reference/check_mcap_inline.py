@@ -7,8 +7,14 @@ test asserts the two are equal.
 
     IMUPREP_BLESS=1 cargo test --release --features ros2 --test ros2_mcap
     python3 tests/reference/check_mcap_inline.py
+
+The same check for the LZ4-chunked inline output (tests/protocols_mcap_index.rs):
+
+    IMUPREP_BLESS=1 cargo test --release --features ros2 --test protocols_mcap_index
+    python3 tests/reference/check_mcap_inline.py mcap_inline_lz4.mcap mcap_inline_lz4_rosbags.csv
 """
 import csv
+import sys
 from pathlib import Path
 
 from rosbags.rosbag2 import Reader
@@ -17,7 +23,8 @@ from rosbags.typesys import Stores, get_typestore
 HERE = Path(__file__).resolve().parent
 ts = get_typestore(Stores.ROS2_HUMBLE)
 rows, counts = [], {}
-with Reader(HERE / "mcap_inline_bag.mcap") as r:
+bag, out = (sys.argv[1], sys.argv[2]) if len(sys.argv) > 2 else ("mcap_inline_bag.mcap", "mcap_inline_rosbags.csv")
+with Reader(HERE / bag) as r:
     for conn, t, raw in r.messages():
         counts[conn.topic] = counts.get(conn.topic, 0) + 1
         if conn.msgtype != "sensor_msgs/msg/Imu":
@@ -29,7 +36,7 @@ with Reader(HERE / "mcap_inline_bag.mcap") as r:
         rows.append([conn.topic, st, t, repr(g.x), repr(g.y), repr(g.z), repr(a.x), repr(a.y), repr(a.z),
                      *(repr(float(v)) for v in (gc[0], gc[4], gc[8], ac[0], ac[4], ac[8], oc[0]))])
 assert counts == {"/imu/data": 60, "/imu/second": 20, "/chatter": 12}, counts
-with open(HERE / "mcap_inline_rosbags.csv", "w", newline="") as f:
+with open(HERE / out, "w", newline="") as f:
     w = csv.writer(f)
     w.writerow(["topic", "stamp_ns", "log_time_ns", "gx", "gy", "gz", "ax", "ay", "az",
                 "gcov_xx", "gcov_yy", "gcov_zz", "acov_xx", "acov_yy", "acov_zz", "ocov_0"])
