@@ -31,6 +31,7 @@ const SEED: u64 = 12;
 const SCORE_FROM: usize = 2000;
 
 #[test]
+#[allow(clippy::needless_range_loop)] // c indexes the label rows' channel and the samples alike
 fn missed_injections_are_broken_down_and_agree_with_the_audit() {
     let Some(dir) = common::real_data("") else {
         return;
