@@ -97,6 +97,12 @@ pub struct GrossErrorSettings {
     /// Confirmation: the event must also stand out from the sharpest ordinary sample around it
     /// by this factor (default 2; see `confirm.rs`).
     pub stand_out: f64,
+    /// Confirmation: the breaks into and out of the event must stand out from the sharpest
+    /// ordinary sample around it by this factor, both measured as a spike's height (default 4;
+    /// see `confirm.rs`: an edge's second difference has 2× the sd of a centred one, so 4 here
+    /// is what `stand_out = 2` has always meant for the edges; 2 would be the same bar as the
+    /// interpolation's, and is measured as a trade-off in `docs/gross_error_results.md`).
+    pub edge_stand_out: f64,
     /// Samples before an event whose roughness sets the confirmation scale (default 32: the
     /// scale's own sampling error is then ~12 %, small enough not to make 4σ noise look 6σ).
     pub context_samples: usize,
@@ -138,6 +144,7 @@ impl Default for GrossErrorSettings {
             confirm_k: 6.0,
             edge_k: 2.5,
             stand_out: 2.0,
+            edge_stand_out: 4.0,
             context_samples: 32,
             post_samples: 4,
             plausible_gyro_rad_s: 60.0,
@@ -166,6 +173,7 @@ impl GrossErrorSettings {
             ("confirm_k", self.confirm_k),
             ("edge_k", self.edge_k),
             ("stand_out", self.stand_out),
+            ("edge_stand_out", self.edge_stand_out),
         ] {
             if !(pos(v) && v <= 50.0) {
                 e.push(format!("{name} = {v} must be in (0, 50]"));

@@ -114,9 +114,12 @@ impl GrossErrorStage {
             && evidence.is_some_and(|e| {
                 e.gross(
                     keep - lead,
-                    self.s.confirm_k,
-                    self.s.edge_k,
-                    self.s.stand_out,
+                    &confirm::Thresholds {
+                        confirm_k: self.s.confirm_k,
+                        edge_k: self.s.edge_k,
+                        stand_out: self.s.stand_out,
+                        edge_stand_out: self.s.edge_stand_out,
+                    },
                 )
             });
         let use_interp = evidence.is_some() && self.s.replacement == Replacement::Interpolation;
