@@ -177,3 +177,38 @@ fn comma2k19_runs_as_a_third_record() {
     let m = percentile(&mut h, 50.0);
     assert!(m < 5.0, "median {m} m");
 }
+
+/// comma2k19's pose orientation read as device → ECEF (`C_b^e`): a level car (roll and pitch
+/// within a few degrees) heading along the pose's own course over ground. The other reading
+/// (the transpose) gives roll −36°, pitch −30°, which no car on a highway has.
+#[test]
+fn read_pose_attitude_is_level_and_on_course() {
+    let dir = Path::new("../shared/data/real/comma2k19_car_segment");
+    if !dir.exists() {
+        eprintln!(
+            "SKIPPED: {} is absent (real recordings live beside the repo)",
+            dir.display()
+        );
+        return;
+    }
+    let spec = navtest::comma_record(dir);
+    let l = navtest::load(&spec).unwrap();
+    let refs = navtest::reference_attitude(&spec, &l.gnss)
+        .unwrap()
+        .expect("comma2k19 has a pose attitude reference");
+    assert_eq!(refs.len(), l.gnss.len());
+    let mut worst_course = 0f64;
+    for (r, e) in refs.iter().zip(&l.gnss) {
+        let r = r.expect("every pose epoch has an attitude");
+        let [roll, pitch] = r.tilt.unwrap().map(f64::to_degrees);
+        // Tolerance: 8°, well above a car's roll and pitch on a highway (the pose gives
+        // roll 1–2°, pitch −5…−1°) and far below the transpose's −36° / −30°.
+        assert!(roll.abs() < 8.0 && pitch.abs() < 8.0, "{roll} {pitch}");
+        let course = e.v_neu[1].atan2(e.v_neu[0]);
+        let d = (r.yaw - course).to_degrees();
+        worst_course = worst_course.max(((d + 180.0).rem_euclid(360.0) - 180.0).abs());
+    }
+    // Tolerance: 3° — side-slip on a straight highway is well under a degree; the rest is the
+    // camera's yaw against the car's axis (the offset navtest removes, 0.76° with (a)).
+    assert!(worst_course < 3.0, "yaw − course up to {worst_course}°");
+}

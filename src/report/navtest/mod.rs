@@ -37,6 +37,7 @@
 //! antenna position against the RTK position (horizontal, vertical), and heading and tilt
 //! against the raw no-outage run at the same epoch (the logs hold no independent attitude).
 
+pub mod attref;
 pub mod augment;
 pub mod budget;
 pub mod comma;
@@ -51,7 +52,10 @@ use std::path::Path;
 
 use serde::Serialize;
 
-pub use augment::{AugmentationSource, augmentation_from_allan, augmentation_from_notes};
+pub use attref::{AttRefReport, AttRefRow, att_ref_report, reference_attitude};
+pub use augment::{
+    AugmentationSource, augmentation_from_allan, augmentation_from_notes, noise_variants,
+};
 pub use budget::{BUDGET_LENGTH_S, BudgetRow, error_budget};
 pub use fitted::{FittedModels, MIN_STILL_CHOICES_S, fit_models, held_out};
 pub use harm::{HarmCell, HarmOutage, harm_check};
@@ -60,14 +64,15 @@ pub use outages::{
     run_filter_with, schedule,
 };
 pub use setup::{
-    BodyImu, GnssSource, RecordSpec, comma_record, default_records, filter_config, reference_noise,
-    to_body,
+    AttRefSource, BodyImu, GnssSource, RecordSpec, comma_record, default_records, filter_config,
+    reference_noise, to_body,
 };
 pub use static_drift::{DriftRow, STATIC_ALIGN_S, run_bench, static_drift};
 
 use crate::config::Config;
 use crate::frame::Descriptor;
 use crate::nav::earth;
+use crate::nav::eskf::EskfConfig;
 use crate::nav::pos::{self, PosEpoch};
 use crate::report::audit::{load_recording, run_config};
 use crate::sample::{Sample, flags};
@@ -149,6 +154,10 @@ pub struct RecordResult {
     pub harm: Vec<HarmCell>,
     pub harm_outages: Vec<HarmOutage>,
     pub budget: Vec<BudgetRow>,
+    /// Heading and tilt against an independent attitude reference, where the record has one.
+    pub att_ref: Option<AttRefReport>,
+    /// The process noise of (a)–(d) (the reference filter's, [`reference_noise`]).
+    pub filter_noise: crate::nav::eskf::ImuNoise,
 }
 
 fn summary(
@@ -232,6 +241,21 @@ pub fn run_record(
         )?),
         None => None,
     };
+    let mut e_runs = vec![];
+    for (label, noise) in aug
+        .as_ref()
+        .map(|s| noise_variants(s, &base.noise))
+        .unwrap_or_default()
+    {
+        let cfg_e = EskfConfig {
+            noise,
+            ..base.clone()
+        };
+        e_runs.push((
+            label,
+            run_filter(&cfg_e, &raw_b, gnss, &outages, Some(&att_ref))?,
+        ));
+    }
     let mut rows_all = rows(&spec.name, A, &a.errors);
     rows_all.extend(rows(&spec.name, B, &b.errors));
     let mut all = vec![];
@@ -246,6 +270,11 @@ pub fn run_record(
         rows_all.extend(rows(&spec.name, D, &d.errors));
         all.extend(d.errors.iter().map(|e| (D.to_string(), *e)));
         variants.push(summary(D, &raw_b, &raw_b, None, d));
+    }
+    for (label, e) in &e_runs {
+        rows_all.extend(rows(&spec.name, label, &e.errors));
+        all.extend(e.errors.iter().map(|x| (label.to_string(), *x)));
+        variants.push(summary(label, &raw_b, &raw_b, None, e));
     }
     let mut fitted = vec![];
     for m in models {
@@ -288,6 +317,12 @@ pub fn run_record(
     let (harm, harm_outages) =
         harm_check(&a.errors, &b.errors, &raw_b, &clean_b, &cleaned, spec.t_off);
     let budget = error_budget(&base, &raw_b, gnss, &outages, &att_ref)?;
+    let t_first = outages
+        .iter()
+        .map(|o| o.start)
+        .fold(f64::INFINITY, f64::min);
+    let indep = reference_attitude(spec, gnss)?
+        .map(|r| att_ref_report(spec.att_ref, &r, gnss, &att_ref, t_first, &all));
     Ok(RecordResult {
         name: spec.name.clone(),
         imu_epochs: raw.len(),
@@ -305,6 +340,8 @@ pub fn run_record(
         harm,
         harm_outages,
         budget,
+        att_ref: indep,
+        filter_noise: base.noise,
     })
 }
 

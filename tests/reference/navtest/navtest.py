@@ -55,6 +55,9 @@ def parse_args(argv=None):
     p.add_argument("--logs", default="drive,walk", help="comma list of: drive, walk")
     p.add_argument("--variants", default=",".join(VARIANTS),
                    help="comma list of: raw, default, fitted (raw is always run)")
+    p.add_argument("--lengths", default=",".join("%g" % x for x in LENGTHS_S),
+                   help="scheme (ii): comma list of outage lengths, s (a subset of the default "
+                        "saves time on a busy machine)")
     p.add_argument("--one-outage-per-run", action="store_true",
                    help="scheme (ii): every outage in a filter run of its own (slower) instead "
                         "of the tool's comb of outages spaced 2 x their length")
@@ -214,7 +217,7 @@ def plan(args, tool, log, rtk, fit_span, t_imu_raw):
     def end_ok(t_end):
         return rtk.end_epoch(outages.Window(t_end - 1.0, t_end), cv["imu_t_off"]) is not None
 
-    for length in LENGTHS_S:
+    for length in [float(x) for x in args.lengths.split(",")]:
         runs, _ = outages.grid_runs(g0, g1, length, cv["start_coast"], end_ok,
                                     isolated=args.one_outage_per_run)
         for r in runs:
