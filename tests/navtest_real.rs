@@ -17,6 +17,19 @@ use imuprep::report::navtest::{
     self, default_records, filter_config, percentile, run_filter, schedule, to_body,
 };
 
+/// The real-recording folder, or `None` after a visible `SKIPPED:` line when it is absent.
+fn real_dir(p: &str) -> Option<&Path> {
+    let dir = Path::new(p);
+    if dir.exists() {
+        return Some(dir);
+    }
+    eprintln!(
+        "SKIPPED: {} is absent (real recordings live beside the repo)",
+        dir.display()
+    );
+    None
+}
+
 #[derive(serde::Deserialize)]
 struct RefError {
     log: String,
@@ -28,14 +41,9 @@ struct RefError {
 
 #[test]
 fn drive_raw_30s_outages_agree_with_the_reference_filter() {
-    let data = Path::new("../shared/data/real/rtklibexplorer_drive_walk");
-    if !data.exists() {
-        eprintln!(
-            "SKIPPED: {} is absent (real recordings live beside the repo)",
-            data.display()
-        );
+    let Some(data) = real_dir("../shared/data/real/rtklibexplorer_drive_walk") else {
         return;
-    }
+    };
     let spec = default_records(data).remove(0);
     assert_eq!(spec.name, "drive");
     let (_, raw) = load_recording(&spec.imu_csv).unwrap();
@@ -92,14 +100,9 @@ fn drive_raw_30s_outages_agree_with_the_reference_filter() {
 /// fitted stretch count as held out.
 #[test]
 fn fitted_models_for_variant_c_say_not_fitted_and_are_refused_at_another_rate() {
-    let data = Path::new("../shared/data/real/rtklibexplorer_drive_walk");
-    if !data.exists() {
-        eprintln!(
-            "SKIPPED: {} is absent (real recordings live beside the repo)",
-            data.display()
-        );
+    let Some(data) = real_dir("../shared/data/real/rtklibexplorer_drive_walk") else {
         return;
-    }
+    };
     let specs = default_records(data);
     let drive = navtest::load(&specs[0]).unwrap();
     let walk = navtest::load(&specs[1]).unwrap();
@@ -142,14 +145,9 @@ fn fitted_models_for_variant_c_say_not_fitted_and_are_refused_at_another_rate() 
 /// 3.917 °/s).
 #[test]
 fn comma2k19_runs_as_a_third_record() {
-    let dir = Path::new("../shared/data/real/comma2k19_car_segment");
-    if !dir.exists() {
-        eprintln!(
-            "SKIPPED: {} is absent (real recordings live beside the repo)",
-            dir.display()
-        );
+    let Some(dir) = real_dir("../shared/data/real/comma2k19_car_segment") else {
         return;
-    }
+    };
     let spec = navtest::comma_record(dir);
     let l = navtest::load(&spec).unwrap();
     // 1,200 pose rows at 20 Hz, every 5th.
@@ -183,14 +181,9 @@ fn comma2k19_runs_as_a_third_record() {
 /// (the transpose) gives roll −36°, pitch −30°, which no car on a highway has.
 #[test]
 fn read_pose_attitude_is_level_and_on_course() {
-    let dir = Path::new("../shared/data/real/comma2k19_car_segment");
-    if !dir.exists() {
-        eprintln!(
-            "SKIPPED: {} is absent (real recordings live beside the repo)",
-            dir.display()
-        );
+    let Some(dir) = real_dir("../shared/data/real/comma2k19_car_segment") else {
         return;
-    }
+    };
     let spec = navtest::comma_record(dir);
     let l = navtest::load(&spec).unwrap();
     let refs = navtest::reference_attitude(&spec, &l.gnss)

@@ -108,6 +108,9 @@ fn errors(att_deg: [f64; 3], r: &RefAttitude, off: &[f64; 3]) -> (f64, Option<f6
     (d(2, r.yaw).abs(), tilt)
 }
 
+/// The GNSS-aided filter's attitude and the reference's at one epoch.
+type Pair = (Vector3<f64>, RefAttitude);
+
 fn median_p95(mut v: Vec<f64>) -> [f64; 2] {
     [percentile(&mut v, 50.0), percentile(&mut v, 95.0)]
 }
@@ -124,11 +127,11 @@ pub fn att_ref_report(
     t_first: f64,
     errs: &[(String, OutageError)],
 ) -> AttRefReport {
-    let pairs: Vec<(Vector3<f64>, RefAttitude)> = (0..refs.len().min(aided.len()))
+    let pairs: Vec<Pair> = (0..refs.len().min(aided.len()))
         .filter(|&j| gnss[j].t >= t_first)
         .filter_map(|j| Some((aided[j]?, refs[j]?)))
         .collect();
-    let med = |f: &dyn Fn(&(Vector3<f64>, RefAttitude)) -> Option<f64>| {
+    let med = |f: &dyn Fn(&Pair) -> Option<f64>| {
         let mut v: Vec<f64> = pairs.iter().filter_map(f).collect();
         percentile(&mut v, 50.0)
     };
