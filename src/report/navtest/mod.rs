@@ -9,12 +9,13 @@
 //! of the recording's longest still stretch (the random-walk part keeps the reference's density;
 //! an implausible part falls back to it, [`augment`]); the do-no-harm check (b) ≤ (a) per cell
 //! with the outages behind every miss ([`harm`]); the error budget of the 30-s outages
-//! ([`budget`]); plus, on the static benches, the drift of a free-inertial solution, raw against
-//! cleaned ([`static_drift`]).
+//! ([`budget`]); (e) and (e') the raw IMU with the filter's process noise from the same Allan
+//! terms ([`noise_variants`]); plus, on the static benches, the drift of a free-inertial
+//! solution, raw against cleaned ([`static_drift`]).
 //!
 //! Files: [`setup`] (records, the reference's settings, body-frame IMU), [`outages`] (schedule,
-//! filter runs, statistics), [`augment`], [`fitted`], [`harm`], [`budget`], [`static_drift`],
-//! and the text report (`display`).
+//! filter runs, statistics), [`attref`], [`comma`], [`augment`], [`fitted`], [`harm`],
+//! [`budget`], [`static_drift`], and the text report (`display`).
 //!
 //! **What is copied from the reference filter's setup** (rtklibexplorer's GNSS_IMU, its
 //! `drive_config.py` / `walk_config.py`; values, not code): the IMU-to-body rotation, the lever
@@ -35,7 +36,9 @@
 //! did not get, which must be fixed. Each outage is a copy of the no-outage filter at its start
 //! that runs without GNSS (ZUPT still active) to its end — one outage per run. Errors: the
 //! antenna position against the RTK position (horizontal, vertical), and heading and tilt
-//! against the raw no-outage run at the same epoch (the logs hold no independent attitude).
+//! against the raw no-outage run at the same epoch; where a record has an independent attitude
+//! reference (comma2k19's pose, the drive's RTK course over ground) also against that
+//! ([`attref`]).
 
 pub mod attref;
 pub mod augment;

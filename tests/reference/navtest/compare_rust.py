@@ -21,7 +21,9 @@ from scipy.stats import spearmanr
 
 
 def main(ref_paths, rust_path):
-    ref = [e for p in ref_paths for e in json.load(open(p))]
+    # Staged runs may hold the same (a) outage twice: keep one per (log, variant, length, start).
+    ref = list({(e["log"], e["variant"], e["length_s"], round(e["start_rel_s"], 3)): e
+                for p in ref_paths for e in json.load(open(p))}.values())
     rust = json.load(open(rust_path))
     print("| record | outage s | n | ref. horiz. median / p95 m | Rust median / p95 m | ratio median / p95 "
           "| ref. vert. median m | Rust vert. median m | rank corr. (per outage) |")
@@ -63,7 +65,6 @@ def harm(ref):
     print("| record | outage s | variant | n | (a) median / p95 m | variant median / p95 m "
           "| difference median / p95 m |")
     print("|---|---:|---|---:|---:|---:|---:|")
-    # One outage per (log, length, start): several files may hold the same raw outage.
     rows = {(e["log"], e["length_s"], e["variant"], round(e["start_rel_s"], 3)): e for e in ref}
     keys = sorted({(k[0], k[1], k[2]) for k in rows})
     for log, length, variant in keys:
