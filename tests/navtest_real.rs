@@ -17,6 +17,19 @@ use imuprep::report::navtest::{
     self, default_records, filter_config, percentile, run_filter, schedule, to_body,
 };
 
+/// The real-recording folder, or `None` after a visible `SKIPPED:` line when it is absent.
+fn real_dir(p: &str) -> Option<&Path> {
+    let dir = Path::new(p);
+    if dir.exists() {
+        return Some(dir);
+    }
+    eprintln!(
+        "SKIPPED: {} is absent (real recordings live beside the repo)",
+        dir.display()
+    );
+    None
+}
+
 #[derive(serde::Deserialize)]
 struct RefError {
     log: String,
@@ -28,14 +41,9 @@ struct RefError {
 
 #[test]
 fn drive_raw_30s_outages_agree_with_the_reference_filter() {
-    let data = Path::new("../shared/data/real/rtklibexplorer_drive_walk");
-    if !data.exists() {
-        eprintln!(
-            "SKIPPED: {} is absent (real recordings live beside the repo)",
-            data.display()
-        );
+    let Some(data) = real_dir("../shared/data/real/rtklibexplorer_drive_walk") else {
         return;
-    }
+    };
     let spec = default_records(data).remove(0);
     assert_eq!(spec.name, "drive");
     let (_, raw) = load_recording(&spec.imu_csv).unwrap();
@@ -92,14 +100,9 @@ fn drive_raw_30s_outages_agree_with_the_reference_filter() {
 /// fitted stretch count as held out.
 #[test]
 fn fitted_models_for_variant_c_say_not_fitted_and_are_refused_at_another_rate() {
-    let data = Path::new("../shared/data/real/rtklibexplorer_drive_walk");
-    if !data.exists() {
-        eprintln!(
-            "SKIPPED: {} is absent (real recordings live beside the repo)",
-            data.display()
-        );
+    let Some(data) = real_dir("../shared/data/real/rtklibexplorer_drive_walk") else {
         return;
-    }
+    };
     let specs = default_records(data);
     let drive = navtest::load(&specs[0]).unwrap();
     let walk = navtest::load(&specs[1]).unwrap();
@@ -142,14 +145,9 @@ fn fitted_models_for_variant_c_say_not_fitted_and_are_refused_at_another_rate() 
 /// 3.917 °/s).
 #[test]
 fn comma2k19_runs_as_a_third_record() {
-    let dir = Path::new("../shared/data/real/comma2k19_car_segment");
-    if !dir.exists() {
-        eprintln!(
-            "SKIPPED: {} is absent (real recordings live beside the repo)",
-            dir.display()
-        );
+    let Some(dir) = real_dir("../shared/data/real/comma2k19_car_segment") else {
         return;
-    }
+    };
     let spec = navtest::comma_record(dir);
     let l = navtest::load(&spec).unwrap();
     // 1,200 pose rows at 20 Hz, every 5th.
@@ -176,4 +174,34 @@ fn comma2k19_runs_as_a_third_record() {
     let mut h: Vec<f64> = run.errors.iter().map(|e| e.horiz_m).collect();
     let m = percentile(&mut h, 50.0);
     assert!(m < 5.0, "median {m} m");
+}
+
+/// comma2k19's pose orientation read as device → ECEF (`C_b^e`): a level car (roll and pitch
+/// within a few degrees) heading along the pose's own course over ground. The other reading
+/// (the transpose) gives roll −36°, pitch −30°, which no car on a highway has.
+#[test]
+fn read_pose_attitude_is_level_and_on_course() {
+    let Some(dir) = real_dir("../shared/data/real/comma2k19_car_segment") else {
+        return;
+    };
+    let spec = navtest::comma_record(dir);
+    let l = navtest::load(&spec).unwrap();
+    let refs = navtest::reference_attitude(&spec, &l.gnss)
+        .unwrap()
+        .expect("comma2k19 has a pose attitude reference");
+    assert_eq!(refs.len(), l.gnss.len());
+    let mut worst_course = 0f64;
+    for (r, e) in refs.iter().zip(&l.gnss) {
+        let r = r.expect("every pose epoch has an attitude");
+        let [roll, pitch] = r.tilt.unwrap().map(f64::to_degrees);
+        // Tolerance: 8°, well above a car's roll and pitch on a highway (the pose gives
+        // roll 1–2°, pitch −5…−1°) and far below the transpose's −36° / −30°.
+        assert!(roll.abs() < 8.0 && pitch.abs() < 8.0, "{roll} {pitch}");
+        let course = e.v_neu[1].atan2(e.v_neu[0]);
+        let d = (r.yaw - course).to_degrees();
+        worst_course = worst_course.max(((d + 180.0).rem_euclid(360.0) - 180.0).abs());
+    }
+    // Tolerance: 3° — side-slip on a straight highway is well under a degree; the rest is the
+    // camera's yaw against the car's axis (the offset navtest removes, 0.76° with (a)).
+    assert!(worst_course < 3.0, "yaw − course up to {worst_course}°");
 }

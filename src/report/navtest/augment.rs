@@ -24,6 +24,37 @@ pub struct AugmentationSource {
     pub channels: Vec<(String, f64, f64, bool)>,
     /// IMU channels whose part was refused, and why (they keep the random walk only).
     pub refused: Refused,
+    /// Variant (e)'s process noise from the same Allan report: N and K of the gyros and of
+    /// the accelerometers, the largest over each sensor's axes (`allan_export::sensor_noise`,
+    /// the values `imuprep allan` exports for Kalibr and for GNSS_IMU's config), with the
+    /// channels whose N or K is only an upper bound (not resolved by the stretch).
+    pub noise: Option<(ImuNoise, Vec<String>)>,
+}
+
+/// The process noise a filter gets from `allan` (see [`AugmentationSource::noise`]).
+fn noise_from_allan(
+    rep: &crate::analysis::allan_report::AllanReport,
+) -> Option<(ImuNoise, Vec<String>)> {
+    let g = allan_export::sensor_noise(rep, true)?;
+    let a = allan_export::sensor_noise(rep, false)?;
+    let mut bounds: Vec<String> = vec![];
+    for (what, b) in [
+        ("N", &g.noise_density_bounds),
+        ("K", &g.random_walk_bounds),
+        ("N", &a.noise_density_bounds),
+        ("K", &a.random_walk_bounds),
+    ] {
+        bounds.extend(b.iter().map(|c| format!("{what} {c}")));
+    }
+    Some((
+        ImuNoise {
+            gyro_psd: g.noise_density,
+            accel_psd: a.noise_density,
+            gyro_bias_rw: g.random_walk,
+            accel_bias_rw: a.random_walk,
+        },
+        bounds,
+    ))
 }
 
 /// Channels whose Gauss–Markov part was refused: (channel, why).
@@ -68,6 +99,36 @@ pub fn augmentation_from_notes(
         accel: [0, 1, 2].map(|b| pick(b, 3)),
     };
     Ok(((!aug.is_empty()).then_some(aug), refused))
+}
+
+/// Variant (e)'s filter noise from `src`'s Allan terms, two ways: (e) every term as `allan`
+/// gives it, an upper bound taken as the value (the exported Kalibr / GNSS_IMU values);
+/// (e') only the resolved terms, `base` (the reference filter's) where a sensor's term is an
+/// upper bound on any axis.
+pub fn noise_variants(src: &AugmentationSource, base: &ImuNoise) -> Vec<(&'static str, ImuNoise)> {
+    let Some((n, bounds)) = &src.noise else {
+        return vec![];
+    };
+    let pick = |term: &str, sensor: char, allan: f64, own: f64| {
+        let bounded = bounds.iter().any(|b| {
+            let mut w = b.split(' ');
+            w.next() == Some(term) && w.next().is_some_and(|c| c.starts_with(sensor))
+        });
+        if bounded { own } else { allan }
+    };
+    let resolved = ImuNoise {
+        gyro_psd: pick("N", 'g', n.gyro_psd, base.gyro_psd),
+        accel_psd: pick("N", 'a', n.accel_psd, base.accel_psd),
+        gyro_bias_rw: pick("K", 'g', n.gyro_bias_rw, base.gyro_bias_rw),
+        accel_bias_rw: pick("K", 'a', n.accel_bias_rw, base.accel_bias_rw),
+    };
+    vec![
+        ("(e) raw, filter noise from allan", *n),
+        (
+            "(e') raw, filter noise from allan, resolved terms only",
+            resolved,
+        ),
+    ]
 }
 
 /// Allan terms of the record's longest still stretch (consecutive GNSS epochs slower than
@@ -127,6 +188,7 @@ pub fn augmentation_from_allan(
             .map(|n| (n.channel.clone(), n.tc_s, n.sigma_gm, !n.b_is_bound))
             .collect(),
         refused,
+        noise: noise_from_allan(&rep),
     })
 }
 
@@ -181,5 +243,41 @@ mod tests {
         assert!(aug.is_none());
         assert_eq!(refused.len(), 6);
         assert!(augmentation_from_notes(&bad[..5], &m).is_err());
+    }
+
+    /// (e) takes every `allan` term, bounds included; (e') keeps the filter's own value for a
+    /// sensor's term that is an upper bound on any of its axes.
+    #[test]
+    fn resolved_terms_only_keeps_the_filters_own_noise_where_allan_gives_a_bound() {
+        let allan = ImuNoise {
+            gyro_psd: 1.0,
+            accel_psd: 2.0,
+            gyro_bias_rw: 3.0,
+            accel_bias_rw: 4.0,
+        };
+        let base = ImuNoise {
+            gyro_psd: 10.0,
+            accel_psd: 20.0,
+            gyro_bias_rw: 30.0,
+            accel_bias_rw: 40.0,
+        };
+        let src = AugmentationSource {
+            still_from_s: 0.0,
+            still_to_s: 20.0,
+            augmentation: None,
+            channels: vec![],
+            refused: vec![],
+            noise: Some((allan, vec!["K gx".into(), "N az".into()])),
+        };
+        let v = noise_variants(&src, &base);
+        assert_eq!(v.len(), 2);
+        assert_eq!(v[0].1.gyro_bias_rw, 3.0);
+        let r = v[1].1;
+        assert_eq!(
+            [r.gyro_psd, r.accel_psd, r.gyro_bias_rw, r.accel_bias_rw],
+            [1.0, 20.0, 30.0, 4.0]
+        );
+        let none = AugmentationSource { noise: None, ..src };
+        assert!(noise_variants(&none, &base).is_empty());
     }
 }

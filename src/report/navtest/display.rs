@@ -2,7 +2,7 @@
 
 use std::fmt::{self, Write as _};
 
-use super::{LENGTHS, NavtestReport, RecordResult, Row};
+use super::{AttRefReport, AttRefSource, LENGTHS, NavtestReport, RecordResult, Row};
 
 const ROW_HEAD: &str = "| outage s | variant | outages | horiz. median m | horiz. p95 m | vert. median m | vert. p95 m | heading median ° | heading p95 ° | tilt median ° |\n|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|";
 
@@ -33,6 +33,60 @@ fn v3(v: &[f64; 3]) -> String {
     format!("{:+.3}, {:+.3}, {:+.3}", v[0], v[1], v[2])
 }
 
+fn att_ref_table(f: &mut fmt::Formatter<'_>, name: &str, a: &AttRefReport) -> fmt::Result {
+    let what = match a.source {
+        AttRefSource::Course { min_speed_mps } => format!(
+            "heading against the RTK course over ground (fixed epochs, ≥ {min_speed_mps:.0} m/s); no tilt reference"
+        ),
+        AttRefSource::Pose => {
+            "heading and tilt against the post-processed pose's orientation".into()
+        }
+        AttRefSource::None => "none".into(),
+    };
+    writeln!(
+        f,
+        "\n#### {name}: heading and tilt against an independent reference\n\n{what}. \
+         Constant removed (median of the GNSS-aided raw filter − reference over {} epochs from \
+         the first outage on): roll {:+.2}°, pitch {:+.2}°, yaw {:+.2}°. The aided filter itself \
+         then differs by heading {:.2}° median / {:.2}° p95, tilt {:.2}° / {:.2}°.\n",
+        a.epochs,
+        a.offset_deg[0],
+        a.offset_deg[1],
+        a.offset_deg[2],
+        a.aided_heading_deg[0],
+        a.aided_heading_deg[1],
+        a.aided_tilt_deg[0],
+        a.aided_tilt_deg[1]
+    )?;
+    writeln!(
+        f,
+        "| outage s | variant | outages with a reference | heading median ° | heading p95 ° | tilt median ° | tilt p95 ° |\n|---:|---|---:|---:|---:|---:|---:|"
+    )?;
+    let t = |x: f64| {
+        if x.is_nan() {
+            "—".into()
+        } else {
+            format!("{x:.2}")
+        }
+    };
+    for l in LENGTHS {
+        for w in a.rows.iter().filter(|w| w.length_s == l) {
+            writeln!(
+                f,
+                "| {:.0} | {} | {} | {:.2} | {:.2} | {} | {} |",
+                w.length_s,
+                w.variant,
+                w.outages,
+                w.heading_median_deg,
+                w.heading_p95_deg,
+                t(w.tilt_median_deg),
+                t(w.tilt_p95_deg)
+            )?;
+        }
+    }
+    Ok(())
+}
+
 fn record(f: &mut fmt::Formatter<'_>, r: &RecordResult) -> fmt::Result {
     writeln!(
         f,
@@ -54,6 +108,9 @@ fn record(f: &mut fmt::Formatter<'_>, r: &RecordResult) -> fmt::Result {
     }
     writeln!(f)?;
     row_table(f, &r.rows)?;
+    if let Some(a) = &r.att_ref {
+        att_ref_table(f, &r.name, a)?;
+    }
 
     writeln!(
         f,
@@ -234,8 +291,31 @@ fn record(f: &mut fmt::Formatter<'_>, r: &RecordResult) -> fmt::Result {
                     "  every part refused: (d) ran as the 15-state filter, i.e. as (a)"
                 )?;
             }
+            if let Some((n, bounds)) = &a.noise {
+                let (d, m) = (1f64.to_degrees(), &r.filter_noise);
+                writeln!(
+                    f,
+                    "\n(e): process noise from the same `allan` terms (largest over each sensor's axes) against (a)'s, the reference filter's: gyro white {:.4} against {:.4} °/s/√Hz, accel white {:.5} against {:.5} m/s²/√Hz, gyro bias random walk {:.2e} against {:.2e} °/s/√s, accel bias random walk {:.2e} against {:.2e} m/s²/√s{}",
+                    n.gyro_psd * d,
+                    m.gyro_psd * d,
+                    n.accel_psd,
+                    m.accel_psd,
+                    n.gyro_bias_rw * d,
+                    m.gyro_bias_rw * d,
+                    n.accel_bias_rw,
+                    m.accel_bias_rw,
+                    if bounds.is_empty() {
+                        String::new()
+                    } else {
+                        format!(
+                            " (upper bounds, not resolved by the stretch: {})",
+                            bounds.join(", ")
+                        )
+                    }
+                )?;
+            }
         }
-        (None, Some(e)) => writeln!(f, "(d): not run: {e}")?,
+        (None, Some(e)) => writeln!(f, "(d), (e): not run: {e}")?,
         _ => {}
     }
     writeln!(f)

@@ -187,6 +187,8 @@ mod tests {
             gyro_bias_start_dps: [0.0, 0.0, bias_z],
             accel_bias_start: [0.0; 3],
             att_start_deg: [0.0; 3],
+            att_end_deg: [0.0; 3],
+            scored: 0,
         }
     }
 

@@ -9,12 +9,13 @@
 //! of the recording's longest still stretch (the random-walk part keeps the reference's density;
 //! an implausible part falls back to it, [`augment`]); the do-no-harm check (b) ≤ (a) per cell
 //! with the outages behind every miss ([`harm`]); the error budget of the 30-s outages
-//! ([`budget`]); plus, on the static benches, the drift of a free-inertial solution, raw against
-//! cleaned ([`static_drift`]).
+//! ([`budget`]); (e) and (e') the raw IMU with the filter's process noise from the same Allan
+//! terms ([`noise_variants`]); plus, on the static benches, the drift of a free-inertial
+//! solution, raw against cleaned ([`static_drift`]).
 //!
 //! Files: [`setup`] (records, the reference's settings, body-frame IMU), [`outages`] (schedule,
-//! filter runs, statistics), [`augment`], [`fitted`], [`harm`], [`budget`], [`static_drift`],
-//! and the text report (`display`).
+//! filter runs, statistics), [`attref`], [`comma`], [`augment`], [`fitted`], [`harm`],
+//! [`budget`], [`static_drift`], and the text report (`display`).
 //!
 //! **What is copied from the reference filter's setup** (rtklibexplorer's GNSS_IMU, its
 //! `drive_config.py` / `walk_config.py`; values, not code): the IMU-to-body rotation, the lever
@@ -35,8 +36,11 @@
 //! did not get, which must be fixed. Each outage is a copy of the no-outage filter at its start
 //! that runs without GNSS (ZUPT still active) to its end — one outage per run. Errors: the
 //! antenna position against the RTK position (horizontal, vertical), and heading and tilt
-//! against the raw no-outage run at the same epoch (the logs hold no independent attitude).
+//! against the raw no-outage run at the same epoch; where a record has an independent attitude
+//! reference (comma2k19's pose, the drive's RTK course over ground) also against that
+//! ([`attref`]).
 
+pub mod attref;
 pub mod augment;
 pub mod budget;
 pub mod comma;
@@ -51,7 +55,10 @@ use std::path::Path;
 
 use serde::Serialize;
 
-pub use augment::{AugmentationSource, augmentation_from_allan, augmentation_from_notes};
+pub use attref::{AttRefReport, AttRefRow, att_ref_report, reference_attitude};
+pub use augment::{
+    AugmentationSource, augmentation_from_allan, augmentation_from_notes, noise_variants,
+};
 pub use budget::{BUDGET_LENGTH_S, BudgetRow, error_budget};
 pub use fitted::{FittedModels, MIN_STILL_CHOICES_S, fit_models, held_out};
 pub use harm::{HarmCell, HarmOutage, harm_check};
@@ -60,14 +67,15 @@ pub use outages::{
     run_filter_with, schedule,
 };
 pub use setup::{
-    BodyImu, GnssSource, RecordSpec, comma_record, default_records, filter_config, reference_noise,
-    to_body,
+    AttRefSource, BodyImu, GnssSource, RecordSpec, comma_record, default_records, filter_config,
+    reference_noise, to_body,
 };
 pub use static_drift::{DriftRow, STATIC_ALIGN_S, run_bench, static_drift};
 
 use crate::config::Config;
 use crate::frame::Descriptor;
 use crate::nav::earth;
+use crate::nav::eskf::EskfConfig;
 use crate::nav::pos::{self, PosEpoch};
 use crate::report::audit::{load_recording, run_config};
 use crate::sample::{Sample, flags};
@@ -149,6 +157,10 @@ pub struct RecordResult {
     pub harm: Vec<HarmCell>,
     pub harm_outages: Vec<HarmOutage>,
     pub budget: Vec<BudgetRow>,
+    /// Heading and tilt against an independent attitude reference, where the record has one.
+    pub att_ref: Option<AttRefReport>,
+    /// The process noise of (a)–(d) (the reference filter's, [`reference_noise`]).
+    pub filter_noise: crate::nav::eskf::ImuNoise,
 }
 
 fn summary(
@@ -232,6 +244,21 @@ pub fn run_record(
         )?),
         None => None,
     };
+    let mut e_runs = vec![];
+    for (label, noise) in aug
+        .as_ref()
+        .map(|s| noise_variants(s, &base.noise))
+        .unwrap_or_default()
+    {
+        let cfg_e = EskfConfig {
+            noise,
+            ..base.clone()
+        };
+        e_runs.push((
+            label,
+            run_filter(&cfg_e, &raw_b, gnss, &outages, Some(&att_ref))?,
+        ));
+    }
     let mut rows_all = rows(&spec.name, A, &a.errors);
     rows_all.extend(rows(&spec.name, B, &b.errors));
     let mut all = vec![];
@@ -246,6 +273,11 @@ pub fn run_record(
         rows_all.extend(rows(&spec.name, D, &d.errors));
         all.extend(d.errors.iter().map(|e| (D.to_string(), *e)));
         variants.push(summary(D, &raw_b, &raw_b, None, d));
+    }
+    for (label, e) in &e_runs {
+        rows_all.extend(rows(&spec.name, label, &e.errors));
+        all.extend(e.errors.iter().map(|x| (label.to_string(), *x)));
+        variants.push(summary(label, &raw_b, &raw_b, None, e));
     }
     let mut fitted = vec![];
     for m in models {
@@ -288,6 +320,12 @@ pub fn run_record(
     let (harm, harm_outages) =
         harm_check(&a.errors, &b.errors, &raw_b, &clean_b, &cleaned, spec.t_off);
     let budget = error_budget(&base, &raw_b, gnss, &outages, &att_ref)?;
+    let t_first = outages
+        .iter()
+        .map(|o| o.start)
+        .fold(f64::INFINITY, f64::min);
+    let indep = reference_attitude(spec, gnss)?
+        .map(|r| att_ref_report(spec.att_ref, &r, gnss, &att_ref, t_first, &all));
     Ok(RecordResult {
         name: spec.name.clone(),
         imu_epochs: raw.len(),
@@ -305,6 +343,8 @@ pub fn run_record(
         harm,
         harm_outages,
         budget,
+        att_ref: indep,
+        filter_noise: base.noise,
     })
 }
 

@@ -110,6 +110,10 @@ pub struct OutageError {
     pub accel_bias_start: [f64; 3],
     /// Its roll, pitch, yaw at the outage start, degrees.
     pub att_start_deg: [f64; 3],
+    /// The coasting filter's roll, pitch, yaw at the scored epoch, degrees.
+    pub att_end_deg: [f64; 3],
+    /// Index of the scored GNSS epoch (as [`Outage::scored`]).
+    pub scored: usize,
 }
 
 /// What a coasting copy takes from the GNSS-aided (no-outage) filter at every IMU epoch of
@@ -275,7 +279,8 @@ pub fn run_filter_with(
                     let p = frame.ned(la, lo, ha) - c.antenna_velocity() * (imu.t[i] - e.t);
                     let d = p - frame.ned(e.lat, e.lon, e.h);
                     let r = att_ref.and_then(|a| a[j]).unwrap_or(kf.nav.euler());
-                    let da = (c.nav.euler() - r).map(|x| wrap_deg(x.to_degrees()));
+                    let end = c.nav.euler();
+                    let da = (end - r).map(|x| wrap_deg(x.to_degrees()));
                     errors.push(OutageError {
                         length_s: o.length_s,
                         start_rel_s: o.start_rel_s,
@@ -284,6 +289,8 @@ pub fn run_filter_with(
                         gyro_bias_start_dps: coasting[k].2.gyro_bias_dps,
                         accel_bias_start: coasting[k].2.accel_bias,
                         att_start_deg: coasting[k].2.att_deg,
+                        att_end_deg: [end[0], end[1], end[2]].map(f64::to_degrees),
+                        scored: j,
                         horiz_m: d.xy().norm(),
                         vert_m: d[2].abs(),
                         heading_deg: da[2].abs(),

@@ -41,6 +41,23 @@ pub struct RecordSpec {
     pub accel_in_g: bool,
     /// Initial 1-σ of the gyro biases, °/s.
     pub init_gyro_bias_dps: f64,
+    /// What heading and tilt at an outage's end are also scored against ([`super::attref`]).
+    pub att_ref: AttRefSource,
+}
+
+/// An attitude reference independent of the filter, for heading and tilt errors.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub enum AttRefSource {
+    /// None: heading and tilt only against the filter's own raw no-outage run.
+    None,
+    /// Heading from the GNSS velocity's course over ground at fixed epochs whose horizontal
+    /// speed is at least this (m/s); no tilt reference. For a car the course is the heading up
+    /// to the side-slip and the IMU-to-body yaw the mounting leaves (a constant, removed as the
+    /// median offset, [`super::attref`]).
+    Course { min_speed_mps: f64 },
+    /// comma2k19's pose orientation (heading and tilt) at the GNSS epochs, from the same rows
+    /// as [`GnssSource::ReferencePose`], [`super::comma::read_pose_attitude`].
+    Pose,
 }
 
 /// The GNSS a record's filter gets, which is also what its outages are scored against.
@@ -76,6 +93,7 @@ pub fn default_records(data: &Path) -> Vec<RecordSpec> {
             gnss: GnssSource::RtkPos,
             accel_in_g: true,
             init_gyro_bias_dps: 0.2,
+            att_ref: AttRefSource::Course { min_speed_mps: 5.0 },
         },
         RecordSpec {
             name: "walk".into(),
@@ -92,6 +110,8 @@ pub fn default_records(data: &Path) -> Vec<RecordSpec> {
             gnss: GnssSource::RtkPos,
             accel_in_g: true,
             init_gyro_bias_dps: 0.2,
+            // Handheld at 1.25 m/s: the device's yaw is not the walking course.
+            att_ref: AttRefSource::None,
         },
     ]
 }
@@ -123,6 +143,7 @@ pub fn comma_record(dir: &Path) -> RecordSpec {
         },
         accel_in_g: false,
         init_gyro_bias_dps: 5.0,
+        att_ref: AttRefSource::Pose,
     }
 }
 

@@ -16,6 +16,7 @@ Run from the repository root:  python3 tests/reference/navtest/navtest.py [--qui
 """
 
 import argparse
+import ast
 import json
 import filecmp
 import shutil
@@ -55,6 +56,13 @@ def parse_args(argv=None):
     p.add_argument("--logs", default="drive,walk", help="comma list of: drive, walk")
     p.add_argument("--variants", default=",".join(VARIANTS),
                    help="comma list of: raw, default, fitted (raw is always run)")
+    p.add_argument("--lengths", default=",".join("%g" % x for x in LENGTHS_S),
+                   help="scheme (ii): comma list of outage lengths, s (a subset of the default "
+                        "saves time on a busy machine)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="set an attribute of the tool's config module in every run (VALUE a "
+                        "Python literal), e.g. gyro_noise_PSD=0.00029; repeatable; shown in "
+                        "the report's command line")
     p.add_argument("--one-outage-per-run", action="store_true",
                    help="scheme (ii): every outage in a filter run of its own (slower) instead "
                         "of the tool's comb of outages spaced 2 x their length")
@@ -214,7 +222,7 @@ def plan(args, tool, log, rtk, fit_span, t_imu_raw):
     def end_ok(t_end):
         return rtk.end_epoch(outages.Window(t_end - 1.0, t_end), cv["imu_t_off"]) is not None
 
-    for length in LENGTHS_S:
+    for length in [float(x) for x in args.lengths.split(",")]:
         runs, _ = outages.grid_runs(g0, g1, length, cv["start_coast"], end_ok,
                                     isolated=args.one_outage_per_run)
         for r in runs:
@@ -236,11 +244,26 @@ def held_out(window, fit_span):
 # ---------------------------------------------------------------------------------------------
 # Running
 
-def execute(tasks, tool, folders, work, jobs):
+def config_sets(items):
+    """`--set NAME=VALUE` options as a dict of config attributes."""
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.isidentifier():
+            sys.exit("--set %r: expected NAME=VALUE" % item)
+        try:
+            out[name] = ast.literal_eval(value)
+        except (ValueError, SyntaxError):
+            sys.exit("--set %r: VALUE is not a Python literal" % item)
+    return out
+
+
+def execute(tasks, tool, folders, work, jobs, sets=None):
     def one(i_task):
         i, t = i_task
         log = reftool.LOGS[t.log]
-        overrides = dict(t.run.overrides(), vel_match=t.vel_match, plot_results=False,
+        overrides = dict(t.run.overrides(), **(sets or {}), vel_match=t.vel_match,
+                         plot_results=False,
                          plot_bias_data=False, plot_imu_data=False, plot_unc_data=False)
         run_dir = work / "runs" / ("%04d_%s_%s_%s" % (i, t.log, t.variant, t.purpose))
         spec = reftool.filter_run_spec(tool, log, folders[t.log][t.variant], overrides,
@@ -391,7 +414,8 @@ def main(argv=None):
             all_tasks[log.name] = plan(args, tool, log, rtks[log.name], spans[log.name],
                                        t_imu_raw)
         t_prep = time.time() - t_start
-        execute([t for ts in all_tasks.values() for t in ts], tool, folders, work, args.jobs)
+        execute([t for ts in all_tasks.values() for t in ts], tool, folders, work, args.jobs,
+                config_sets(args.set))
 
         sections = []
         per_outage = []
