@@ -79,21 +79,28 @@ pub fn innovations(
 
 /// Concentrated log-likelihood over the observed points, with r̂ (the filter of
 /// [`innovations`], inline: no allocation, it runs a few hundred times per fit).
-fn loglik(d: &[f64], phi: f64, qr: f64, observe: &dyn Fn(usize) -> bool) -> (f64, f64) {
+fn loglik<F: Fn(usize) -> bool + ?Sized>(d: &[f64], phi: f64, qr: f64, observe: &F) -> (f64, f64) {
     let mut g = 0.0;
     let mut pp = if phi < 1.0 {
         qr / (1.0 - phi * phi).max(1e-12)
     } else {
         1e4
     };
-    let (mut a, mut l, mut k) = (0.0, 0.0, 0usize);
+    // Σ ln S_k as ln Π S_k, the product taken to at most 1e250 before its log (S_k ≥ 1, so it
+    // only grows; each S_k < 1e50 for q/r ≤ 10 and τ ≤ 20 records): a log per hundred points
+    // instead of one per point, which was a third of the whole-log diagnose's time.
+    let (mut a, mut l, mut prod, mut k) = (0.0, 0.0, 1.0f64, 0usize);
     for (i, x) in d.iter().enumerate() {
         let e = x - g;
         let sk = pp + 1.0;
         let (g_upd, p_upd) = if observe(i) {
             if i >= 2 {
                 a += e * e / sk;
-                l += sk.ln();
+                prod *= sk;
+                if prod > 1e250 {
+                    l += prod.ln();
+                    prod = 1.0;
+                }
                 k += 1;
             }
             let kg = pp / sk;
@@ -104,6 +111,7 @@ fn loglik(d: &[f64], phi: f64, qr: f64, observe: &dyn Fn(usize) -> bool) -> (f64
         g = phi * g_upd;
         pp = phi * phi * p_upd + qr;
     }
+    l += prod.ln();
     let kf = k.max(1) as f64;
     let r = a / kf;
     (-0.5 * (kf * r.max(1e-300).ln() + l + kf), r)
@@ -126,7 +134,7 @@ pub struct WanderFit {
 }
 
 /// Fit the wander of `d` (step `dt_s`) on the points where `observe(k)`.
-pub fn fit(d: &[f64], dt_s: f64, observe: &dyn Fn(usize) -> bool) -> WanderFit {
+pub fn fit<F: Fn(usize) -> bool + ?Sized>(d: &[f64], dt_s: f64, observe: &F) -> WanderFit {
     let t_rec = d.len() as f64 * dt_s;
     let taus: Vec<f64> = (0..14)
         .map(|j| 2.0 * dt_s * (10.0 * t_rec / dt_s).powf(j as f64 / 13.0))

@@ -13,7 +13,11 @@
 //!    (one-step errors of the decimated series on held-out points).
 //! 3. **Wander** (`diagnose_wander`): Gauss–Markov, random walk or undecided; a random walk that
 //!    passes the held-out test (wander predictor vs none) is written as the rate-random-walk
-//!    effect; a Gauss–Markov wander is reported with τ and σ (the model file has no GM effect).
+//!    effect; a Gauss–Markov wander that passes it is written as the channel's bias process
+//!    (`ar_of = "bias"`: AR(1) with φ = e^{−1/(τ fs)}, stationary σ², the rest of the residual's
+//!    variance as white noise), so the online filter tracks the wander it was shown (on the
+//!    ADIS16405 bench the gyro outputs' Allan deviation falls to 0.48–0.89 of the model-less
+//!    one at τ = 41–2621 s, docs/results-diagnose-real.md).
 //! 4. **AR(p)** of the full-rate residual on the selection blocks (Burg, every order in one pass,
 //!    AIC), for the one-step held-out error before/after and the model file.
 //! 5. **Deployment**: the chosen structure refitted on every block (a step's time re-located at
@@ -137,8 +141,25 @@ pub struct WanderReport {
     pub lr_gm_vs_rw: f64,
     /// Wander predictor vs none on held-out points.
     pub test: HeldOutTest,
-    /// Written to the model file (a random walk that passed).
+    /// Written to the model file (module docs, step 3), having passed the held-out test.
     pub written: bool,
+    /// Variance of the full-rate deployment residual about its level (units²).
+    pub residual_var: f64,
+}
+
+impl WanderReport {
+    /// A written Gauss–Markov wander as the model file's bias process at `fs`:
+    /// `(ar, innovation_var, white_noise_var)` of `ar_of = "bias"`.
+    pub fn bias_process(&self, fs: f64) -> Option<(Vec<f64>, f64, f64)> {
+        (self.written && self.kind == WanderKind::GaussMarkov).then(|| {
+            let phi = (-1.0 / (self.tau_s * fs)).exp();
+            let var = self.gm_sigma * self.gm_sigma;
+            // The white part: what the residual holds beyond the wander, floored at a tenth of
+            // the residual (the 1-s means' σ is a different estimate of the same level).
+            let white = (self.residual_var - var).max(0.1 * self.residual_var);
+            (vec![phi], var * (1.0 - phi * phi), white)
+        })
+    }
 }
 
 /// Held-out errors before (intercept, or AR on it) and after (every kept effect).
@@ -397,8 +418,9 @@ pub fn diagnose_whole(
             gm_sigma: (gm.q / (1.0 - gm.phi * gm.phi).max(1e-12)).sqrt(),
             rw_q_per_s: wf.rw.q / dt,
             lr_gm_vs_rw: 2.0 * (wf.ll_gm - wf.ll_rw),
-            written: kind == WanderKind::RandomWalk && test.kept,
+            written: kind != WanderKind::Undecided && test.kept,
             test,
+            residual_var: 0.0,
         }
     });
     // 4. Full-rate residual of the selection model; AR before/after.
@@ -535,6 +557,7 @@ pub fn diagnose_whole(
     }
     if let Some(w) = &wander
         && w.written
+        && w.kind == WanderKind::RandomWalk
     {
         effects.push(FoundEffect {
             effect: Effect::RateRandomWalk {
@@ -547,6 +570,10 @@ pub fn diagnose_whole(
     }
     for v in &mut r_dep {
         *v -= dep.c;
+    }
+    let mut wander = wander;
+    if let Some(w) = wander.as_mut() {
+        w.residual_var = r_dep.iter().map(|v| v * v).sum::<f64>() / n as f64;
     }
     let ar_dep = burg(&r_dep, ar1.order().max(1))?;
     progress("plots");

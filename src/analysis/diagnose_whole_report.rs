@@ -141,12 +141,12 @@ pub fn whole_text(d: &WholeDiagnosis) -> String {
             w.test.mse_before,
             w.test.mse_after,
             w.test.p_value,
-            if w.written {
-                "written as the rate random walk"
-            } else if w.kind == WanderKind::RandomWalk {
-                "not written (held-out test)"
-            } else {
-                "not written (the model file has no Gauss-Markov effect; its AR carries the short-term colour)"
+            match (w.written, w.kind) {
+                (true, WanderKind::RandomWalk) => "written as the rate random walk",
+                (true, _) =>
+                    "written as the bias process (ar_of = \"bias\": its AR(1) and white noise)",
+                (false, WanderKind::Undecided) => "not written (GM or random walk: not told apart)",
+                (false, _) => "not written (held-out test)",
             }
         );
     }

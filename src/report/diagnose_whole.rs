@@ -14,7 +14,7 @@ use super::diagnose::{
 };
 use crate::analysis::diagnose_whole::{WholeDiagnosis, WholeSettings, diagnose_whole};
 use crate::analysis::diagnose_whole_report::{effect_lines, whole_plots, whole_text};
-use crate::model::bias_model::BiasModelFile;
+use crate::model::bias_model::{ArOf, BiasModelFile};
 use crate::sample::{CHANNEL_NAMES, Sample};
 
 /// The report of one run.
@@ -110,12 +110,19 @@ pub fn diagnose_whole_samples(
             std::fs::write(out_dir.join("plots").join(format!("{stem}.svg")), svg)?;
         }
         let effects: Vec<_> = d.effects.iter().map(|e| e.effect.clone()).collect();
-        model.channels.push(channel_model(
+        let mut m = channel_model(
             name,
             rate,
             (d.intercept, &d.ar, d.innovation_var),
             effects.clone(),
-        ));
+        );
+        if let Some((ar, q, white)) = d.wander.as_ref().and_then(|w| w.bias_process(rate)) {
+            m.ar = ar;
+            m.innovation_var = q;
+            m.white_noise_var = white;
+            m.ar_of = ArOf::Bias;
+        }
+        model.channels.push(m);
         added_all.push((name.to_string(), effects));
         report.channels.push(d);
     }
