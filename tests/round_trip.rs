@@ -194,7 +194,41 @@ fn replay_refuses_a_file_that_is_not_a_log() {
         .output()
         .unwrap();
     assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("wrong magic"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("wrong magic"), "{err}");
+    assert!(
+        err.contains("--protocol auto"),
+        "the way out is named: {err}"
+    );
+}
+
+#[test]
+fn replay_of_a_sensor_recording_without_protocol_names_the_flag_that_reads_it() {
+    // The native protocol is the default: a UBX or MAVLink file given to `replay` as it is must
+    // say what it looks like and which flag reads it, and that flag must then read it.
+    let dir = env!("CARGO_MANIFEST_DIR");
+    for (file, p) in [("ubx_stream.bin", "ubx"), ("mavlink_stream.bin", "mavlink")] {
+        let path = format!("{dir}/tests/reference/{file}");
+        let out = Command::new(common::bin())
+            .args(["replay", &path])
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(&format!("looks like a {p} recording, pass --protocol {p}")),
+            "{file}: {err}"
+        );
+        let ok = Command::new(common::bin())
+            .args(["replay", &path, "--protocol", p])
+            .output()
+            .unwrap();
+        assert!(
+            ok.status.success(),
+            "{file} --protocol {p}: {}",
+            String::from_utf8_lossy(&ok.stderr)
+        );
+    }
 }
 
 #[test]

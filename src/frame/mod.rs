@@ -225,8 +225,16 @@ pub fn encode_log_header(d: &Descriptor, buf: &mut BytesMut) {
 pub enum LogHeaderError {
     #[error("file is too short to hold a log header ({0} bytes, need {LOG_HEADER_LEN})")]
     TooShort(usize),
-    #[error("not an imuprep log: wrong magic {0:02x?} (expected \"IMUPLOG\\0\")")]
+    #[error(
+        "not an imuprep log: wrong magic {0:02x?} (expected \"IMUPLOG\\0\"); a UBX, MAVLink, ULog or MCAP recording needs --protocol auto (or its name)"
+    )]
     BadMagic([u8; 8]),
+    /// Not a native log, and the first bytes decode as another protocol (the native protocol
+    /// is the default, so a sensor recording would otherwise fail with no way out named).
+    #[error(
+        "not an imuprep log (magic {1:02x?}): it looks like a {0} recording, pass --protocol {0} (or --protocol auto)"
+    )]
+    LooksLike(Protocol, [u8; 8]),
     #[error("unsupported log version {0} (this build reads version {LOG_VERSION})")]
     BadVersion(u16),
 }

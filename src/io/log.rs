@@ -26,6 +26,38 @@ pub enum LogError {
     Header { path: PathBuf, err: LogHeaderError },
 }
 
+/// The error of a refused file header; a wrong magic says which protocol the file looks like
+/// when its first bytes decode as one.
+fn header_error(path: &Path) -> impl FnOnce(LogHeaderError) -> LogError + '_ {
+    move |err| {
+        let err = match err {
+            LogHeaderError::BadMagic(m) => match looks_like(path) {
+                Some(p) => LogHeaderError::LooksLike(p, m),
+                None => LogHeaderError::BadMagic(m),
+            },
+            e => e,
+        };
+        LogError::Header {
+            path: path.into(),
+            err,
+        }
+    }
+}
+
+/// The protocol the file's first bytes decode as, if not native.
+fn looks_like(path: &Path) -> Option<crate::frame::Protocol> {
+    use crate::frame::detect::{DETECT_BYTES, ProtocolConfig, detect};
+    use std::io::Read;
+    let mut head = Vec::with_capacity(DETECT_BYTES);
+    std::fs::File::open(path)
+        .ok()?
+        .take(DETECT_BYTES as u64)
+        .read_to_end(&mut head)
+        .ok()?;
+    let p = detect(&head, &ProtocolConfig::auto());
+    (p != crate::frame::Protocol::Native).then_some(p)
+}
+
 impl LogError {
     fn io(path: &Path) -> impl FnOnce(std::io::Error) -> LogError + '_ {
         move |err| LogError::Io {
@@ -156,10 +188,7 @@ pub fn read_log_span(
     let file_len = f.metadata().map_err(io)?.len();
     let mut head = [0u8; crate::frame::LOG_HEADER_LEN];
     let got = read_full(&mut f, &mut head).map_err(io)?;
-    check_log_header(&head[..got]).map_err(|err| LogError::Header {
-        path: path.into(),
-        err,
-    })?;
+    check_log_header(&head[..got]).map_err(header_error(path))?;
     const CHUNK: usize = 64 * 1024;
     let mut buf = BytesMut::with_capacity(2 * CHUNK);
     let mut dec = FrameDecoder::new();
@@ -252,10 +281,7 @@ pub fn read_descriptor(path: &Path) -> Result<Option<Descriptor>, LogError> {
     f.take(4096)
         .read_to_end(&mut head)
         .map_err(LogError::io(path))?;
-    check_log_header(&head).map_err(|err| LogError::Header {
-        path: path.into(),
-        err,
-    })?;
+    check_log_header(&head).map_err(header_error(path))?;
     let mut buf = BytesMut::from(&head[LOG_HEADER_LEN..]);
     let mut dec = FrameDecoder::new();
     while let Ok(Some(m)) = dec.decode(&mut buf) {
@@ -282,10 +308,7 @@ pub async fn open_log(path: &Path) -> Result<tokio::fs::File, LogError> {
         }
         n += k;
     }
-    check_log_header(&h[..n]).map_err(|err| LogError::Header {
-        path: path.into(),
-        err,
-    })?;
+    check_log_header(&h[..n]).map_err(header_error(path))?;
     Ok(f)
 }
 
