@@ -137,14 +137,8 @@ pub struct ArimaIdentification {
 /// Identify and fit an ARIMA(p, d, q) with constant for `x` (see the module header).
 pub fn identify(x: &[f64], settings: &IdentifySettings) -> Result<ArimaIdentification, ArimaError> {
     settings.validate().map_err(ArimaError::InvalidSettings)?;
-    check_input(x)?;
-    let need = settings.min_len();
-    if x.len() < need {
-        return Err(ArimaError::TooShort {
-            needed: need,
-            got: x.len(),
-        });
-    }
+    check_finite(x)?;
+    check_series(x, settings.min_len())?;
     let adf_res = adf(x, settings.adf_lag)?;
     let d = if adf_res.p_value < settings.adf_alpha {
         0
@@ -233,7 +227,7 @@ pub fn identify(x: &[f64], settings: &IdentifySettings) -> Result<ArimaIdentific
             }
             chosen
         }
-        None => return Err(last_err.unwrap_or(ArimaError::Singular("every candidate".into()))),
+        None => return Err(last_err.unwrap_or(NumError::singular("every candidate").into())),
     };
     let residuals = css_residuals(&w, fit.constant, &fit.ar, &fit.ma, fit.n_cond);
     let lb_lags = settings.ljung_box_lags.min(residuals.len() / 2);

@@ -108,13 +108,15 @@ fn identify_picks_d0_and_white_noise_for_white_noise() {
 fn identify_rejects_bad_input_with_errors() {
     assert!(matches!(
         identify(&[1.0; 10], &IdentifySettings::default()),
-        Err(ArimaError::TooShort { .. })
+        Err(ArimaError::Numeric(NumError::TooShort { .. }))
     ));
     let mut x: Vec<f64> = (0..500).map(|i| (i as f64 * 0.1).sin()).collect();
     x[17] = f64::NAN;
     assert!(matches!(
         identify(&x, &IdentifySettings::default()),
-        Err(ArimaError::NonFinite { index: 17 })
+        Err(ArimaError::Numeric(NumError::NonFinite {
+            index: 17
+        }))
     ));
     let bad = IdentifySettings {
         d_max: 2,
