@@ -246,8 +246,7 @@ pub(super) fn initial_values(
             xtx[(a, b)] = xtx[(b, a)];
         }
     }
-    let beta =
-        solve_spd(xtx, xty).ok_or_else(|| NumError::singular("initial regression"))?;
+    let beta = solve_spd(xtx, xty).ok_or_else(|| NumError::singular("initial regression"))?;
     let mut beta: Vec<f64> = beta.iter().copied().collect();
     shrink_until(&mut beta[1..1 + p], ar_is_stationary);
     shrink_until(&mut beta[1 + p..], ma_is_invertible);
@@ -272,7 +271,6 @@ pub(super) fn admissible(beta: &[f64], p: usize) -> bool {
         && ar_is_stationary(&beta[1..1 + p])
         && ma_is_invertible(&beta[1 + p..])
 }
-
 
 /// Minimise the CSS of an ARMA(p, q) with intercept on the (already differenced) series `w`,
 /// conditioning on the first `n_cond ≥ p` values. `d` is only recorded in the result.

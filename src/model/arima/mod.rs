@@ -46,11 +46,11 @@
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-use crate::stats::{NumError, check_finite, check_series};
 use crate::stats::acf::{LjungBox, acf, acf_bound_95, ljung_box, pacf_from_acf};
 use crate::stats::adf::{AdfLag, AdfResult, adf};
 pub use crate::stats::ar_poly::is_stable;
 use crate::stats::ar_poly::levinson_partial;
+use crate::stats::{NumError, check_finite, check_series};
 
 mod file;
 mod fit;

@@ -114,9 +114,7 @@ fn identify_rejects_bad_input_with_errors() {
     x[17] = f64::NAN;
     assert!(matches!(
         identify(&x, &IdentifySettings::default()),
-        Err(ArimaError::Numeric(NumError::NonFinite {
-            index: 17
-        }))
+        Err(ArimaError::Numeric(NumError::NonFinite { index: 17 }))
     ));
     let bad = IdentifySettings {
         d_max: 2,
