@@ -238,25 +238,19 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
     let (tx, rx) = mpsc::channel(SINK_QUEUE);
     let stats = Arc::new(SinkStats::default());
     let st = stats.clone();
-    let (name, lossless, task) = match sink.clone() {
+    let (name, task) = match sink.clone() {
         Sink::Stdout { format } => {
             let out = tokio::io::stdout();
-            (
-                "stdout".to_string(),
-                true,
-                tokio::spawn(stream::write_stream(out, format, false, rx, st)),
-            )
+            let task = tokio::spawn(stream::write_stream(out, format, false, rx, st));
+            ("stdout".to_string(), task)
         }
         Sink::File { path, format } => {
             let f = tokio::fs::File::create(&path)
                 .await
                 .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
             let w = tokio::io::BufWriter::with_capacity(1 << 16, f);
-            (
-                format!("file:{}", path.display()),
-                true,
-                tokio::spawn(stream::write_stream(w, format, true, rx, st)),
-            )
+            let task = tokio::spawn(stream::write_stream(w, format, true, rx, st));
+            (format!("file:{}", path.display()), task)
         }
         Sink::Tcp {
             bind,
@@ -269,15 +263,14 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
             let name = format!("tcp:{}", l.local_addr()?);
             (
                 name,
-                false,
                 tokio::spawn(net::tcp_server(l, format, queue, rx, st)),
             )
         }
         Sink::Udp { targets, format } => {
             let sock = tokio::net::UdpSocket::bind("0.0.0.0:0").await?;
+            let name = format!("udp:{}", targets.len());
             (
-                format!("udp:{}", targets.len()),
-                false,
+                name,
                 tokio::spawn(net::udp_sender(sock, targets, format, rx, st)),
             )
         }
@@ -294,11 +287,8 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
                     frame_id,
                     health_topic,
                 };
-                (
-                    format!("mcap:{}", path.display()),
-                    true,
-                    crate::io::mcap_sink::start(path, opts, rx, st)?,
-                )
+                let name = format!("mcap:{}", path.display());
+                (name, crate::io::mcap_sink::start(path, opts, rx, st)?)
             }
             #[cfg(not(feature = "ros2"))]
             {
@@ -308,11 +298,10 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
                 ));
             }
         }
-        Sink::Inline { path } => {
-            let (name, task) = inline::start_inline(path, rx, st).await?;
-            (name, true, task)
-        }
+        Sink::Inline { path } => inline::start_inline(path, rx, st).await?,
     };
+    // Network sinks are never waited for; local ones are (up to the stall time).
+    let lossless = !matches!(sink, Sink::Tcp { .. } | Sink::Udp { .. });
     Ok(SinkHandle {
         name,
         tx,
