@@ -207,21 +207,19 @@ fn detect(header: &[String], o: &ImportOptions, path: &Path) -> Result<Layout, C
         let p = ks.into_iter().find_map(|k| idx[k].map(|p| (k, p)))?;
         (header[p.1].trim() != CANON[p.0]).then(|| toks[p.1].as_slice())
     };
-    let gyro = triad_unit(
-        o.gyro_unit,
-        unit_tokens(1..=3),
-        GyroUnit::RadS,
-        gyro_unit_of,
-        "gyro",
-    );
-    let accel = triad_unit(
-        o.accel_unit,
-        unit_tokens(4..=6),
-        AccelUnit::MS2,
-        accel_unit_of,
-        "accel",
-    );
-    let (gyro, accel) = (gyro.map_err(err)?, accel.map_err(err)?);
+    let unit_err = |what: &str| {
+        err(format!(
+            "cannot tell the {what} unit from the column name: pass --{what}-unit"
+        ))
+    };
+    let gyro = o
+        .gyro_unit
+        .or_else(|| unit_tokens(1..=3).map_or(Some(GyroUnit::RadS), gyro_unit_of))
+        .ok_or_else(|| unit_err("gyro"))?;
+    let accel = o
+        .accel_unit
+        .or_else(|| unit_tokens(4..=6).map_or(Some(AccelUnit::MS2), accel_unit_of))
+        .ok_or_else(|| unit_err("accel"))?;
     let time = o.time_unit.unwrap_or_else(|| match idx[0] {
         Some(p) if toks[p].iter().any(|x| x == "ms") => TimeUnit::Ms,
         Some(p) if toks[p].iter().any(|x| x == "ns") => TimeUnit::Ns,
@@ -235,22 +233,6 @@ fn detect(header: &[String], o: &ImportOptions, path: &Path) -> Result<Layout, C
         time,
         absent,
     })
-}
-
-/// A triad's unit: the one given, else SI when its tokens are `None` (absent or canonically
-/// named columns), else the unit its column name tells (`of`), else an error naming `what`.
-fn triad_unit<U>(
-    given: Option<U>,
-    tokens: Option<&[String]>,
-    si: U,
-    of: fn(&[String]) -> Option<U>,
-    what: &str,
-) -> Result<U, String> {
-    given
-        .or_else(|| tokens.map_or(Some(si), of))
-        .ok_or_else(|| {
-            format!("cannot tell the {what} unit from the column name: pass --{what}-unit")
-        })
 }
 
 fn open_text(path: &Path) -> Result<Box<dyn BufRead>, CsvError> {
