@@ -10,7 +10,7 @@ fn regenerate(name: &str) -> (Vec<u8>, Vec<u8>) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.log");
     let seed = imuprep::sim::log::effective_seed(&scn, None);
-    imuprep::sim::log::write_sim_log(&scn, seed, &out, None).unwrap();
+    imuprep::io::sim_log::write_sim_log(&scn, seed, &out, None).unwrap();
     (
         std::fs::read(out).unwrap(),
         std::fs::read(root.join(format!("{name}.log"))).unwrap(),

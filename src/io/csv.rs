@@ -201,35 +201,25 @@ fn detect(header: &[String], o: &ImportOptions, path: &Path) -> Result<Layout, C
             "missing time column (name it \"t\", or pass --col t=NAME, or --rate HZ to time by index)".into(),
         ));
     }
-    let canon_named = |k: usize| {
-        idx[k]
-            .map(|p| header[p].trim() == CANON[k])
-            .unwrap_or(false)
+    // The tokens naming a triad's unit: those of its first present column, none when the triad
+    // is absent or that column has its canonical name (SI units then).
+    let unit_tokens = |ks: std::ops::RangeInclusive<usize>| {
+        let p = ks.into_iter().find_map(|k| idx[k].map(|p| (k, p)))?;
+        (header[p.1].trim() != CANON[p.0]).then(|| toks[p.1].as_slice())
     };
-    // The unit of a triad from its first present column (none needed for an absent triad).
-    let first = |ks: std::ops::RangeInclusive<usize>| ks.into_iter().find(|k| idx[*k].is_some());
-    let gyro = o.gyro_unit.map(Ok).unwrap_or_else(|| {
-        let Some(k) = first(1..=3) else {
-            return Ok(GyroUnit::RadS);
-        };
-        if canon_named(k) {
-            return Ok(GyroUnit::RadS);
-        }
-        gyro_unit_of(&toks[idx[k].expect("present")]).ok_or_else(|| {
-            err("cannot tell the gyro unit from the column name: pass --gyro-unit".into())
-        })
-    })?;
-    let accel = o.accel_unit.map(Ok).unwrap_or_else(|| {
-        let Some(k) = first(4..=6) else {
-            return Ok(AccelUnit::MS2);
-        };
-        if canon_named(k) {
-            return Ok(AccelUnit::MS2);
-        }
-        accel_unit_of(&toks[idx[k].expect("present")]).ok_or_else(|| {
-            err("cannot tell the accel unit from the column name: pass --accel-unit".into())
-        })
-    })?;
+    let unit_err = |what: &str| {
+        err(format!(
+            "cannot tell the {what} unit from the column name: pass --{what}-unit"
+        ))
+    };
+    let gyro = o
+        .gyro_unit
+        .or_else(|| unit_tokens(1..=3).map_or(Some(GyroUnit::RadS), gyro_unit_of))
+        .ok_or_else(|| unit_err("gyro"))?;
+    let accel = o
+        .accel_unit
+        .or_else(|| unit_tokens(4..=6).map_or(Some(AccelUnit::MS2), accel_unit_of))
+        .ok_or_else(|| unit_err("accel"))?;
     let time = o.time_unit.unwrap_or_else(|| match idx[0] {
         Some(p) if toks[p].iter().any(|x| x == "ms") => TimeUnit::Ms,
         Some(p) if toks[p].iter().any(|x| x == "ns") => TimeUnit::Ns,

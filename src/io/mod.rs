@@ -7,6 +7,7 @@ pub mod format;
 pub mod log;
 #[cfg(feature = "ros2")]
 pub mod mcap_sink;
+pub mod sim_log;
 pub mod sink;
 pub mod source;
 pub mod timing;

@@ -442,35 +442,31 @@ pub async fn serial_watched(
                 if !alive {
                     return;
                 }
-                if let Some(e) = err
-                    .as_ref()
-                    .filter(|e| e.kind() == std::io::ErrorKind::TimedOut)
-                {
-                    stalls += 1;
-                    let reason = format!("port open but silent ({e}); reopening");
-                    tracing::warn!(port = %port, stalls, "serial {reason}");
-                    if tx
-                        .send(SourceEvent::Stall { reason, stalls })
-                        .await
-                        .is_err()
-                    {
-                        return;
+                let stalled = matches!(&err, Some(e) if e.kind() == std::io::ErrorKind::TimedOut);
+                let event = match err {
+                    Some(e) if stalled => {
+                        stalls += 1;
+                        let reason = format!("port open but silent ({e}); reopening");
+                        tracing::warn!(port = %port, stalls, "serial {reason}");
+                        SourceEvent::Stall { reason, stalls }
                     }
+                    _ => {
+                        outages += 1;
+                        let reason = match err {
+                            Some(e) => format!("read failed: {e}"),
+                            None => "port closed".to_string(),
+                        };
+                        tracing::warn!(port = %port, outages, "serial port lost ({reason}); retrying");
+                        SourceEvent::Outage { reason, outages }
+                    }
+                };
+                if tx.send(event).await.is_err() {
+                    return;
+                }
+                if stalled {
+                    // A silent port is reopened after the current delay, which does not grow.
                     tokio::time::sleep(delay).await;
                     continue;
-                }
-                outages += 1;
-                let reason = match err {
-                    Some(e) => format!("read failed: {e}"),
-                    None => "port closed".to_string(),
-                };
-                tracing::warn!(port = %port, outages, "serial port lost ({reason}); retrying");
-                if tx
-                    .send(SourceEvent::Outage { reason, outages })
-                    .await
-                    .is_err()
-                {
-                    return;
                 }
             }
             Err(e) => {

@@ -181,7 +181,7 @@ pub fn simulate(
 ) -> Result<SimulateReport> {
     let scn = super::read_scenario(scenario, sets)?;
     let seed = crate::sim::log::effective_seed(&scn, seed);
-    let s = crate::sim::log::write_sim_log(&scn, seed, output, truth)?;
+    let s = crate::io::sim_log::write_sim_log(&scn, seed, output, truth)?;
     Ok(SimulateReport {
         output: output.to_path_buf(),
         seed,

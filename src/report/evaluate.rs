@@ -105,16 +105,31 @@ fn scores(err: &[f64], rate: f64) -> Scores {
     }
 }
 
-/// Evaluate `pipeline` against the calibration-only `baseline` on the simulated scenario.
-pub fn evaluate(
-    samples: &[Sample],
-    truth: &[TruthRow],
-    rate_hz: f64,
-    mut pipeline: Pipeline,
-    mut baseline: impl FnMut(Sample) -> Sample,
-) -> Vec<ChannelEval> {
-    let out: Vec<Sample> = crate::stage::run_through(&mut pipeline, samples);
-    let base: Vec<Sample> = samples.iter().map(|s| baseline(*s)).collect();
+/// The pipeline's output and the calibration-only baseline's, sample for sample, on the same
+/// simulated input.
+pub struct Outputs {
+    pub pipeline: Vec<Sample>,
+    pub baseline: Vec<Sample>,
+}
+
+impl Outputs {
+    /// Run `pipeline` and `baseline` over `samples`.
+    pub fn of(
+        samples: &[Sample],
+        mut pipeline: Pipeline,
+        baseline: impl FnMut(Sample) -> Sample,
+    ) -> Self {
+        Outputs {
+            pipeline: crate::stage::run_through(&mut pipeline, samples),
+            baseline: samples.iter().copied().map(baseline).collect(),
+        }
+    }
+}
+
+/// Evaluate the pipeline's output against the calibration-only baseline's on the simulated
+/// scenario.
+pub fn evaluate(outputs: &Outputs, truth: &[TruthRow], rate_hz: f64) -> Vec<ChannelEval> {
+    let (out, base) = (&outputs.pipeline, &outputs.baseline);
     let mut res = Vec::new();
     for (c, ch_name) in CHANNEL_NAMES.iter().enumerate().take(3) {
         let tr: Vec<f64> = truth
@@ -225,27 +240,24 @@ fn window_position_errors(out: &[Sample], truth: &[TruthRow], n: usize, dt: f64)
 /// The static 60-s position drift of `pipeline` vs the calibration-only `baseline`, or `None`
 /// when the scenario moves (|true rate| > 1e-3 rad/s anywhere) or is shorter than 60 s.
 pub fn static_position_drift(
-    samples: &[Sample],
+    outputs: &Outputs,
     truth: &[TruthRow],
     rate_hz: f64,
-    mut pipeline: Pipeline,
-    mut baseline: impl FnMut(Sample) -> Sample,
 ) -> Option<StaticDrift> {
+    let (out, base) = (&outputs.pipeline, &outputs.baseline);
     let still = truth
         .iter()
         .all(|t| t.true_signal[..3].iter().all(|w| w.abs() < 1e-3));
     let n = (60.0 * rate_hz).round() as usize;
-    if !still || n == 0 || samples.len() < n {
+    if !still || n == 0 || base.len() < n {
         return None;
     }
-    let out: Vec<Sample> = crate::stage::run_through(&mut pipeline, samples);
-    let base: Vec<Sample> = samples.iter().map(|s| baseline(*s)).collect();
     let rms = |e: Vec<f64>| (e.iter().map(|x| x * x).sum::<f64>() / e.len().max(1) as f64).sqrt();
     let dt = 1.0 / rate_hz;
-    let pe = window_position_errors(&out, truth, n, dt);
+    let pe = window_position_errors(out, truth, n, dt);
     let windows = pe.len();
     let p = rms(pe);
-    let b = rms(window_position_errors(&base, truth, n, dt));
+    let b = rms(window_position_errors(base, truth, n, dt));
     Some(StaticDrift {
         windows,
         pipeline_rms_m: p,
@@ -300,9 +312,9 @@ pub fn evaluate_scenario(
         s.accel = accel_cal.apply(&s.accel);
         s
     };
-    let channels = evaluate(&samples, &truth, rate, pipeline, calibrate);
-    let second = cfg.stages.build().map_err(|e| anyhow!(e))?;
-    let static_drift = static_position_drift(&samples, &truth, rate, second, calibrate);
+    let outputs = Outputs::of(&samples, pipeline, calibrate);
+    let channels = evaluate(&outputs, &truth, rate);
+    let static_drift = static_position_drift(&outputs, &truth, rate);
     Ok(EvaluateReport {
         scenario: scenario.display().to_string(),
         seed,

@@ -175,11 +175,11 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
             p: m.p,
             d: m.d,
             q: m.q,
-            adf_stat: id.adf.stat,
-            adf_p: id.adf.p_value,
+            adf_stat: id.diagnostics.adf.stat,
+            adf_p: id.diagnostics.adf.p_value,
             sigma: m.sigma,
-            ljung_box_q: id.ljung_box.q,
-            ljung_box_p: id.ljung_box.p_value,
+            ljung_box_q: id.diagnostics.ljung_box.q,
+            ljung_box_p: id.diagnostics.ljung_box.p_value,
         });
         file.channels.push(m);
     }

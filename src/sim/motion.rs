@@ -516,21 +516,24 @@ mod tests {
         assert!((num - (tt - tau)).abs() < 1e-8);
     }
 
-    #[test]
-    fn level_static_reads_minus_g_on_z_in_frd() {
-        let mut ck = Checker::default();
+    /// One second at rest (g = 9.8 m/s², no roll), with Earth rate at `earth_rate_lat_deg` if given.
+    fn static_at(pitch_deg: f64, yaw_deg: f64, earth_rate_lat_deg: Option<f64>) -> Trajectory {
         let m = MotionConfig::Static {
             duration_s: 1.0,
             roll_deg: 0.0,
-            pitch_deg: 0.0,
-            yaw_deg: 30.0,
+            pitch_deg,
+            yaw_deg,
             gravity_m_s2: 9.8,
-            earth_rate: false,
-            latitude_deg: 0.0,
+            earth_rate: earth_rate_lat_deg.is_some(),
+            latitude_deg: earth_rate_lat_deg.unwrap_or(0.0),
             vibration: vec![],
         };
-        let tr = Trajectory::build(&m, &mut ck).unwrap();
-        let s = tr.at(0.3);
+        Trajectory::build(&m, &mut Checker::default()).unwrap()
+    }
+
+    #[test]
+    fn level_static_reads_minus_g_on_z_in_frd() {
+        let s = static_at(0.0, 30.0, None).at(0.3);
         assert_eq!(s.accel_m_s2, Vector3::new(0.0, 0.0, -9.8));
         assert_eq!(s.gyro_rad_s, Vector3::zeros());
     }
@@ -539,18 +542,7 @@ mod tests {
     fn nose_up_static_sees_gravity_forward_and_earth_rate_magnitude() {
         // Pitch 90° nose up: x points up, so f_x = +g; Earth rate magnitude is Ω for any
         // attitude, and at the pole it is all vertical (−x when x is up... i.e. |ω_x| = Ω).
-        let mut ck = Checker::default();
-        let m = MotionConfig::Static {
-            duration_s: 1.0,
-            roll_deg: 0.0,
-            pitch_deg: 90.0,
-            yaw_deg: 0.0,
-            gravity_m_s2: 9.8,
-            earth_rate: true,
-            latitude_deg: 90.0,
-            vibration: vec![],
-        };
-        let s = Trajectory::build(&m, &mut ck).unwrap().at(0.0);
+        let s = static_at(90.0, 0.0, Some(90.0)).at(0.0);
         assert!((s.accel_m_s2.x - 9.8).abs() < 1e-12);
         assert!((s.gyro_rad_s.norm() - EARTH_RATE_RAD_S).abs() < 1e-18);
         assert!((s.gyro_rad_s.x.abs() - EARTH_RATE_RAD_S).abs() < 1e-15);

@@ -189,17 +189,23 @@ pub enum TruthPrecision {
 /// scientific otherwise (Rust's `{}` never switches to an exponent, so 1e-300 would take 300
 /// characters). Both forms are shortest round-trip in Rust.
 fn write_f64(out: &mut impl Write, v: f64) -> io::Result<()> {
-    let a = v.abs();
-    if v == 0.0 || (1e-5..1e16).contains(&a) || !v.is_finite() {
-        write!(out, "{v}")
-    } else {
-        write!(out, "{v:e}")
-    }
+    let plain = v == 0.0 || (1e-5..1e16).contains(&v.abs()) || !v.is_finite();
+    write_float(out, v, plain)
 }
 
+/// [`write_f64`]'s rule with the bounds as f32 values.
 fn write_f32(out: &mut impl Write, v: f32) -> io::Result<()> {
-    let a = v.abs();
-    if v == 0.0 || (1e-5..1e16).contains(&a) || !v.is_finite() {
+    let plain = v == 0.0 || (1e-5..1e16).contains(&v.abs()) || !v.is_finite();
+    write_float(out, v, plain)
+}
+
+/// `v` in plain notation or with an exponent.
+fn write_float<T: std::fmt::Display + std::fmt::LowerExp>(
+    out: &mut impl Write,
+    v: T,
+    plain: bool,
+) -> io::Result<()> {
+    if plain {
         write!(out, "{v}")
     } else {
         write!(out, "{v:e}")

@@ -45,30 +45,32 @@ pub fn ln_gamma(x: f64) -> f64 {
 
 /// Regularised lower incomplete gamma `P(a, x)`, a > 0, x ≥ 0.
 pub fn gamma_p(a: f64, x: f64) -> f64 {
-    if !(a > 0.0) || !(x >= 0.0) {
-        return f64::NAN;
-    }
-    if x == 0.0 {
-        return 0.0;
-    }
-    if x == f64::INFINITY {
-        return 1.0;
-    }
-    gamma::checked_gamma_lr(a, x).unwrap_or(f64::NAN)
+    incomplete_gamma(a, x, 0.0, gamma::checked_gamma_lr)
 }
 
 /// Regularised upper incomplete gamma `Q(a, x) = 1 − P(a, x)`, accurate in the upper tail.
 pub fn gamma_q(a: f64, x: f64) -> f64 {
+    incomplete_gamma(a, x, 1.0, gamma::checked_gamma_ur)
+}
+
+/// `P` or `Q` (`at_zero` = its value at x = 0, 1 − that at x = ∞): NaN outside the domain, the
+/// end values exactly, `statrs` in between.
+fn incomplete_gamma(
+    a: f64,
+    x: f64,
+    at_zero: f64,
+    f: fn(f64, f64) -> Result<f64, gamma::GammaFuncError>,
+) -> f64 {
     if !(a > 0.0) || !(x >= 0.0) {
         return f64::NAN;
     }
     if x == 0.0 {
-        return 1.0;
+        return at_zero;
     }
     if x == f64::INFINITY {
-        return 0.0;
+        return 1.0 - at_zero;
     }
-    gamma::checked_gamma_ur(a, x).unwrap_or(f64::NAN)
+    f(a, x).unwrap_or(f64::NAN)
 }
 
 /// Chi-square CDF with `k` degrees of freedom (k > 0, not necessarily integer).

@@ -2,7 +2,7 @@
 
 use super::*;
 
-/// Diagnostics stored with a model (what `fit` found; informative, not used online).
+/// What identification found, stored with a model (informative, not used online).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ArimaDiagnostics {
@@ -128,22 +128,7 @@ impl ArimaIdentification {
             ar: self.fit.ar.clone(),
             ma: self.fit.ma.clone(),
             sigma: self.fit.sigma2.sqrt(),
-            diagnostics: Some(ArimaDiagnostics {
-                n_obs: self.n_obs,
-                adf: self.adf,
-                acf_bound: self.acf_bound,
-                acf: self.acf.clone(),
-                pacf: self.pacf.clone(),
-                suggested_p: self.suggested_p,
-                suggested_q: self.suggested_q,
-                aic: self.fit.aic,
-                aic_table: self.aic_table.clone(),
-                converged: self.fit.converged,
-                ljung_box: self.ljung_box,
-                resid_bound: self.resid_bound,
-                resid_acf: self.resid_acf.clone(),
-                resid_pacf: self.resid_pacf.clone(),
-            }),
+            diagnostics: Some(self.diagnostics.clone()),
         }
     }
 }

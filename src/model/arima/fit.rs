@@ -210,16 +210,15 @@ pub(super) fn initial_values(
         (0, _) => n_cond,
         (_, Some(h)) => n_cond.max(h.start + q),
         (_, None) => {
-            return Err(ArimaError::Singular(
-                "Hannan-Rissanen without long AR".into(),
-            ));
+            return Err(NumError::singular("Hannan-Rissanen without long AR").into());
         }
     };
     if w.len() <= first + k {
-        return Err(ArimaError::TooShort {
+        return Err(NumError::TooShort {
             needed: first + k + 1,
             got: w.len(),
-        });
+        }
+        .into());
     }
     // Normal equations of w_t ~ [1, w_{t−1..p}, ê_{t−1..q}] (k ≤ 21, small).
     let mut xtx = DMatrix::<f64>::zeros(k, k);
@@ -247,8 +246,7 @@ pub(super) fn initial_values(
             xtx[(a, b)] = xtx[(b, a)];
         }
     }
-    let beta =
-        solve_spd(xtx, xty).ok_or_else(|| ArimaError::Singular("initial regression".into()))?;
+    let beta = solve_spd(xtx, xty).ok_or_else(|| NumError::singular("initial regression"))?;
     let mut beta: Vec<f64> = beta.iter().copied().collect();
     shrink_until(&mut beta[1..1 + p], ar_is_stationary);
     shrink_until(&mut beta[1 + p..], ma_is_invertible);
@@ -274,13 +272,6 @@ pub(super) fn admissible(beta: &[f64], p: usize) -> bool {
         && ma_is_invertible(&beta[1 + p..])
 }
 
-pub(super) fn check_input(w: &[f64]) -> Result<(), ArimaError> {
-    match w.iter().position(|v| !v.is_finite()) {
-        Some(index) => Err(ArimaError::NonFinite { index }),
-        None => Ok(()),
-    }
-}
-
 /// Minimise the CSS of an ARMA(p, q) with intercept on the (already differenced) series `w`,
 /// conditioning on the first `n_cond ≥ p` values. `d` is only recorded in the result.
 pub fn fit_css(
@@ -291,7 +282,7 @@ pub fn fit_css(
     n_cond: usize,
     opts: &CssOptions,
 ) -> Result<ArimaFit, ArimaError> {
-    check_input(w)?;
+    check_finite(w)?;
     if p > MAX_FIT_ORDER || q > MAX_FIT_ORDER {
         return Err(ArimaError::BadOrder(format!(
             "p = {p}, q = {q}; the fitter supports up to {MAX_FIT_ORDER}"
@@ -327,7 +318,7 @@ pub(super) fn fit_css_with(
     let mut jte = vec![0.0; k];
     let mut ssr = css_pass(w, &beta, p, q, n_cond, Some((&mut jtj, &mut jte)), None);
     if !ssr.is_finite() {
-        return Err(ArimaError::Singular("CSS at the initial values".into()));
+        return Err(NumError::singular("CSS at the initial values").into());
     }
     let mut lambda = 1e-3;
     let mut converged = false;
@@ -403,7 +394,7 @@ pub(super) fn fit_css_with(
     let n_resid = w.len() - n_cond;
     let sigma2 = ssr / n_resid as f64;
     if !(sigma2 > 0.0) {
-        return Err(ArimaError::Constant);
+        return Err(NumError::Constant.into());
     }
     let aic = n_resid as f64 * ((2.0 * std::f64::consts::PI * sigma2).ln() + 1.0)
         + 2.0 * (p + q + 2) as f64;
@@ -432,7 +423,7 @@ pub fn fit_arima(
     q: usize,
     opts: &CssOptions,
 ) -> Result<ArimaFit, ArimaError> {
-    check_input(x)?;
+    check_finite(x)?;
     let w = difference(x, d);
     fit_css(&w, p, d, q, p, opts)
 }

@@ -108,28 +108,10 @@ pub struct AicEntry {
 pub struct ArimaIdentification {
     /// The chosen model.
     pub fit: ArimaFit,
-    /// ADF on the original series.
-    pub adf: AdfResult,
-    /// Samples in the input.
-    pub n_obs: usize,
-    /// ACF of w, lags 0..=acf_lags.
-    pub acf: Vec<f64>,
-    /// PACF of w, lags 0..=acf_lags.
-    pub pacf: Vec<f64>,
-    /// 95 % white-noise bound ±z/√n of the ACF/PACF of w.
-    pub acf_bound: f64,
-    /// Last PACF lag ≤ p_max outside the bound (classical AR-order suggestion).
-    pub suggested_p: usize,
-    /// Last ACF lag ≤ q_max outside the bound (classical MA-order suggestion).
-    pub suggested_q: usize,
-    /// AIC of every candidate that fitted.
-    pub aic_table: Vec<AicEntry>,
-    /// Ljung–Box on the chosen model's residuals.
-    pub ljung_box: LjungBox,
-    /// Residual ACF / PACF, lags 0..=acf_lags, and their bound.
-    pub resid_acf: Vec<f64>,
-    pub resid_pacf: Vec<f64>,
-    pub resid_bound: f64,
+    /// What identification found on the way: ADF, ACF/PACF of the differenced series and their
+    /// order suggestions, the AIC of every candidate that fitted, the residual diagnosis (the
+    /// model file stores it as found).
+    pub diagnostics: ArimaDiagnostics,
     /// The chosen model's CSS residuals.
     pub residuals: Vec<f64>,
 }
@@ -137,14 +119,8 @@ pub struct ArimaIdentification {
 /// Identify and fit an ARIMA(p, d, q) with constant for `x` (see the module header).
 pub fn identify(x: &[f64], settings: &IdentifySettings) -> Result<ArimaIdentification, ArimaError> {
     settings.validate().map_err(ArimaError::InvalidSettings)?;
-    check_input(x)?;
-    let need = settings.min_len();
-    if x.len() < need {
-        return Err(ArimaError::TooShort {
-            needed: need,
-            got: x.len(),
-        });
-    }
+    check_finite(x)?;
+    check_series(x, settings.min_len())?;
     let adf_res = adf(x, settings.adf_lag)?;
     let d = if adf_res.p_value < settings.adf_alpha {
         0
@@ -233,7 +209,7 @@ pub fn identify(x: &[f64], settings: &IdentifySettings) -> Result<ArimaIdentific
             }
             chosen
         }
-        None => return Err(last_err.unwrap_or(ArimaError::Singular("every candidate".into()))),
+        None => return Err(last_err.unwrap_or(NumError::singular("every candidate").into())),
     };
     let residuals = css_residuals(&w, fit.constant, &fit.ar, &fit.ma, fit.n_cond);
     let lb_lags = settings.ljung_box_lags.min(residuals.len() / 2);
@@ -241,20 +217,25 @@ pub fn identify(x: &[f64], settings: &IdentifySettings) -> Result<ArimaIdentific
     let lags = settings.acf_lags.min(residuals.len() - 1);
     let resid_acf = acf(&residuals, lags)?;
     let resid_pacf = pacf_from_acf(&resid_acf);
-    Ok(ArimaIdentification {
-        adf: adf_res,
+    let diagnostics = ArimaDiagnostics {
         n_obs: x.len(),
+        adf: adf_res,
+        acf_bound: bound,
         acf: acf_w,
         pacf: pacf_w,
-        acf_bound: bound,
         suggested_p,
         suggested_q,
+        aic: fit.aic,
         aic_table: table,
+        converged: fit.converged,
         ljung_box: ljung,
+        resid_bound: acf_bound_95(residuals.len()),
         resid_acf,
         resid_pacf,
-        resid_bound: acf_bound_95(residuals.len()),
-        residuals,
+    };
+    Ok(ArimaIdentification {
         fit,
+        diagnostics,
+        residuals,
     })
 }

@@ -46,11 +46,11 @@
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-use crate::stats::NumError;
 use crate::stats::acf::{LjungBox, acf, acf_bound_95, ljung_box, pacf_from_acf};
 use crate::stats::adf::{AdfLag, AdfResult, adf};
 pub use crate::stats::ar_poly::is_stable;
 use crate::stats::ar_poly::levinson_partial;
+use crate::stats::{NumError, check_finite, check_series};
 
 mod file;
 mod fit;
@@ -117,30 +117,19 @@ fn shrink_until(a: &mut [f64], ok: impl Fn(&[f64]) -> bool) {
 /// Why an ARIMA model could not be identified, fitted, loaded or used.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ArimaError {
-    /// Fewer samples than the fit needs.
-    #[error("series too short: need at least {needed} samples, got {got}")]
-    TooShort { needed: usize, got: usize },
-    /// NaN or ±Inf in the input.
-    #[error("non-finite value at index {index}")]
-    NonFinite { index: usize },
-    /// Zero variance where a variance must be estimated.
-    #[error("series is constant")]
-    Constant,
+    /// The series is too short, non-finite or constant, or a system is singular (the shared
+    /// numerical vocabulary, [`NumError`]), in the fit or in a statistic used during identification.
+    #[error(transparent)]
+    Numeric(#[from] NumError),
     /// Model order outside what the caller supports.
     #[error("bad model order: {0}")]
     BadOrder(String),
-    /// Singular normal equations.
-    #[error("singular system in {0}")]
-    Singular(String),
     /// A model (e.g. loaded from TOML) that is inconsistent or not usable.
     #[error("invalid model: {0}")]
     InvalidModel(String),
     /// Settings that failed validation (all problems listed).
     #[error("invalid settings: {}", .0.join("; "))]
     InvalidSettings(Vec<String>),
-    /// A statistic used during identification failed.
-    #[error(transparent)]
-    Test(#[from] NumError),
     /// A model file that does not parse or serialise.
     #[error("model file: {0}")]
     Toml(String),

@@ -83,13 +83,17 @@ fn identify_picks_d1_for_a_random_walk_with_ar_increments() {
         .collect();
     let id = identify(&x, &IdentifySettings::default()).unwrap();
     assert_eq!(id.fit.d, 1);
-    assert!(id.adf.p_value > 0.05);
-    assert_eq!(id.aic_table.len(), 12);
+    assert!(id.diagnostics.adf.p_value > 0.05);
+    assert_eq!(id.diagnostics.aic_table.len(), 12);
     assert!(id.fit.p >= 1, "p = {}", id.fit.p);
     // Whatever the chosen (p, q), its one-step residual sd matches the true innovation sd.
     assert!((id.fit.sigma2.sqrt() - 1.0).abs() < 0.03);
-    assert!(id.ljung_box.p_value > 0.01, "{:?}", id.ljung_box);
-    assert_eq!(id.suggested_p, 1);
+    assert!(
+        id.diagnostics.ljung_box.p_value > 0.01,
+        "{:?}",
+        id.diagnostics.ljung_box
+    );
+    assert_eq!(id.diagnostics.suggested_p, 1);
 }
 
 #[test]
@@ -108,13 +112,13 @@ fn identify_picks_d0_and_white_noise_for_white_noise() {
 fn identify_rejects_bad_input_with_errors() {
     assert!(matches!(
         identify(&[1.0; 10], &IdentifySettings::default()),
-        Err(ArimaError::TooShort { .. })
+        Err(ArimaError::Numeric(NumError::TooShort { .. }))
     ));
     let mut x: Vec<f64> = (0..500).map(|i| (i as f64 * 0.1).sin()).collect();
     x[17] = f64::NAN;
     assert!(matches!(
         identify(&x, &IdentifySettings::default()),
-        Err(ArimaError::NonFinite { index: 17 })
+        Err(ArimaError::Numeric(NumError::NonFinite { index: 17 }))
     ));
     let bad = IdentifySettings {
         d_max: 2,

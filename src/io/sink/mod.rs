@@ -1,0 +1,318 @@
+//! Sinks: stdout, file, TCP server, UDP, inline (the input's own protocol to a serial device,
+//! file or pseudo-terminal). Each runs as its own task behind a bounded queue.
+//!
+//! The runtime hands every sink the same `Arc` batch and never waits long for any of them:
+//!
+//! * Network sinks (TCP, UDP) are offered the batch with `try_send`; a full queue drops the
+//!   batch for that consumer only, counted. The TCP server repeats that per client: each client
+//!   has its own bounded queue and lag counter; what a client was sent counts bytes written to
+//!   its socket, not bytes queued; a client that leaves is folded into the sink's totals.
+//! * Local sinks (stdout, file, inline) are wanted complete, so a full queue is waited for — but
+//!   only up to the sink's stall time ([`DEFAULT_STALL`]). A sink whose queue stays full that long
+//!   is *stuck* (a `| (sleep 20; cat)` pipe, a full disk, a FIFO nobody reads): from then on it
+//!   is offered like a network sink — batches it cannot take are dropped and counted — until
+//!   its queue has drained to half, when it is waited for again. A stuck consumer therefore
+//!   costs the stream one stall time, once, and never freezes the daemon or its health reports.
+//! * Inline sinks (serial device, file, pseudo-terminal) are local sinks too, with one more
+//!   duty: each sample must meet its own carrier, which travels ahead of it in the side stream.
+//!   What a stuck inline sink drops (sample batches, side batches) is told to its writer by a
+//!   [`SinkItem::Skip`] marker queued before the next item that gets through, so the writer
+//!   knows the index of every sample and carrier: a sample whose carrier was dropped, and a
+//!   carrier whose sample was dropped, are dropped too (counted), and a frame that carries
+//!   several samples (UBX ESF-RAW) is dropped whole when one of them was, so nothing raw is
+//!   ever written as cleaned and no sample lands in another's carrier.
+//!
+//! The files: this one holds the fan-out side (the queue, the stall and stuck rule, the skip
+//! markers) and [`start`]; [`stats`] the counters and their reports; `stream.rs` stdout and
+//! files; `net.rs` the TCP server and UDP; `inline.rs` the inline writer and its pairing of
+//! samples with carriers.
+
+use crate::config::Sink;
+use crate::frame::Descriptor;
+use crate::frame::health::HealthFrame;
+use crate::sample::Sample;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::sync::mpsc;
+use tokio::task::JoinHandle;
+
+mod inline;
+mod net;
+mod stats;
+mod stream;
+
+pub use stats::{ClientCounters, ClientStats, GoneClients, SinkReport, SinkStats};
+
+/// What flows to a sink.
+#[derive(Debug, Clone)]
+pub enum SinkItem {
+    Descriptor(Descriptor),
+    Samples(Arc<Vec<Sample>>),
+    /// Carriers and pass-through messages, ahead of their samples (inline sinks only).
+    Side(Arc<Vec<crate::io::source::SideItem>>),
+    /// A health report, written beside the samples by sinks whose format carries it (native
+    /// frames, JSON lines); CSV and inline sinks skip it.
+    Health(Box<HealthFrame>),
+    /// Inline sinks only: since the previous item, this many samples and sample carriers were
+    /// dropped (the sink was stuck); see the module docs.
+    Skip {
+        samples: u64,
+        carriers: u64,
+        /// The protocol announced in a dropped side batch (it applies to what follows).
+        protocol: Option<crate::frame::Protocol>,
+    },
+}
+
+/// How long a local sink's full queue is waited for before the sink counts as stuck.
+pub const DEFAULT_STALL: Duration = Duration::from_millis(500);
+
+/// A running sink.
+pub struct SinkHandle {
+    pub name: String,
+    pub tx: mpsc::Sender<SinkItem>,
+    /// Waited for (up to `stall`) when true; see the module docs.
+    pub lossless: bool,
+    /// Wants the side stream ([`SinkItem::Side`]): inline sinks.
+    pub wants_side: bool,
+    pub stats: Arc<SinkStats>,
+    pub task: JoinHandle<()>,
+    /// How long a full queue is waited for before the sink counts as stuck.
+    pub stall: Duration,
+    /// Set while the sink is stuck (dropping instead of waiting).
+    stuck: AtomicBool,
+    /// Inline sinks: samples and carriers dropped since the last item that got through, not
+    /// yet told to the writer (a [`SinkItem::Skip`] goes ahead of the next item).
+    skip_samples: AtomicU64,
+    skip_carriers: AtomicU64,
+    skip_protocol: Mutex<Option<crate::frame::Protocol>>,
+}
+
+impl SinkHandle {
+    /// Offer an item. Network sinks: dropped (and counted) when the queue is full. Local sinks
+    /// (inline ones included): waited for up to `stall`, then dropped while the sink is stuck
+    /// (see the module docs).
+    pub async fn offer(&self, item: SinkItem) {
+        let item = match self.try_put(item) {
+            Put::Sent | Put::Closed => return,
+            Put::Full(item) => *item,
+        };
+        if self.lossless && self.stuck.load(Relaxed) && self.tx.capacity() * 2 >= SINK_QUEUE {
+            self.stuck.store(false, Relaxed);
+            tracing::info!(sink = %self.name, "sink caught up; no longer dropping");
+        }
+        let item = if self.lossless && !self.stuck.load(Relaxed) {
+            match self.put_within_stall(item).await {
+                Put::Sent | Put::Closed => return,
+                Put::Full(item) => {
+                    let item = *item;
+                    self.stuck.store(true, Relaxed);
+                    tracing::warn!(
+                        sink = %self.name,
+                        stall_ms = self.stall.as_millis() as u64,
+                        "sink stuck (its consumer took nothing for the stall time): dropping what it cannot take, counted"
+                    );
+                    item
+                }
+            }
+        } else {
+            item
+        };
+        self.dropped(item);
+    }
+
+    /// The pending skip marker of an inline sink, if any.
+    fn pending_skip(&self) -> Option<SinkItem> {
+        let (samples, carriers) = (
+            self.skip_samples.load(Relaxed),
+            self.skip_carriers.load(Relaxed),
+        );
+        let protocol = self.skip_protocol.lock().ok().and_then(|p| *p);
+        (self.wants_side && (samples + carriers > 0 || protocol.is_some())).then_some(
+            SinkItem::Skip {
+                samples,
+                carriers,
+                protocol,
+            },
+        )
+    }
+
+    fn skip_sent(&self) {
+        self.skip_samples.store(0, Relaxed);
+        self.skip_carriers.store(0, Relaxed);
+        if let Ok(mut p) = self.skip_protocol.lock() {
+            *p = None;
+        }
+    }
+
+    /// Queue `item` now (after the pending skip marker).
+    fn try_put(&self, item: SinkItem) -> Put {
+        if let Some(skip) = self.pending_skip() {
+            match self.tx.try_send(skip) {
+                Ok(()) => self.skip_sent(),
+                Err(mpsc::error::TrySendError::Full(_)) => return Put::Full(Box::new(item)),
+                Err(mpsc::error::TrySendError::Closed(_)) => return Put::Closed,
+            }
+        }
+        match self.tx.try_send(item) {
+            Ok(()) => Put::Sent,
+            Err(mpsc::error::TrySendError::Full(item)) => Put::Full(Box::new(item)),
+            Err(mpsc::error::TrySendError::Closed(_)) => Put::Closed,
+        }
+    }
+
+    /// Queue `item` (after the pending skip marker), waiting at most the stall time in all.
+    async fn put_within_stall(&self, item: SinkItem) -> Put {
+        let deadline = tokio::time::Instant::now() + self.stall;
+        if let Some(skip) = self.pending_skip() {
+            match self.tx.send_timeout(skip, self.stall).await {
+                Ok(()) => self.skip_sent(),
+                Err(mpsc::error::SendTimeoutError::Timeout(_)) => return Put::Full(Box::new(item)),
+                Err(mpsc::error::SendTimeoutError::Closed(_)) => return Put::Closed,
+            }
+        }
+        let left = deadline.saturating_duration_since(tokio::time::Instant::now());
+        match self.tx.send_timeout(item, left).await {
+            Ok(()) => Put::Sent,
+            Err(mpsc::error::SendTimeoutError::Timeout(item)) => Put::Full(Box::new(item)),
+            Err(mpsc::error::SendTimeoutError::Closed(_)) => Put::Closed,
+        }
+    }
+
+    /// Count what a full queue lost; an inline sink's writer is told before its next item.
+    fn dropped(&self, item: SinkItem) {
+        match item {
+            SinkItem::Samples(b) => {
+                self.stats.dropped.fetch_add(b.len() as u64, Relaxed);
+                if self.wants_side {
+                    self.skip_samples.fetch_add(b.len() as u64, Relaxed);
+                }
+            }
+            SinkItem::Side(items) => {
+                use crate::io::source::SideItem;
+                let carriers = items
+                    .iter()
+                    .filter(|i| matches!(i, SideItem::Sample(_)))
+                    .count();
+                let others = items
+                    .iter()
+                    .filter(|i| matches!(i, SideItem::Other(_)))
+                    .count();
+                self.skip_carriers.fetch_add(carriers as u64, Relaxed);
+                self.stats
+                    .messages_dropped
+                    .fetch_add(others as u64, Relaxed);
+                let announced = items.iter().rev().find_map(|i| match i {
+                    SideItem::Protocol(p) => Some(*p),
+                    _ => None,
+                });
+                if let (Some(p), Ok(mut slot)) = (announced, self.skip_protocol.lock()) {
+                    *slot = Some(p);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// True while a local sink is stuck and dropping.
+    pub fn is_stuck(&self) -> bool {
+        self.stuck.load(Relaxed)
+    }
+}
+
+/// What became of an item offered to a sink's queue.
+enum Put {
+    Sent,
+    /// The sink has ended.
+    Closed,
+    /// The queue is full (or stayed full for the stall time): the item is handed back.
+    Full(Box<SinkItem>),
+}
+
+/// Queue length (in batches) of a sink's own input.
+const SINK_QUEUE: usize = 64;
+
+/// Start the task for one configured sink (binds sockets and creates files now, so a bad
+/// address or path fails before any data flows).
+pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
+    let (tx, rx) = mpsc::channel(SINK_QUEUE);
+    let stats = Arc::new(SinkStats::default());
+    let st = stats.clone();
+    let (name, task) = match sink.clone() {
+        Sink::Stdout { format } => {
+            let out = tokio::io::stdout();
+            let task = tokio::spawn(stream::write_stream(out, format, false, rx, st));
+            ("stdout".to_string(), task)
+        }
+        Sink::File { path, format } => {
+            let f = tokio::fs::File::create(&path)
+                .await
+                .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+            let w = tokio::io::BufWriter::with_capacity(1 << 16, f);
+            let task = tokio::spawn(stream::write_stream(w, format, true, rx, st));
+            (format!("file:{}", path.display()), task)
+        }
+        Sink::Tcp {
+            bind,
+            format,
+            queue,
+        } => {
+            let l = tokio::net::TcpListener::bind(bind).await.map_err(|e| {
+                std::io::Error::new(e.kind(), format!("tcp sink cannot bind {bind}: {e}"))
+            })?;
+            let name = format!("tcp:{}", l.local_addr()?);
+            (
+                name,
+                tokio::spawn(net::tcp_server(l, format, queue, rx, st)),
+            )
+        }
+        Sink::Udp { targets, format } => {
+            let sock = tokio::net::UdpSocket::bind("0.0.0.0:0").await?;
+            let name = format!("udp:{}", targets.len());
+            (
+                name,
+                tokio::spawn(net::udp_sender(sock, targets, format, rx, st)),
+            )
+        }
+        Sink::Mcap {
+            path,
+            topic,
+            frame_id,
+            health_topic,
+        } => {
+            #[cfg(feature = "ros2")]
+            {
+                let opts = crate::io::mcap_sink::McapSinkOptions {
+                    topic,
+                    frame_id,
+                    health_topic,
+                };
+                let name = format!("mcap:{}", path.display());
+                (name, crate::io::mcap_sink::start(path, opts, rx, st)?)
+            }
+            #[cfg(not(feature = "ros2"))]
+            {
+                let _ = (path, topic, frame_id, health_topic, rx, st);
+                return Err(std::io::Error::other(
+                    "mcap sink: this build has no ROS 2 support (cargo build --release --features ros2)",
+                ));
+            }
+        }
+        Sink::Inline { path } => inline::start_inline(path, rx, st).await?,
+    };
+    // Network sinks are never waited for; local ones are (up to the stall time).
+    let lossless = !matches!(sink, Sink::Tcp { .. } | Sink::Udp { .. });
+    Ok(SinkHandle {
+        name,
+        tx,
+        lossless,
+        wants_side: matches!(sink, Sink::Inline { .. }),
+        stats,
+        task,
+        stall: DEFAULT_STALL,
+        stuck: AtomicBool::new(false),
+        skip_samples: AtomicU64::new(0),
+        skip_carriers: AtomicU64::new(0),
+        skip_protocol: Mutex::new(None),
+    })
+}
