@@ -404,8 +404,11 @@ pub fn compare_channel(
     };
     let max_l = s.orders.iter().copied().max().unwrap_or(1).max(s.max_order);
     if n_test < 2 || n_train < 4 * max_l + 4 || (s.max_order > 0 && n_val < 2) {
+        // The split is in seconds: the record must hold the whole training span (at least
+        // what the highest order needs), the validation span and two test samples.
+        let val_min = if s.max_order > 0 { 2 } else { 0 };
         return Err(CompareError::TooShort {
-            needed: 4 * max_l + 4 + n_val.max(2) + 2,
+            needed: n_train.max(4 * max_l + 4) + n_val.max(val_min) + 2,
             got: y.len(),
         });
     }
@@ -665,6 +668,15 @@ mod tests {
             compare_channel(&y, &[], "gx", SensorKind::Gyro, &s),
             Err(CompareError::TooShort { .. })
         ));
+        // A record longer than the old (wrong) bound but shorter than train + validation: the
+        // error's need is more than what it got (it once said "30000 samples, need 18046").
+        let y = vec![0.0; 30_000];
+        let Err(CompareError::TooShort { needed, got }) =
+            compare_channel(&y, &[], "gx", SensorKind::Gyro, &s)
+        else {
+            panic!("expected TooShort");
+        };
+        assert!(needed > got, "need {needed}, got {got}");
         let mut s0 = s.clone();
         s0.sample_rate_hz = 0.0;
         assert!(compare_channel(&y, &[], "gx", SensorKind::Gyro, &s0).is_err());
