@@ -217,12 +217,35 @@ impl Config {
 
     /// Read and validate a config file; relative paths in it are taken from its directory.
     pub fn from_file(path: &Path) -> Result<Config, ConfigErrors> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
+        Config::read(path, false)
+    }
+
+    /// As [`Config::from_file`], for the commands that replace the source with their own input
+    /// (`replay LOG`, `audit`, `navtest`, …): a file without `[source]` takes the embedded
+    /// default's, so a file holding only tuning keys works there (`run` still needs one).
+    pub fn from_file_source_replaced(path: &Path) -> Result<Config, ConfigErrors> {
+        Config::read(path, true)
+    }
+
+    fn read(path: &Path, default_source: bool) -> Result<Config, ConfigErrors> {
+        let mut text = std::fs::read_to_string(path).map_err(|e| {
             ConfigErrors(vec![ConfigError {
                 path: path.display().to_string(),
                 message: format!("cannot read config: {e}"),
             }])
         })?;
+        if default_source
+            && let Ok(mut user) = text.parse::<toml::Table>()
+            && !user.contains_key("source")
+        {
+            let defaults: toml::Table = DEFAULT_TOML
+                .parse()
+                .expect("the embedded config/default.toml parses (tested)");
+            if let Some(src) = defaults.get("source") {
+                user.insert("source".into(), src.clone());
+                text = user.to_string();
+            }
+        }
         let base = path.parent().unwrap_or(Path::new("."));
         Config::from_toml_str(&text, base)
     }
@@ -255,7 +278,8 @@ impl Config {
             }
         }
         // A file changes only what it names: everything else comes from the embedded defaults
-        // (`[source]` excepted — it must be given, and is taken whole).
+        // (`[source]` excepted — taken whole, and required here; the commands that bring their own
+        // input fill it in first, see `from_file_source_replaced`).
         let table = overlay_on_defaults(table);
         // The protocol keys of [source] are read on their own (the source kinds' tables deny
         // unknown keys).

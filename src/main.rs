@@ -313,9 +313,22 @@ fn main() -> ExitCode {
     }
 }
 
+/// The config of a command that brings its own input (the file's `[source]` is optional).
 fn load_config(path: &Option<PathBuf>) -> Result<Config> {
+    load_with(path, Config::from_file_source_replaced)
+}
+
+/// The daemon's config: its source comes from the file, which must name one.
+fn load_daemon_config(path: &Option<PathBuf>) -> Result<Config> {
+    load_with(path, Config::from_file)
+}
+
+fn load_with(
+    path: &Option<PathBuf>,
+    read: fn(&std::path::Path) -> Result<Config, imuprep::config::ConfigErrors>,
+) -> Result<Config> {
     let c = match path {
-        Some(p) => Config::from_file(p),
+        Some(p) => read(p),
         None => Config::default_embedded(),
     };
     c.map_err(|e| anyhow::anyhow!("{e}"))
@@ -339,7 +352,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             out,
             summary_json,
         } => {
-            let mut cfg = load_config(&config)?;
+            let mut cfg = load_daemon_config(&config)?;
             report::daemon::add_outs(&mut cfg, &out)?;
             daemon(cfg, summary_json)
         }

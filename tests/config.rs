@@ -369,3 +369,29 @@ fn default_toml_lists_every_setting_and_every_documented_value_parses() {
         }
     }
 }
+
+#[test]
+fn a_tuning_only_file_works_where_the_command_brings_its_input_and_run_still_needs_a_source() {
+    // `replay LOG` replaces the source, so a file holding only what the user tunes must run
+    // there (it once failed "missing section [source]"); the daemon takes its source from the
+    // file, so `run` must still refuse a file without one.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("tuning.toml");
+    std::fs::write(&p, "[gross_error.settings]\nk = 5.0\n").unwrap();
+    let log = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/drive.log");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_imuprep"))
+        .args(["replay", log, "--config"])
+        .arg(&p)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("29982 out"), "the whole log is cleaned: {err}");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_imuprep"))
+        .args(["run", "--config"])
+        .arg(&p)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing section [source]"));
+}
