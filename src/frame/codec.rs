@@ -165,49 +165,6 @@ impl FrameDecoder {
         }
     }
 
-    /// Mark the channels the last descriptor declares absent (NaN, [`Sample::absent`]); they
-    /// are no measurement, so neither non-finite nor saturated.
-    fn mark_absent(&self, s: &mut Sample) {
-        let absent = self.descriptor.map_or(0, |d| d.absent);
-        if absent == 0 {
-            return;
-        }
-        s.absent = absent;
-        for c in 0..6 {
-            if s.is_absent(c) {
-                s.set_channel(c, f64::NAN);
-                s.flags &= !flags::sat_ch(c);
-            }
-        }
-    }
-
-    fn check_values(&mut self, s: &mut Sample) {
-        let ch = s.channels();
-        if ch
-            .iter()
-            .enumerate()
-            .any(|(c, v)| !v.is_finite() && !s.is_absent(c))
-        {
-            s.flags |= flags::NON_FINITE;
-            self.stats.non_finite += 1;
-        }
-        if let Some(d) = self.descriptor {
-            for (c, v) in ch.iter().enumerate() {
-                let range = if c < 3 {
-                    d.gyro_range_rad_s
-                } else {
-                    d.accel_range_m_s2
-                } as f64;
-                if range > 0.0 && v.abs() >= range && !s.is_absent(c) {
-                    s.flags |= flags::sat_ch(c);
-                }
-            }
-        }
-        if s.flags & flags::SAT_ANY != 0 {
-            self.stats.saturated += 1;
-        }
-    }
-
     /// Try to take one good frame from the front of `buf`. `Ok(None)` = need more bytes.
     fn decode_one(&mut self, buf: &mut BytesMut) -> Option<Message> {
         loop {
@@ -269,8 +226,11 @@ impl FrameDecoder {
                 (MSG_SAMPLE, SAMPLE_PAYLOAD) | (MSG_CLEAN_SAMPLE, CLEAN_SAMPLE_PAYLOAD) => {
                     let mut s = parse_sample(seq, payload, ty == MSG_CLEAN_SAMPLE);
                     self.track_sequence(&mut s);
-                    self.mark_absent(&mut s);
-                    self.check_values(&mut s);
+                    // The channels the last descriptor declares absent are no measurement,
+                    // then the same value rule as every protocol's decoder.
+                    let absent = self.descriptor.map_or(0, |d| d.absent);
+                    protocol::mark_absent(&mut s, absent);
+                    protocol::flag_values(&mut s, self.descriptor.as_ref(), &mut self.stats);
                     self.stats.samples += 1;
                     Some(Message::Sample(s))
                 }

@@ -217,14 +217,19 @@ impl ProtocolDecoder for super::FrameDecoder {
     }
 }
 
-/// Mark the channels of `mask` absent on `s` (bit `c` for channel `c`): NaN, and
-/// [`Sample::absent`], so they count as no measurement rather than as a non-finite value.
+/// Mark the channels of `mask` absent on `s` (bit `c` for channel `c`): NaN, no saturation
+/// flag, and [`Sample::absent`], so they count as no measurement rather than as a non-finite
+/// or saturated value.
 #[inline]
 pub fn mark_absent(s: &mut Sample, mask: u8) {
     s.absent = mask & crate::sample::ALL_CHANNELS;
+    if s.absent == 0 {
+        return;
+    }
     for c in 0..crate::sample::N_CHANNELS {
         if s.is_absent(c) {
             s.set_channel(c, f64::NAN);
+            s.flags &= !flags::sat_ch(c);
         }
     }
 }
