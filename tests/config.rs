@@ -1,6 +1,15 @@
 //! Every shipped config validates; mistakes are all reported, with their key paths.
 use imuprep::config::Config;
+use std::ffi::OsStr;
 use std::path::Path;
+
+/// The binary run with `args`, its output collected.
+fn imuprep<const N: usize>(args: [&OsStr; N]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_imuprep"))
+        .args(args)
+        .output()
+        .unwrap()
+}
 
 #[test]
 fn every_file_in_config_dir_validates() {
@@ -56,11 +65,7 @@ fn binary_exits_non_zero_and_starts_nothing_on_a_bad_config() {
         "[source]\nkind = \"serial\"\nport = \"\"\nbaud = 0\n[bogus]\n",
     )
     .unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_imuprep"))
-        .args(["run", "--config"])
-        .arg(&p)
-        .output()
-        .unwrap();
+    let out = imuprep(["run".as_ref(), "--config".as_ref(), p.as_os_str()]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -379,19 +384,16 @@ fn a_tuning_only_file_works_where_the_command_brings_its_input_and_run_still_nee
     let p = dir.path().join("tuning.toml");
     std::fs::write(&p, "[gross_error.settings]\nk = 5.0\n").unwrap();
     let log = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/drive.log");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_imuprep"))
-        .args(["replay", log, "--config"])
-        .arg(&p)
-        .output()
-        .unwrap();
+    let out = imuprep([
+        "replay".as_ref(),
+        log.as_ref(),
+        "--config".as_ref(),
+        p.as_os_str(),
+    ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(err.contains("29982 out"), "the whole log is cleaned: {err}");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_imuprep"))
-        .args(["run", "--config"])
-        .arg(&p)
-        .output()
-        .unwrap();
+    let out = imuprep(["run".as_ref(), "--config".as_ref(), p.as_os_str()]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing section [source]"));
 }
