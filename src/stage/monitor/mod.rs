@@ -8,7 +8,10 @@
 //! - an **offset** the model does not explain — a step, a drift, a temperature term it lacks
 //!   ([`step::LevelDetector`]: a window's mean output against the channel's own history), and
 //! - a **spectral line** — a vibration or an electrical line appearing ([`line::LineDetector`]:
-//!   a moving Welch average, each bin against its neighbours),
+//!   a moving Welch average, each bin against its neighbours), and
+//! - a **wander** — the output losing its whiteness at tens of seconds, a bias instability the
+//!   model lacks ([`wander::WanderDetector`]: the Allan variance's slope between two τ against
+//!   the channel's own, with an F-quantile bar from the estimates' degrees of freedom),
 //!
 //! and publishes a status — `model fits`, `learning`, or `effect suspected: …` with the channel,
 //! the size and the time — in the health data, so the user learns that `imuprep diagnose` should
@@ -20,6 +23,7 @@
 pub mod line;
 pub mod settings;
 pub mod step;
+pub mod wander;
 
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use crate::stage::Stage;
@@ -28,6 +32,7 @@ use line::{LineDetector, LineEvent};
 pub use settings::MonitorSettings;
 use std::collections::VecDeque;
 use step::LevelDetector;
+use wander::WanderDetector;
 
 /// Positive sample intervals used to learn the rate.
 const RATE_INTERVALS: usize = 64;
@@ -41,6 +46,8 @@ pub enum Finding {
     Offset(f64),
     /// A line at this frequency, Hz (and its index among the channel's lines).
     Line(f64, usize),
+    /// More Allan variance at this τ (s) than the channel's own (the ratio is the score).
+    Wander(f64),
 }
 
 /// One alarm of the monitor.
@@ -50,7 +57,8 @@ pub struct Alarm {
     /// Sensor time the effect was first seen, ns.
     pub t_ns: u64,
     pub finding: Finding,
-    /// Its size against the channel's own scale (σ for an offset, power ratio for a line).
+    /// Its size against the channel's own scale (σ for an offset, power ratio for a line,
+    /// Allan-variance ratio for a wander).
     pub score: f64,
 }
 
@@ -75,6 +83,11 @@ impl std::fmt::Display for Alarm {
                 "{name} line ≈ {hz:.3} Hz since {t:.1} s ({:.0}× its neighbours)",
                 self.score
             ),
+            Finding::Wander(tau) => write!(
+                f,
+                "{name} wander since {t:.1} s (Allan variance at {tau:.0} s {:.1}× its own)",
+                self.score
+            ),
         }
     }
 }
@@ -82,6 +95,7 @@ impl std::fmt::Display for Alarm {
 struct Channel {
     level: LevelDetector,
     line: LineDetector,
+    wander: WanderDetector,
 }
 
 /// The monitor's health: its counters since the start and its status now.
@@ -91,6 +105,8 @@ pub struct MonitorHealth {
     pub offset_alarms: u64,
     /// New spectral lines raised so far (a returning line is not counted again).
     pub line_alarms: u64,
+    /// Wanders (Allan-slope changes) raised so far.
+    pub wander_alarms: u64,
     /// Channels whose offset test has learned enough to be armed now.
     pub armed_channels: u64,
     /// Still samples watched.
@@ -109,6 +125,7 @@ pub struct MonitorStage {
     alarms: VecDeque<Alarm>,
     offset_alarms: u64,
     line_alarms: u64,
+    wander_alarms: u64,
     still_samples: u64,
     line_events: Vec<LineEvent>,
 }
@@ -127,6 +144,7 @@ impl MonitorStage {
             alarms: VecDeque::with_capacity(KEEP_EVENTS),
             offset_alarms: 0,
             line_alarms: 0,
+            wander_alarms: 0,
             still_samples: 0,
             line_events: Vec::new(),
         };
@@ -144,6 +162,11 @@ impl MonitorStage {
     /// Every alarm kept (the last 16), oldest first.
     pub fn alarms(&self) -> impl Iterator<Item = &Alarm> {
         self.alarms.iter()
+    }
+
+    /// The wander detector of channel `c` (its learned baseline and bar), once the rate is known.
+    pub fn wander(&self, c: usize) -> Option<&WanderDetector> {
+        self.ch.get(c).map(|ch| &ch.wander)
     }
 
     /// Channels whose offset test is armed.
@@ -186,6 +209,7 @@ impl MonitorStage {
         match a.finding {
             Finding::Offset(_) => c.level.active(),
             Finding::Line(_, id) => c.line.is_active(id),
+            Finding::Wander(_) => c.wander.active(),
         }
     }
 
@@ -218,10 +242,16 @@ impl MonitorStage {
         let window_blocks = (st.window_s / st.block_s).round().max(1.0) as usize;
         let learn_blocks = (st.learn_s / st.block_s).ceil() as usize;
         let seg_n = (st.line_segment_s * fs).round() as usize;
+        let wb_n = (st.wander_block_s * fs).round().max(1.0) as usize;
+        let wb_s = wb_n as f64 / fs;
+        let w_blocks = (st.wander_window_s / wb_s).round() as usize;
+        let w_m = (st.wander_tau_s / wb_s).round() as usize;
+        let w_learn = (st.learn_s / wb_s).ceil() as usize;
         self.ch = (0..N_CHANNELS)
             .map(|_| Channel {
                 level: LevelDetector::new(block_n, window_blocks, st.offset_k, learn_blocks),
                 line: LineDetector::new(seg_n, st.line_averages, st.line_k, fs),
+                wander: WanderDetector::new(wb_n, wb_s, w_blocks, w_m, st.wander_p, w_learn),
             })
             .collect();
         self.fs = Some(fs);
@@ -242,6 +272,11 @@ impl MonitorStage {
             for c in &mut self.ch {
                 c.level.interrupt();
                 c.line.interrupt();
+                if s.has(flags::GAP) {
+                    c.wander.interrupt();
+                } else {
+                    c.wander.skip();
+                }
             }
             return;
         }
@@ -253,6 +288,7 @@ impl MonitorStage {
             if !v.is_finite() || s.flags & bad != 0 {
                 c.level.interrupt();
                 c.line.interrupt();
+                c.wander.skip();
                 continue;
             }
             if let Some(e) = c.level.push(s.t_ns, v) {
@@ -261,6 +297,16 @@ impl MonitorStage {
                     t_ns: e.t_ns,
                     finding: Finding::Offset(e.offset),
                     score: e.z,
+                });
+            }
+            if self.settings.wander
+                && let Some(e) = c.wander.push(s.t_ns, v)
+            {
+                found.push(Alarm {
+                    channel: i,
+                    t_ns: e.t_ns,
+                    finding: Finding::Wander(e.tau_s),
+                    score: e.ratio,
                 });
             }
             self.line_events.clear();
@@ -278,6 +324,7 @@ impl MonitorStage {
             match a.finding {
                 Finding::Offset(_) => self.offset_alarms += 1,
                 Finding::Line(..) => self.line_alarms += 1,
+                Finding::Wander(_) => self.wander_alarms += 1,
             }
             self.record(a);
         }
@@ -298,6 +345,7 @@ impl Stage for MonitorStage {
         StageHealth::Monitor(MonitorHealth {
             offset_alarms: self.offset_alarms,
             line_alarms: self.line_alarms,
+            wander_alarms: self.wander_alarms,
             armed_channels: self.armed_channels() as u64,
             still_samples: self.still_samples,
             status: self.status(),
