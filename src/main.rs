@@ -136,7 +136,8 @@ enum Cmd {
         bias_order: Option<usize>,
         /// Shortest still stretch, seconds, the bias model may be fitted on. The bias model
         /// describes the sensor's bias, so it is fitted only on the longest still stretch of the
-        /// training span (the bias stage's own stillness test); without one this long, bias.toml
+        /// training span (the bias stage's own stillness test, on the span after the gross-error
+        /// stage with the ARIMA models just identified); without one this long, bias.toml
         /// holds no channel models and the stage learns each gyro's bias at warm-up.
         #[arg(long, default_value_t = 60.0)]
         min_still_s: f64,

@@ -185,3 +185,46 @@ fn replay_publishes_every_sample_and_only_the_look_ahead_replaces() {
     assert!(causal["flagged_suspect"].as_u64().unwrap() > 0, "{causal}");
     assert!(ahead["flagged_replaced"].as_u64().unwrap() > 0, "{ahead}");
 }
+
+#[test]
+fn fit_judges_stillness_after_the_gross_error_stage() {
+    // The static bench at 200 Hz carries gross errors (5e-5 per channel-sample: ~13 events in
+    // the 180-s training span's 216 000 channel-samples). On the raw samples each spike breaks
+    // the stillness test's run, and the longest still stretch is 59.3 s — under the default
+    // --min-still-s 60, so fit wrote no bias model. After the gross-error stage (what the bias
+    // stage sees in the daemon) the span is one still stretch from the detector's warm-up on,
+    // as on the same bench without gross errors (178.5 s from 1.5 s).
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("bench200.log");
+    let log_s = log.to_str().unwrap();
+    run(&[
+        "simulate",
+        "replay/static_bench.toml",
+        "-o",
+        log_s,
+        "--set",
+        "motion.duration_s=200",
+        "--set",
+        "sensor.sample_rate_hz=200",
+    ]);
+    // The premise: the raw span's stillness is broken by the gross errors.
+    let (_, raw) = imuprep::report::audit::load_recording(&log).unwrap();
+    let raw_still = imuprep::report::fit::longest_still_stretch(&raw[..36_000], 200.0);
+    assert!(
+        raw_still.len < 60 * 200,
+        "the raw span has a 60-s still stretch: {raw_still:?}"
+    );
+    let o = imuprep::report::fit::FitOptions {
+        train_s: 180.0,
+        skip_s: 0.0,
+        bias_method: imuprep::report::fit::BiasMethod::Burg,
+        bias_order: 64,
+        min_still_s: 60.0,
+    };
+    let r = imuprep::report::fit::fit(&log, &dir.path().join("m"), &o).unwrap();
+    assert!(r.bias_skipped.is_none(), "{:?}", r.bias_skipped);
+    assert_eq!(r.bias.len(), 6);
+    // ≥ 175 s of the 180: the stillness detector's own warm-up (1.5 s) is the only gap on the
+    // same bench without gross errors.
+    assert!(r.still.len >= 175 * 200, "{:?}", r.still);
+}

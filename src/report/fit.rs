@@ -17,6 +17,7 @@ use crate::model::fos_model::{FosModel, FosModelSpec};
 use crate::model::{ArFit, ModelError};
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample};
 use crate::stage::bias::stillness::{StillnessDetector, StillnessSettings};
+use crate::stage::gross_error::GrossErrorStage;
 
 /// How `fit` estimates the bias model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -191,8 +192,12 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
 
     // The bias model describes the sensor's bias, not the vehicle's motion: fit it only where
     // the sensor was still (a model fitted on motion takes the motion's mean and dynamics for
-    // bias, and the bias stage then subtracts them).
-    let still = longest_still_stretch(&samples[..n], rate);
+    // bias, and the bias stage then subtracts them). Stillness and the fit are judged on what
+    // the bias stage sees in the daemon: the span after the gross-error stage with the models
+    // just identified — a single spike must not break a still stretch, nor enter the bias fit.
+    let cleaned = after_gross_errors(&samples[..n], &file)?;
+    let samples = &cleaned;
+    let still = longest_still_stretch(samples, rate);
     let need = ((o.min_still_s * rate).ceil() as usize).max(4 * bias_order);
     let bias_skipped = (still.len < need).then(|| {
         format!(
@@ -251,6 +256,25 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
         bias: rows,
         bias_path,
     })
+}
+
+/// `samples` through the gross-error stage of the embedded default configuration (its gate
+/// settings) with the ARIMA models `file`; unchanged when that configuration has the stage off.
+fn after_gross_errors(samples: &[Sample], file: &ArimaModelFile) -> Result<Vec<Sample>> {
+    let cfg = crate::config::Config::default_embedded().map_err(|e| anyhow!("{e}"))?;
+    let Some(g) = cfg.stages.gross_error else {
+        return Ok(samples.to_vec());
+    };
+    let mut stage = GrossErrorStage::new(&g.settings, Some(file))
+        .map_err(|e| anyhow!("gross-error stage: {e}"))?;
+    let out = crate::stage::run_through(&mut stage, samples);
+    ensure!(
+        out.len() == samples.len(),
+        "gross-error stage returned {} samples for {}",
+        out.len(),
+        samples.len()
+    );
+    Ok(out)
 }
 
 /// The model files' first line when channels were left out: which, and why.
@@ -351,7 +375,7 @@ impl fmt::Display for FitReport {
             return writeln!(f, "wrote {p} (no channel models)");
         }
         let on = format!(
-            "on the longest still stretch, {:.1} s from {:.1} s of the span",
+            "on the longest still stretch after the gross-error stage, {:.1} s from {:.1} s of the span",
             self.still.len as f64 / rate,
             self.still.start as f64 / rate
         );
