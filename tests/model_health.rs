@@ -92,11 +92,10 @@ fn clean_simulated_benches_raise_no_alarm() {
         let m = monitor_over(&samples, 100.0, true);
         let a = alarms(&m);
         eprintln!("seed {seed}: {} — {a:?}", m.status());
-        for c in 0..6 {
+        for (c, name) in CHANNEL_NAMES.iter().enumerate() {
             let w = m.wander(c).unwrap();
             eprintln!(
-                "  {}: wander quiet max {:.2} (bar {:.2}), ρ₀ {:.2}, {} tests, {} runs broken",
-                CHANNEL_NAMES[c],
+                "  {name}: wander quiet max {:.2} (bar {:.2}), ρ₀ {:.2}, {} tests, {} runs broken",
                 w.max_quiet.0,
                 w.max_quiet.1,
                 w.baseline().unwrap_or(f64::NAN),

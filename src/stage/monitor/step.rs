@@ -28,17 +28,61 @@ pub struct LevelEvent {
     pub z: f64,
 }
 
+/// Means of consecutive blocks of `n` values, each with the time of its first value.
+#[derive(Debug, Clone)]
+pub struct BlockMean {
+    /// Values per block.
+    pub n: usize,
+    sum: f64,
+    count: usize,
+    start_ns: u64,
+}
+
+impl BlockMean {
+    pub fn new(n: usize) -> Self {
+        BlockMean {
+            n: n.max(1),
+            sum: 0.0,
+            count: 0,
+            start_ns: 0,
+        }
+    }
+
+    /// Whether a block is partly filled.
+    pub fn partial(&self) -> bool {
+        self.count > 0
+    }
+
+    /// Drops the partly filled block.
+    pub fn reset(&mut self) {
+        self.sum = 0.0;
+        self.count = 0;
+    }
+
+    /// One value; the block's mean and start time when it completes one.
+    pub fn push(&mut self, t_ns: u64, v: f64) -> Option<(f64, u64)> {
+        if self.count == 0 {
+            self.start_ns = t_ns;
+        }
+        self.sum += v;
+        self.count += 1;
+        if self.count < self.n {
+            return None;
+        }
+        let mean = self.sum / self.count as f64;
+        self.reset();
+        Some((mean, self.start_ns))
+    }
+}
+
 /// Level-change detector of one channel.
 #[derive(Debug, Clone)]
 pub struct LevelDetector {
-    block_n: usize,
     window_blocks: usize,
     k: f64,
     learn_blocks: usize,
     // Current block.
-    sum: f64,
-    n: usize,
-    block_start_ns: u64,
+    block: BlockMean,
     // Contiguous still blocks: (mean, start time).
     blocks: VecDeque<(f64, u64)>,
     // Window means not yet learned from: each waits two windows, and is dropped if an alarm
@@ -60,13 +104,10 @@ impl LevelDetector {
     /// after `learn_blocks` still blocks (and at least `window_blocks` windows) were seen.
     pub fn new(block_n: usize, window_blocks: usize, k: f64, learn_blocks: usize) -> Self {
         LevelDetector {
-            block_n: block_n.max(1),
             window_blocks: window_blocks.max(1),
             k,
             learn_blocks,
-            sum: 0.0,
-            n: 0,
-            block_start_ns: 0,
+            block: BlockMean::new(block_n),
             blocks: VecDeque::with_capacity(window_blocks + 1),
             pending: VecDeque::with_capacity(2 * window_blocks + 1),
             b2_sum: 0.0,
@@ -100,26 +141,14 @@ impl LevelDetector {
 
     /// The contiguous run of still data was broken (motion, a gap, a bad value).
     pub fn interrupt(&mut self) {
-        self.sum = 0.0;
-        self.n = 0;
+        self.block.reset();
         self.blocks.clear();
         self.active = false;
     }
 
     /// One still value; returns an alarm when one is raised.
     pub fn push(&mut self, t_ns: u64, v: f64) -> Option<LevelEvent> {
-        if self.n == 0 {
-            self.block_start_ns = t_ns;
-        }
-        self.sum += v;
-        self.n += 1;
-        if self.n < self.block_n {
-            return None;
-        }
-        let mean = self.sum / self.n as f64;
-        let start = self.block_start_ns;
-        self.sum = 0.0;
-        self.n = 0;
+        let (mean, start) = self.block.push(t_ns, v)?;
         self.still_blocks += 1;
         let w = self.window_blocks;
         if self.blocks.len() == w {

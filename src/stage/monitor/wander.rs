@@ -23,6 +23,7 @@
 //! ([`WanderDetector::edf`]). The alarm holds until the ratio falls back below the median of
 //! that `F`.
 
+use super::step::BlockMean;
 use crate::analysis::allan_edf::{NoiseType, edf_oadev};
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 use std::collections::VecDeque;
@@ -44,15 +45,12 @@ pub struct WanderEvent {
 /// Wander detector of one channel.
 #[derive(Debug, Clone)]
 pub struct WanderDetector {
-    block_n: usize,
     block_s: f64,
     window_blocks: usize,
     m: usize,
     p: f64,
     learn_blocks: usize,
-    sum: f64,
-    n: usize,
-    block_start_ns: u64,
+    block: BlockMean,
     /// Contiguous still block means and their start times.
     blocks: VecDeque<(f64, u64)>,
     since_test: usize,
@@ -95,15 +93,12 @@ impl WanderDetector {
         let window_blocks = window_blocks.max(4);
         let m = m.clamp(2, (window_blocks - 1) / 2);
         WanderDetector {
-            block_n: block_n.max(1),
             block_s,
             window_blocks,
             m,
             p,
             learn_blocks,
-            sum: 0.0,
-            n: 0,
-            block_start_ns: 0,
+            block: BlockMean::new(block_n),
             blocks: VecDeque::with_capacity(window_blocks + 1),
             since_test: 0,
             pending: VecDeque::new(),
@@ -188,19 +183,18 @@ impl WanderDetector {
     /// break no longer than a block cannot hold a motion that changes the block means much.
     pub fn skip(&mut self) {
         self.skipped += 1;
-        if self.skipped > self.block_n {
+        if self.skipped > self.block.n {
             self.interrupt();
         }
     }
 
     /// The contiguous run of still data was broken.
     pub fn interrupt(&mut self) {
-        if !self.blocks.is_empty() || self.n > 0 {
+        if !self.blocks.is_empty() || self.block.partial() {
             self.breaks += 1;
         }
         self.skipped = 0;
-        self.sum = 0.0;
-        self.n = 0;
+        self.block.reset();
         self.blocks.clear();
         self.since_test = 0;
         self.active = false;
@@ -230,22 +224,12 @@ impl WanderDetector {
     /// One still value; returns an alarm when one is raised.
     pub fn push(&mut self, t_ns: u64, v: f64) -> Option<WanderEvent> {
         self.skipped = 0;
-        if self.n == 0 {
-            self.block_start_ns = t_ns;
-        }
-        self.sum += v;
-        self.n += 1;
-        if self.n < self.block_n {
-            return None;
-        }
-        let mean = self.sum / self.n as f64;
-        self.sum = 0.0;
-        self.n = 0;
+        let (mean, start) = self.block.push(t_ns, v)?;
         self.still_blocks += 1;
         if self.blocks.len() == self.window_blocks {
             self.blocks.pop_front();
         }
-        self.blocks.push_back((mean, self.block_start_ns));
+        self.blocks.push_back((mean, start));
         self.since_test += 1;
         if self.blocks.len() < self.window_blocks || self.since_test < self.m {
             return None;
