@@ -309,3 +309,35 @@ fn a_wander_appearing_late_is_flagged_within_two_minutes() {
         assert!(a.iter().all(|x| x.channel == 2), "{a:?}");
     }
 }
+
+/// The size / τ sweep behind docs/model-health.md's table (`--ignored`: 36 runs of 40 min).
+#[test]
+#[ignore]
+fn sweep_wander_size_and_tau() {
+    let scn = clean_bench(2400.0);
+    // 1-s mean of the gyro white noise: 0.05 °/s per sample at 100 Hz → 0.005 °/s.
+    let w1 = 0.005_f64.to_radians();
+    let sims: Vec<Vec<Sample>> = (0..4u64)
+        .map(|seed| simulate_decoded(&scn, 100 + seed).unwrap().0)
+        .collect();
+    for tau in [8.0, 12.0, 16.0] {
+        for k in [2.0, 3.0, 4.0] {
+            let mut times = Vec::new();
+            for (seed, sim) in sims.iter().enumerate() {
+                let mut samples = sim.clone();
+                add_wander(&mut samples, 2, 1800.0, 20.0, k * w1, 500 + seed as u64);
+                let (out, mut st) = cleaned(&samples, 100.0, true);
+                st.wander_tau_s = tau;
+                let a = alarms(&watch(&out, st, 100.0));
+                // The five clean channels stay quiet at every τ.
+                assert!(a.iter().all(|x| x.channel == 2), "τ {tau}: {a:?}");
+                let first = a
+                    .iter()
+                    .find(|x| matches!(x.finding, Finding::Wander(_)))
+                    .map(|x| (x.t_ns as f64 * 1e-9 + 120.0 - 1800.0).round());
+                times.push(first);
+            }
+            eprintln!("τ {tau} s, σ {k}× the 1-s white σ: flagged after {times:?} s");
+        }
+    }
+}
