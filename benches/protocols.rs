@@ -132,7 +132,11 @@ fn bench(c: &mut Criterion) {
     whole(&mut cpu, "decode_cpu", &ins);
     whole(c, "decode_wall", &ins);
     reads(&mut cpu, "decode_64k_reads_cpu", &ins);
-    let ubx_b = &ins.iter().find(|i| i.name == "ubx_esf_raw").expect("ubx").bytes;
+    let ubx_b = &ins
+        .iter()
+        .find(|i| i.name == "ubx_esf_raw")
+        .expect("ubx")
+        .bytes;
     ubx_rework(c, "ubx_rework_64k_reads", ubx_b);
     ubx_rework(&mut cpu, "ubx_rework_64k_reads_cpu", ubx_b);
 }

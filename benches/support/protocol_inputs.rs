@@ -56,7 +56,10 @@ fn esf_meas(ss: &[Sample], out: &mut BytesMut) {
         p.extend_from_slice(&(7u16 << 11).to_le_bytes());
         p.extend_from_slice(&0u16.to_le_bytes());
         let ch = s.channels();
-        let vals = ubx::CHANNEL_TYPES.iter().zip(ch).chain([(&ubx::TYPE_GYRO_TEMP, 25.0)]);
+        let vals = ubx::CHANNEL_TYPES
+            .iter()
+            .zip(ch)
+            .chain([(&ubx::TYPE_GYRO_TEMP, 25.0)]);
         for (&ty, v) in vals {
             let raw = ubx::raw_of(ty, v).expect("finite");
             p.extend_from_slice(&(((ty as u32) << 24) | (raw as u32 & 0x00FF_FFFF)).to_le_bytes());
