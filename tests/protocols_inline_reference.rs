@@ -7,6 +7,7 @@
 //! script, stated in its CSV's first line and asserted here), and the changed values to the
 //! protocol's resolution.
 mod common;
+use common::csv_rows as rows;
 
 use bytes::BytesMut;
 use imuprep::frame::inline::InlineEncoder;
@@ -60,14 +61,6 @@ fn bless_or_check(path: &str, bytes: &[u8]) {
         std::fs::read(path).unwrap() == bytes,
         "{path} changed: run with IMUPREP_BLESS=1, then tests/reference/check_inline_reference.py"
     );
-}
-
-fn rows(csv: &str) -> Vec<Vec<String>> {
-    csv.lines()
-        .filter(|l| !l.starts_with('#'))
-        .skip(1)
-        .map(|l| l.split(',').map(str::to_string).collect())
-        .collect()
 }
 
 fn num(s: &str) -> f64 {

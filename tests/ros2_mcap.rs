@@ -312,23 +312,33 @@ fn sink_input() -> Vec<Sample> {
     v
 }
 
-#[test]
-fn the_sink_writes_a_bag_the_mcap_crate_and_rosbags_read() {
-    let v = sink_input();
+/// The sink's bag of [`sink_input`] (FLU axes) with `compression`, checked to be the committed
+/// file at `path` (the one rosbags read: tests/reference/check_mcap_sink.py); written there
+/// instead with IMUPREP_BLESS set.
+fn sink_bag(v: &[Sample], compression: ChunkCompression, path: &str) -> Vec<u8> {
     let flu = Descriptor {
         axes: AxisConvention::Flu,
         ..Descriptor::default()
     };
-    let bag = encode_bag(&flu, &v, McapSinkOptions::default()).unwrap();
+    let opts = McapSinkOptions {
+        compression,
+        ..McapSinkOptions::default()
+    };
+    let bag = encode_bag(&flu, v, opts).unwrap();
     if std::env::var_os("IMUPREP_BLESS").is_some() {
-        std::fs::write(SINK_BAG, &bag).unwrap();
+        std::fs::write(path, &bag).unwrap();
     }
-    // The committed bag is the one rosbags read (tests/reference/check_mcap_sink.py).
-    assert_eq!(
-        std::fs::read(SINK_BAG).unwrap(),
-        bag,
-        "the sink's bytes changed: run with IMUPREP_BLESS=1, then the check script"
+    assert!(
+        std::fs::read(path).unwrap() == bag,
+        "the sink's bytes changed ({path}): run with IMUPREP_BLESS=1, then the check script"
     );
+    bag
+}
+
+#[test]
+fn the_sink_writes_a_bag_the_mcap_crate_and_rosbags_read() {
+    let v = sink_input();
+    let bag = sink_bag(&v, ChunkCompression::None, SINK_BAG);
     let msgs = crate_messages(&bag);
     let imu: Vec<_> = msgs.iter().filter(|m| m.0 == "/imu/clean").collect();
     let health: Vec<_> = msgs.iter().filter(|m| m.0 == "/imuprep/health").collect();
@@ -601,24 +611,8 @@ fn message_bodies(items: &[Decoded]) -> Vec<Vec<u8>> {
 #[test]
 fn the_sink_writes_lz4_chunks_that_read_back_as_the_uncompressed_bag() {
     let v = sink_input();
-    let flu = Descriptor {
-        axes: AxisConvention::Flu,
-        ..Descriptor::default()
-    };
-    let plain = encode_bag(&flu, &v, McapSinkOptions::default()).unwrap();
-    let lz4_opts = McapSinkOptions {
-        compression: ChunkCompression::Lz4,
-        ..McapSinkOptions::default()
-    };
-    let lz4 = encode_bag(&flu, &v, lz4_opts).unwrap();
-    if std::env::var_os("IMUPREP_BLESS").is_some() {
-        std::fs::write(SINK_LZ4_BAG, &lz4).unwrap();
-    }
-    assert_eq!(
-        std::fs::read(SINK_LZ4_BAG).unwrap(),
-        lz4,
-        "the LZ4 sink's bytes changed: run with IMUPREP_BLESS=1, then the check script"
-    );
+    let plain = sink_bag(&v, ChunkCompression::None, SINK_BAG);
+    let lz4 = sink_bag(&v, ChunkCompression::Lz4, SINK_LZ4_BAG);
     assert!(
         lz4.len() < plain.len(),
         "{} vs {} bytes",

@@ -14,47 +14,22 @@ Rust test compares them with the input's values plus the shift, to the protocol'
     IMUPREP_BLESS=1 cargo test --release --test protocols_inline_reference
     python3 tests/reference/check_inline_reference.py
 """
-import io, math
+import io
 from pathlib import Path
 
 from pyubx2 import UBXReader
 from pymavlink.dialects.v20 import ardupilotmega as v2
+from ubx_rows import add_imu, csv_line
 
 HERE = Path(__file__).resolve().parent
 
 
-def s24(v):
-    return v - (1 << 24) if v & 0x800000 else v
-
-
 def ubx_read(data):
-    """(raw bytes, identity) of every message, and the IMU rows as gen_ubx_reference.py
-    makes them."""
+    """(raw bytes, identity) of every message, and the IMU rows (ubx_rows.py)."""
     msgs, rows = [], []
     for raw, parsed in UBXReader(io.BytesIO(data), protfilter=7):
         msgs.append((raw, parsed.identity))
-        if parsed.identity == "ESF-RAW":
-            sets, order = {}, []
-            n = (len(raw) - 8 - 4) // 8
-            for i in range(1, n + 1):
-                d = getattr(parsed, f"data_{i:02d}")
-                t = getattr(parsed, f"sTag_{i:02d}")
-                # pyubx2 keeps X4 fields as little-endian bytes.
-                d = int.from_bytes(d, "little") if isinstance(d, bytes) else d
-                t = (int.from_bytes(t, "little") if isinstance(t, bytes) else t) & 0xFFFFFF
-                if t not in sets:
-                    sets[t] = {}
-                    order.append(t)
-                sets[t][d >> 24] = s24(d & 0xFFFFFF)
-            rows += [("raw", t, sets[t]) for t in order]
-        elif parsed.identity == "ESF-MEAS":
-            vals = {}
-            for i in range(1, parsed.numMeas + 1):
-                vals[getattr(parsed, f"dataType_{i:02d}")] = s24(getattr(parsed, f"dataField_{i:02d}"))
-            if rows and rows[-1][0] == "meas" and rows[-1][1] == parsed.timeTag and len(rows[-1][2]) < 7:
-                rows[-1][2].update(vals)
-            else:
-                rows.append(("meas", parsed.timeTag, vals))
+        add_imu(rows, raw, parsed)
     return msgs, rows
 
 
@@ -71,10 +46,7 @@ def ubx():
         f.write(f"# pyubx2 read {len(r_out)} IMU samples; all {len(m_out)} messages in the input's order, "
                 f"the {other} others byte for byte\n")
         f.write("kind,tag,gx,gy,gz,ax,ay,az,temp\n")
-        for kind, t, v in r_out:
-            g = [math.radians(v[ty] * 2.0**-12) for ty in (14, 13, 5)]
-            a = [v[ty] * 2.0**-10 for ty in (16, 17, 18)]
-            f.write(f"{kind},{t}," + ",".join(repr(x) for x in g + a) + f",{v[12] * 0.01!r}\n")
+        f.writelines(csv_line(r) for r in r_out)
     return len(r_out), len(m_out)
 
 
