@@ -320,13 +320,10 @@ impl MavlinkDecoder {
         let seen = self.seen_channels();
         let carrier = Carrier {
             frame,
-            frame2: None,
-            between: None,
-            slot: 0,
             slots: 1,
-            offsets: [0; 4],
             raw_scale: (key.msgid == MSG_RAW_IMU)
                 .then_some([self.opts.gyro_scale_rad_s, self.opts.accel_scale_m_s2]),
+            ..Carrier::default()
         };
         if self.settle.settled() {
             return Some(self.finish(s, seen, carrier));
