@@ -74,11 +74,11 @@ fn raw_imu_payload(s: &Sample) -> Vec<u8> {
     p.extend_from_slice(&(s.t_ns / 1000).to_le_bytes());
     let ch = s.channels();
     let count = |v: f64, unit: f64| ((v / unit).round() as i16).to_le_bytes();
-    for c in 3..6 {
-        p.extend_from_slice(&count(ch[c], RAW_ACCEL));
+    for a in &ch[3..] {
+        p.extend_from_slice(&count(*a, RAW_ACCEL));
     }
-    for c in 0..3 {
-        p.extend_from_slice(&count(ch[c], RAW_GYRO));
+    for g in &ch[..3] {
+        p.extend_from_slice(&count(*g, RAW_GYRO));
     }
     p.extend_from_slice(&[0u8; 6]); // mag
     p.push(0); // id

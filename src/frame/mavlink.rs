@@ -367,7 +367,7 @@ impl MavlinkDecoder {
 
     /// The next held item, once the channel set is known.
     fn next_held(&mut self) -> Option<Decoded> {
-        Some(match self.settle.next()? {
+        Some(match self.settle.release()? {
             Held::Item(d) => d,
             Held::Sample(s, seen, c) => self.finish(s, seen, c),
         })

@@ -79,7 +79,7 @@ impl Settle {
 
     /// The next held item, once settled.
     #[inline]
-    pub fn next(&mut self) -> Option<Held> {
+    pub fn release(&mut self) -> Option<Held> {
         if self.settled {
             self.queue.pop_front()
         } else {
@@ -109,13 +109,16 @@ mod tests {
         let mut h = Settle::default();
         h.sample(Sample::default(), 0b000_111, Carrier::default());
         h.item(Decoded::Other(bytes::Bytes::from_static(b"x")));
-        assert!(!h.settled() && h.next().is_none());
+        assert!(!h.settled() && h.release().is_none());
         h.sample(Sample::default(), ALL_CHANNELS, Carrier::default());
         assert!(h.settled());
-        assert!(matches!(h.next(), Some(Held::Sample(_, 0b000_111, _))));
-        assert!(matches!(h.next(), Some(Held::Item(_))));
-        assert!(matches!(h.next(), Some(Held::Sample(_, ALL_CHANNELS, _))));
-        assert!(h.next().is_none());
+        assert!(matches!(h.release(), Some(Held::Sample(_, 0b000_111, _))));
+        assert!(matches!(h.release(), Some(Held::Item(_))));
+        assert!(matches!(
+            h.release(),
+            Some(Held::Sample(_, ALL_CHANNELS, _))
+        ));
+        assert!(h.release().is_none());
         let mut h = Settle::default();
         for _ in 0..HOLD_SAMPLES - 1 {
             h.sample(Sample::default(), 0b000_111, Carrier::default());

@@ -65,7 +65,9 @@ struct Counts {
 }
 
 /// Where the records go: the `mcap` crate's writer (uncompressed chunks; it seeks back to
-/// finish them), or imuprep's own stream writer (compressed chunks; front to back).
+/// finish them), or imuprep's own stream writer (compressed chunks; front to back). One per
+/// sink, so the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 enum Out<W: Write + Seek> {
     Crate(::mcap::Writer<W>),
     Stream {
