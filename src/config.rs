@@ -124,7 +124,21 @@ pub enum SinkConfig {
         frame_id: String,
         #[serde(default = "default_mcap_health")]
         health_topic: String,
+        /// Chunk compression: "none" (default) or "lz4" (`--out mcap+lz4:PATH`).
+        #[serde(default)]
+        compression: McapCompression,
     },
+}
+
+/// How the MCAP sink compresses its chunks.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum McapCompression {
+    /// Uncompressed chunks (every MCAP reader reads them).
+    #[default]
+    None,
+    /// LZ4-frame chunks (`lz4_flex`, no C build; rosbags, Foxglove and `ros2 bag` read them).
+    Lz4,
 }
 
 fn default_mcap_topic() -> String {
@@ -195,6 +209,7 @@ pub enum Sink {
         topic: String,
         frame_id: String,
         health_topic: String,
+        compression: McapCompression,
     },
 }
 
@@ -431,6 +446,7 @@ fn validate_sink(s: &SinkConfig, base: &Path, path: &str, errs: &mut Errors) -> 
             topic,
             frame_id,
             health_topic,
+            compression,
         } => {
             errs.check(
                 cfg!(feature = "ros2"),
@@ -447,6 +463,7 @@ fn validate_sink(s: &SinkConfig, base: &Path, path: &str, errs: &mut Errors) -> 
                 topic: topic.clone(),
                 frame_id: frame_id.clone(),
                 health_topic: health_topic.clone(),
+                compression: *compression,
             })
         }
         SinkConfig::Udp { targets, format } => {

@@ -1,7 +1,7 @@
 //! The one async loop in the middle: receive from the source, run the synchronous pipeline,
 //! offer the result to every sink — and publish health beside the data.
 
-use crate::config::{Config, Sink, SourceConfig};
+use crate::config::{Config, McapCompression, Sink, SourceConfig};
 use crate::frame::health::HealthFrame;
 use crate::frame::{DecoderStats, Descriptor};
 use crate::io::sink::{self, SinkHandle, SinkItem, SinkReport};
@@ -574,14 +574,19 @@ pub fn parse_out_spec(spec: &str) -> Result<Sink, String> {
             },
         }),
         "pty" => Ok(Sink::Inline { path: None }),
-        "mcap" if !rest.is_empty() => Ok(Sink::Mcap {
+        "mcap" | "mcap+lz4" if !rest.is_empty() => Ok(Sink::Mcap {
             path: rest.into(),
             topic: "/imu/clean".into(),
             frame_id: "imu_link".into(),
             health_topic: "/imuprep/health".into(),
+            compression: if kind == "mcap" {
+                McapCompression::None
+            } else {
+                McapCompression::Lz4
+            },
         }),
         _ => Err(format!(
-            "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR, inline:PATH (the input's own protocol, to a serial device or file), pty: (the same on a new pseudo-terminal, its path printed), mcap:PATH (ROS 2 bag, sensor_msgs/msg/Imu)"
+            "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR, inline:PATH (the input's own protocol, to a serial device or file), pty: (the same on a new pseudo-terminal, its path printed), mcap:PATH (ROS 2 bag, sensor_msgs/msg/Imu; mcap+lz4:PATH with LZ4 chunks)"
         )),
     }
 }

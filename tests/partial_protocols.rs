@@ -11,7 +11,8 @@ mod common;
 
 use bytes::BytesMut;
 use imuprep::frame::detect::{DecodedFile, ProtocolConfig, decode_bytes};
-use imuprep::frame::{Descriptor, mavlink, ubx, ulog};
+use imuprep::frame::mavlink::MavlinkDecoder;
+use imuprep::frame::{Decoded, Descriptor, ProtocolDecoder, mavlink, ubx, ulog};
 use imuprep::io::convert::{ExportFormat, encode_stream};
 use imuprep::sample::{Sample, flags};
 use std::process::Command;
@@ -339,5 +340,120 @@ fn the_reference_libraries_read_the_same_absence_and_values() {
                 }
             }
         }
+    }
+}
+
+/// A HIGHRES_IMU stream of 40 samples whose first `late` messages carry only the gyro and
+/// temperature bits (accel fields 0, as a sender with no accel reading yet may fill them),
+/// with a HEARTBEAT after the second message.
+fn late_accel_stream(late: usize) -> (Vec<Sample>, Vec<u8>) {
+    let s = common::samples(40, 17);
+    let mut b = BytesMut::new();
+    for (i, x) in s.iter().enumerate() {
+        let mut p = mavlink::highres_payload(x, 0);
+        if i < late {
+            p[8..20].fill(0);
+            p[60..62].copy_from_slice(&(0x0038u16 | 0x1000).to_le_bytes());
+        }
+        mavlink::encode_v2(i as u8, 1, 1, mavlink::MSG_HIGHRES_IMU, &p, &mut b);
+        if i == 1 {
+            mavlink::encode_v2(0, 1, 1, 0, &[0, 0, 0, 0, 2, 3, 81, 4, 3], &mut b);
+        }
+    }
+    (s, b.to_vec())
+}
+
+fn decode_items(b: &[u8]) -> (Vec<Decoded>, imuprep::frame::DecoderStats) {
+    let mut d = MavlinkDecoder::default();
+    let mut buf = BytesMut::from(b);
+    let mut items = Vec::new();
+    while let Some(x) = d.decode_item_eof(&mut buf) {
+        items.push(x);
+    }
+    (items, d.stats())
+}
+
+#[test]
+fn mavlink_accel_that_reports_late_is_missing_at_first_not_an_absent_channel() {
+    // Users expect a 6-axis IMU whose accel starts reporting a few messages after its gyro to
+    // be a 6-axis stream: accel present in the descriptor (which native logs and replays use
+    // for the whole stream), the first samples' accel missing — NaN, flagged, counted — not a
+    // gyro-only sensor for those samples and not zeros.
+    let (sent, b) = late_accel_stream(5);
+    let (items, stats) = decode_items(&b);
+    let got: Vec<&Sample> = items
+        .iter()
+        .filter_map(|x| match x {
+            Decoded::Sample(s, _) => Some(s),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(got.len(), 40);
+    let descriptors: Vec<_> = items
+        .iter()
+        .filter_map(|x| match x {
+            Decoded::Descriptor(d) => Some(d.absent),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(descriptors, [0], "one descriptor, every channel present");
+    assert_eq!((stats.partial_samples, stats.non_finite), (5, 5));
+    for (i, (a, g)) in sent.iter().zip(&got).enumerate() {
+        assert_eq!(g.absent, 0, "#{i}");
+        assert_eq!(
+            g.gyro[0], a.gyro[0] as f32 as f64,
+            "#{i}: gyro as sent (f32)"
+        );
+        if i < 5 {
+            assert!(
+                g.accel.iter().all(|v| v.is_nan()),
+                "#{i}: accel {:?}",
+                g.accel
+            );
+            assert!(g.has(flags::NON_FINITE), "#{i}");
+        } else {
+            assert_eq!(g.accel[2], a.accel[2] as f32 as f64, "#{i}");
+            assert!(!g.has(flags::NON_FINITE), "#{i}");
+        }
+    }
+    // The heartbeat held with the first samples keeps its place: after sample 1, before 2.
+    let pos = |want: &dyn Fn(&Decoded) -> bool| items.iter().position(want).unwrap();
+    let hb = pos(&|x| matches!(x, Decoded::Other(_)));
+    let s1 = pos(&|x| matches!(x, Decoded::Sample(s, _) if s.seq == 1));
+    let s2 = pos(&|x| matches!(x, Decoded::Sample(s, _) if s.seq == 2));
+    assert!(
+        s1 < hb && hb < s2,
+        "order: sample 1 at {s1}, heartbeat at {hb}, sample 2 at {s2}"
+    );
+}
+
+#[test]
+fn mavlink_accel_after_the_hold_window_is_declared_present_again_and_survives_a_native_log() {
+    // Accel first at message 25, after the 16 samples held to learn the channel set: the
+    // first descriptor says gyro-only (then it was), a second one right after sample 25
+    // declares accel present, and a file's descriptor (decode_bytes, import/export) keeps
+    // accel, so a native log of the stream still has every accel reading after message 25.
+    let (sent, b) = late_accel_stream(25);
+    let (items, _) = decode_items(&b);
+    let mut seen = Vec::new();
+    for x in &items {
+        match x {
+            Decoded::Descriptor(d) => seen.push(format!("d{:#b}", d.absent)),
+            Decoded::Sample(s, _) if s.seq == 25 => seen.push("s25".into()),
+            _ => {}
+        }
+    }
+    assert_eq!(seen, ["d0b111000", "s25", "d0b0"]);
+    let f = decode_bytes(&b, &ProtocolConfig::auto());
+    assert_eq!(f.descriptor.unwrap().absent, 0);
+    let native = encode_stream(ExportFormat::Native, &f.descriptor.unwrap(), &f.samples).unwrap();
+    let back = decode_bytes(&native, &ProtocolConfig::auto());
+    assert_eq!(back.samples.len(), 40);
+    for (i, (a, g)) in sent.iter().zip(&back.samples).enumerate().skip(25) {
+        assert_eq!(g.absent, 0, "#{i}");
+        assert_eq!(
+            g.accel[0], a.accel[0] as f32 as f64,
+            "#{i}: accel lost in the native log"
+        );
     }
 }

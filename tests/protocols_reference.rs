@@ -2,7 +2,7 @@
 //! PX4 logs read by pyulog; inline re-encoding preserves every message and every byte. The
 //! fixtures and the scripts that made them are in tests/reference/.
 mod common;
-use common::inline_identity;
+use common::{csv_rows as rows, inline_identity};
 
 use bytes::BytesMut;
 use imuprep::frame::inline::InlineEncoder;
@@ -24,14 +24,6 @@ fn run(d: &mut dyn ProtocolDecoder, bytes: &[u8], chunk: usize) -> (Vec<Decoded>
 
 fn samples(items: &[Decoded]) -> Vec<Sample> {
     imuprep::frame::protocol::samples_of(items)
-}
-
-fn rows(csv: &str) -> Vec<Vec<String>> {
-    csv.lines()
-        .filter(|l| !l.starts_with('#'))
-        .skip(1)
-        .map(|l| l.split(',').map(str::to_string).collect())
-        .collect()
 }
 
 #[test]

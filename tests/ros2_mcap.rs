@@ -6,6 +6,7 @@ use bytes::BytesMut;
 use imuprep::frame::detect::{ProtocolChoice, ProtocolConfig, decode_bytes};
 use imuprep::frame::inline::InlineEncoder;
 use imuprep::frame::mcap::{McapDecoder, McapOptions};
+use imuprep::frame::mcap_out::ChunkCompression;
 use imuprep::frame::ros2;
 use imuprep::frame::{
     AxisConvention, Decoded, DecoderStats, Descriptor, Protocol, ProtocolDecoder,
@@ -17,6 +18,8 @@ const BAG: &[u8] = include_bytes!("reference/mcap_bag.mcap");
 const EXPECTED: &str = include_str!("reference/mcap_expected.csv");
 const SINK_BAG: &str = "tests/reference/mcap_sink_bag.mcap";
 const SINK_ROSBAGS: &str = include_str!("reference/mcap_sink_rosbags.csv");
+const SINK_LZ4_BAG: &str = "tests/reference/mcap_sink_lz4_bag.mcap";
+const SINK_LZ4_ROSBAGS: &str = include_str!("reference/mcap_sink_lz4_rosbags.csv");
 
 fn run(d: &mut dyn ProtocolDecoder, bytes: &[u8], chunk: usize) -> (Vec<Decoded>, DecoderStats) {
     imuprep::frame::protocol::decode_chunked(d, bytes, chunk)
@@ -309,23 +312,33 @@ fn sink_input() -> Vec<Sample> {
     v
 }
 
-#[test]
-fn the_sink_writes_a_bag_the_mcap_crate_and_rosbags_read() {
-    let v = sink_input();
+/// The sink's bag of [`sink_input`] (FLU axes) with `compression`, checked to be the committed
+/// file at `path` (the one rosbags read: tests/reference/check_mcap_sink.py); written there
+/// instead with IMUPREP_BLESS set.
+fn sink_bag(v: &[Sample], compression: ChunkCompression, path: &str) -> Vec<u8> {
     let flu = Descriptor {
         axes: AxisConvention::Flu,
         ..Descriptor::default()
     };
-    let bag = encode_bag(&flu, &v, McapSinkOptions::default()).unwrap();
+    let opts = McapSinkOptions {
+        compression,
+        ..McapSinkOptions::default()
+    };
+    let bag = encode_bag(&flu, v, opts).unwrap();
     if std::env::var_os("IMUPREP_BLESS").is_some() {
-        std::fs::write(SINK_BAG, &bag).unwrap();
+        std::fs::write(path, &bag).unwrap();
     }
-    // The committed bag is the one rosbags read (tests/reference/check_mcap_sink.py).
-    assert_eq!(
-        std::fs::read(SINK_BAG).unwrap(),
-        bag,
-        "the sink's bytes changed: run with IMUPREP_BLESS=1, then the check script"
+    assert!(
+        std::fs::read(path).unwrap() == bag,
+        "the sink's bytes changed ({path}): run with IMUPREP_BLESS=1, then the check script"
     );
+    bag
+}
+
+#[test]
+fn the_sink_writes_a_bag_the_mcap_crate_and_rosbags_read() {
+    let v = sink_input();
+    let bag = sink_bag(&v, ChunkCompression::None, SINK_BAG);
     let msgs = crate_messages(&bag);
     let imu: Vec<_> = msgs.iter().filter(|m| m.0 == "/imu/clean").collect();
     let health: Vec<_> = msgs.iter().filter(|m| m.0 == "/imuprep/health").collect();
@@ -579,4 +592,93 @@ fn a_triad_with_covariance_minus_one_decodes_as_absent_channels() {
     cdr.clear();
     ros2::encode_imu(&m, &mut cdr);
     assert_eq!(ros2::decode_imu_fast(&cdr).unwrap().absent, 0b000_111);
+}
+
+/// Every message record in decoded items (the Imu ones are the samples' carriers), without
+/// opcode, length and channel id (the two writers number channels their own way).
+fn message_bodies(items: &[Decoded]) -> Vec<Vec<u8>> {
+    items
+        .iter()
+        .filter_map(|x| match x {
+            Decoded::Sample(_, Some(c)) => Some(c.frame.clone()),
+            Decoded::Other(b) if b.first() == Some(&0x05) => Some(b.clone()),
+            _ => None,
+        })
+        .map(|b| b[11..].to_vec())
+        .collect()
+}
+
+#[test]
+fn the_sink_writes_lz4_chunks_that_read_back_as_the_uncompressed_bag() {
+    let v = sink_input();
+    let plain = sink_bag(&v, ChunkCompression::None, SINK_BAG);
+    let lz4 = sink_bag(&v, ChunkCompression::Lz4, SINK_LZ4_BAG);
+    assert!(
+        lz4.len() < plain.len(),
+        "{} vs {} bytes",
+        lz4.len(),
+        plain.len()
+    );
+    // The summary, read by the mcap crate (no decompression needed): LZ4 chunks, every
+    // message and both channels counted.
+    let sum = mcap::Summary::read(&lz4).unwrap().expect("a summary");
+    assert!(!sum.chunk_indexes.is_empty());
+    assert!(sum.chunk_indexes.iter().all(|c| c.compression == "lz4"));
+    let stats = sum.stats.expect("statistics");
+    assert_eq!((stats.message_count, stats.channel_count), (61, 2));
+    let topics: Vec<_> = sum.channels.values().map(|c| c.topic.clone()).collect();
+    assert!(topics.contains(&"/imu/clean".into()) && topics.contains(&"/imuprep/health".into()));
+    // imuprep's decoder: the same samples and the same message records as from the
+    // uncompressed bag, at any chunking, CRCs checked and passed.
+    let (want, _) = run(&mut McapDecoder::default(), &plain, 4096);
+    for chunk in [1, 333, 1 << 20] {
+        let (got, st) = run(&mut McapDecoder::default(), &lz4, chunk);
+        assert_eq!(
+            (st.crc_errors, st.unknown_type, st.garbage_bytes),
+            (0, 0, 0)
+        );
+        assert_eq!(samples(&got), samples(&want), "chunk {chunk}");
+        assert_eq!(message_bodies(&got), message_bodies(&want), "chunk {chunk}");
+    }
+    // rosbags read the committed LZ4 bag (check_mcap_sink.py): the same rows as it read from
+    // the uncompressed one, health included.
+    assert_eq!(SINK_LZ4_ROSBAGS, SINK_ROSBAGS);
+    // A flipped byte inside the compressed data: the chunk is dropped (counted), no panic.
+    let mut bad = lz4.clone();
+    let at = sum.chunk_indexes[0].chunk_start_offset as usize + 120;
+    bad[at] ^= 0x55;
+    let (got, st) = run(&mut McapDecoder::default(), &bad, 4096);
+    assert!(samples(&got).len() < 60);
+    assert!(st.crc_errors + st.unknown_type >= 1, "{st:?}");
+}
+
+#[test]
+fn replay_writes_an_lz4_bag_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("clean.mcap");
+    let st = std::process::Command::new(env!("CARGO_BIN_EXE_imuprep"))
+        .args([
+            "replay",
+            "tests/reference/mcap_bag.mcap",
+            "--protocol",
+            "auto",
+        ])
+        .arg("--out")
+        .arg(format!("mcap+lz4:{}", out.display()))
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let b = std::fs::read(&out).unwrap();
+    let sum = mcap::Summary::read(&b).unwrap().expect("a summary");
+    assert!(sum.chunk_indexes.iter().all(|c| c.compression == "lz4"));
+    let f = decode_bytes(&b, &ProtocolConfig::auto());
+    assert_eq!(
+        f.samples.len(),
+        60,
+        "the bag's 60 /imu/data samples, cleaned"
+    );
 }

@@ -35,9 +35,18 @@ impl ValueFormatter for NsFormatter {
         values.iter_mut().for_each(|v| *v *= f);
         u
     }
-    fn scale_throughputs(&self, _: f64, _: &Throughput, values: &mut [f64]) -> &'static str {
-        values.iter_mut().for_each(|v| *v = f64::NAN);
-        "(n/a)"
+    /// Elements (or bytes) per second of CPU time: `n / (value ns × 1e-9)`, in millions.
+    fn scale_throughputs(&self, _: f64, t: &Throughput, values: &mut [f64]) -> &'static str {
+        let (n, unit) = match t {
+            Throughput::Elements(n) => (*n as f64, "Melem/s (CPU)"),
+            Throughput::Bytes(n) | Throughput::BytesDecimal(n) => (*n as f64, "MB/s (CPU)"),
+            _ => {
+                values.iter_mut().for_each(|v| *v = f64::NAN);
+                return "(n/a)";
+            }
+        };
+        values.iter_mut().for_each(|v| *v = n * 1e9 / *v / 1e6);
+        unit
     }
     fn scale_for_machines(&self, _: &mut [f64]) -> &'static str {
         "ns"

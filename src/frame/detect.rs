@@ -285,7 +285,14 @@ pub fn decode_bytes(bytes: &[u8], c: &ProtocolConfig) -> DecodedFile {
     while let Some(item) = d.decode_item_eof(&mut buf) {
         match item {
             Decoded::Sample(s, _) => samples.push(s),
-            Decoded::Descriptor(x) => descriptor = descriptor.or(Some(x)),
+            // The first descriptor, with the channels a later one declared present again
+            // (a channel that came late is part of the file: `Stamper::stamp`).
+            Decoded::Descriptor(x) => {
+                descriptor = Some(descriptor.map_or(x, |d: Descriptor| Descriptor {
+                    absent: d.absent & x.absent,
+                    ..d
+                }))
+            }
             Decoded::Other(_) => {}
         }
     }

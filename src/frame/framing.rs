@@ -243,6 +243,16 @@ impl Stamper {
             self.descriptor = Some(d);
             stats.descriptors += 1;
             new = Some(d);
+        } else if let Some(d) = self.descriptor.as_mut()
+            && d.absent & !s.absent != 0
+        {
+            // A channel the descriptor declared absent has come: declared again, present
+            // (kept present after that: a later message without it is a missing value, not
+            // a sensor without the channel). Without this, a native log or replay of the
+            // output would read every later value of that channel as absent.
+            d.absent &= s.absent;
+            stats.descriptors += 1;
+            new = Some(*d);
         }
         flag_values(s, self.descriptor.as_ref(), stats);
         stats.samples += 1;

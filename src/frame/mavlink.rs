@@ -36,7 +36,8 @@
 
 use super::framing::{Fault, Framer, Stamper};
 use super::mavlink_crc::CRC_EXTRA;
-use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder, mark_absent};
+use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
+use super::settle::{self, Held, Settle};
 use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
@@ -62,6 +63,8 @@ const MG_M_S2: f64 = 9.80665e-3;
 const HIGHRES_CHANNEL_BITS: [u16; 6] = [1 << 3, 1 << 4, 1 << 5, 1 << 0, 1 << 1, 1 << 2];
 /// HIGHRES_IMU `fields_updated` bit of the temperature.
 const HIGHRES_TEMP_BIT: u16 = 1 << 12;
+/// Bit of a seen-channels mask (above the six channels) for the temperature.
+const TEMP_SEEN: u8 = 1 << 6;
 
 /// Slice-by-16 tables (8 KiB): the byte-at-a-time table was three quarters of the decode time.
 const X25: Crc<u16, Table<16>> = Crc::<u16, Table<16>>::new(&CRC_16_MCRF4XX);
@@ -133,7 +136,7 @@ pub struct MavlinkOptions {
 }
 
 /// One IMU stream on the link.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
 pub struct StreamKey {
     pub sysid: u8,
     pub compid: u8,
@@ -190,6 +193,8 @@ pub struct MavlinkDecoder {
     v2: u64,
     /// HIGHRES_IMU `fields_updated` bits the selected stream has set so far.
     seen_fields: u16,
+    /// The selected stream's first samples, held until its channel set is known.
+    settle: Settle,
 }
 
 impl Default for MavlinkDecoder {
@@ -212,6 +217,7 @@ impl MavlinkDecoder {
             v1: 0,
             v2: 0,
             seen_fields: 0,
+            settle: Settle::default(),
         }
     }
 
@@ -285,8 +291,9 @@ impl MavlinkDecoder {
         Some((key, s, fields))
     }
 
-    /// Handle one good frame (checksum verified or unverifiable).
-    fn frame(&mut self, frame: Bytes) -> Decoded {
+    /// Handle one good frame (checksum verified or unverifiable): its item, or `None` while
+    /// the selected stream's first samples are held ([`Settle`]).
+    fn frame(&mut self, frame: Bytes) -> Option<Decoded> {
         self.f.stats.frames_ok += 1;
         let Some(fr) = parse_header(&frame) else {
             return self.other(frame);
@@ -296,7 +303,7 @@ impl MavlinkDecoder {
         } else {
             self.v1 += 1;
         }
-        let Some((key, mut s, fields)) = self.imu(&fr) else {
+        let Some((key, s, fields)) = self.imu(&fr) else {
             return self.other(frame);
         };
         match self.streams.iter_mut().find(|(k, _)| *k == key) {
@@ -310,39 +317,71 @@ impl MavlinkDecoder {
             return self.other(frame);
         }
         self.seen_fields |= fields;
-        let absent = HIGHRES_CHANNEL_BITS
+        let seen = self.seen_channels();
+        let carrier = Carrier {
+            frame,
+            slots: 1,
+            raw_scale: (key.msgid == MSG_RAW_IMU)
+                .then_some([self.opts.gyro_scale_rad_s, self.opts.accel_scale_m_s2]),
+            ..Carrier::default()
+        };
+        if self.settle.settled() {
+            return Some(self.finish(s, seen, carrier));
+        }
+        self.settle.sample(s, seen, carrier);
+        self.next_held()
+    }
+
+    /// Channels (bit `c`) whose `fields_updated` bit the selected stream has set so far, and
+    /// [`TEMP_SEEN`] for the temperature's.
+    fn seen_channels(&self) -> u8 {
+        let temp = if self.seen_fields & HIGHRES_TEMP_BIT != 0 {
+            TEMP_SEEN
+        } else {
+            0
+        };
+        HIGHRES_CHANNEL_BITS
             .iter()
             .enumerate()
-            .filter(|(_, b)| self.seen_fields & **b == 0)
-            .fold(0u8, |m, (c, _)| m | 1 << c);
-        mark_absent(&mut s, absent);
-        if self.seen_fields & HIGHRES_TEMP_BIT == 0 {
+            .filter(|(_, b)| self.seen_fields & **b != 0)
+            .fold(temp, |m, (c, _)| m | 1 << c)
+    }
+
+    /// Finish a sample of the selected stream: its channels for the stream's channel set (the
+    /// channels seen so far; `seen` = those seen by its own message), time, flags.
+    fn finish(&mut self, mut s: Sample, seen: u8, carrier: Carrier) -> Decoded {
+        if settle::channels(&mut s, self.seen_channels(), seen) {
+            self.f.stats.partial_samples += 1;
+        }
+        if seen & TEMP_SEEN == 0 {
             s.temp_c = None;
         }
+        let key = self.selected.unwrap_or_default();
         // A descriptor learned on a frame goes out right after that frame's sample.
         self.stamper.finish(&mut s, &mut self.f, || Descriptor {
             device_id: (key.sysid as u32) << 16 | (key.compid as u32) << 8 | key.instance as u32,
             ..Descriptor::default()
         });
-        Decoded::Sample(
-            s,
-            Some(Carrier {
-                frame,
-                frame2: None,
-                between: None,
-                slot: 0,
-                slots: 1,
-                offsets: [0; 4],
-                raw_scale: (key.msgid == MSG_RAW_IMU)
-                    .then_some([self.opts.gyro_scale_rad_s, self.opts.accel_scale_m_s2]),
-            }),
-        )
+        Decoded::Sample(s, Some(carrier))
     }
 
-    fn other(&mut self, frame: Bytes) -> Decoded {
+    /// The next held item, once the channel set is known.
+    fn next_held(&mut self) -> Option<Decoded> {
+        Some(match self.settle.release()? {
+            Held::Item(d) => d,
+            Held::Sample(s, seen, c) => self.finish(s, seen, c),
+        })
+    }
+
+    fn other(&mut self, frame: Bytes) -> Option<Decoded> {
         self.f.stats.other_messages += 1;
         self.f.stats.other_bytes += frame.len() as u64;
-        Decoded::Other(frame)
+        if self.selected.is_some() && !self.settle.settled() {
+            // Between held samples: held too, so the order is kept.
+            self.settle.item(Decoded::Other(frame));
+            return self.next_held();
+        }
+        Some(Decoded::Other(frame))
     }
 
     /// One frame from the front of `buf`, or `None` when more bytes are needed.
@@ -394,7 +433,9 @@ impl MavlinkDecoder {
                 }
             }
             let frame = self.f.take(buf, total);
-            return Some(self.frame(frame));
+            if let Some(d) = self.frame(frame) {
+                return Some(d);
+            }
         }
     }
 }
@@ -404,11 +445,19 @@ impl ProtocolDecoder for MavlinkDecoder {
         Protocol::Mavlink
     }
     fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        self.f.begin(buf).or_else(|| self.step(buf))
+        self.f
+            .begin(buf)
+            .or_else(|| self.next_held())
+            .or_else(|| self.step(buf))
     }
     fn end_of_input(&mut self) {
         // A frame with an unknown id at the very end is trusted without a frame after it.
         self.eof = true;
+    }
+    fn held(&mut self) -> Option<Decoded> {
+        // Every byte decoded: what is still held goes out with the channels seen so far.
+        self.settle.settle();
+        self.next_held()
     }
     fn discard_tail(&mut self, buf: &mut BytesMut) {
         let start = matches!(buf.first(), Some(&(STX_V1 | STX_V2)));

@@ -11,8 +11,8 @@
 //!
 //! The records are framed here (so that a bad record is counted and the search restarts one
 //! byte after it, and each record's bytes are kept for pass-through); their bodies are parsed by
-//! the `mcap` crate, which also decompresses zstd / lz4 chunks when built with the
-//! `ros2-compression` feature. The records inside a chunk come out one by one, as if the file
+//! the `mcap` crate. LZ4 chunks are inflated with `lz4_flex` in every `ros2` build; zstd
+//! chunks through the `mcap` crate when built with `ros2-compression`. The records inside a chunk come out one by one, as if the file
 //! had no chunks. A chunk whose CRC fails is dropped whole (counted): its messages cannot be
 //! trusted. MCAP records outside chunks carry no checksum; as for ULog, an implausible record
 //! (reserved opcode, impossible length, a message on a channel never declared) is a fault.
@@ -325,7 +325,11 @@ impl McapDecoder {
                     }
                     return Ok(Rec::Chunk(start..start + len));
                 }
-                return Ok(match decompress(rec) {
+                let inflated = match header.compression.as_str() {
+                    "lz4" => lz4(&data, header.uncompressed_size),
+                    _ => decompress(rec),
+                };
+                return Ok(match inflated {
                     Ok(v) if crc_ok(&v) => Rec::Inflated(v),
                     Ok(_) => Rec::Corrupt,
                     Err(e) => {
@@ -480,8 +484,31 @@ fn crc32(b: &[u8]) -> u32 {
     crc32fast::hash(b)
 }
 
+/// The records of an LZ4-frame chunk (`lz4_flex`, pure Rust: every `ros2` build reads the
+/// chunks the `mcap+lz4:` sink and the LZ4 inline output write). At most `size` bytes (the
+/// chunk's declared uncompressed size, itself at most [`MAX_RECORD`]) are inflated, so a corrupt
+/// chunk cannot allocate without bound; fewer or more than `size` is an error.
+fn lz4(data: &[u8], size: u64) -> Result<Vec<u8>, String> {
+    use std::io::Read;
+    if size > MAX_RECORD {
+        return Err(format!("LZ4 chunk claims {size} bytes uncompressed"));
+    }
+    let mut out = Vec::with_capacity(size as usize);
+    lz4_flex::frame::FrameDecoder::new(data)
+        .take(size + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| format!("LZ4 chunk: {e}"))?;
+    if out.len() as u64 != size {
+        return Err(format!(
+            "LZ4 chunk inflates to {} bytes, not {size}",
+            out.len()
+        ));
+    }
+    Ok(out)
+}
+
 /// The uncompressed records of a compressed chunk record, through the `mcap` crate's reader
-/// (zstd and lz4 when built with `ros2-compression`).
+/// (zstd when built with `ros2-compression`).
 fn decompress(rec: &[u8]) -> Result<Vec<u8>, String> {
     use ::mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
     let mut r = LinearReader::new_with_options(

@@ -28,6 +28,7 @@ pub mod mcap;
 pub mod mcap_out;
 pub mod protocol;
 pub mod ros2;
+pub mod settle;
 pub mod ubx;
 pub mod ulog;
 

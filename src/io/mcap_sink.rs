@@ -1,7 +1,11 @@
 //! The MCAP sink (`--out mcap:PATH`, `[[sinks]] kind = "mcap"`): a ROS 2 bag file (profile
 //! `ros2`) with the cleaned samples as `sensor_msgs/msg/Imu` and a health topic, written with
 //! the `mcap` crate (chunked, indexed, uncompressed, CRCs on), readable by `ros2 bag`, rosbags,
-//! Foxglove.
+//! Foxglove. With `compression = "lz4"` (`--out mcap+lz4:PATH`) the chunks are LZ4 frames: the
+//! `mcap` crate writes compressed chunks only with its C-built features, so then the records
+//! are made here and written by imuprep's own indexed MCAP writer ([`McapStream`], the inline
+//! output's, `lz4_flex`): same schemas, channels, messages, chunk and message indexes,
+//! statistics and summary, in every `ros2` build.
 //!
 //! Imu messages: `header.stamp` = the sample's sensor time, `frame_id` as configured,
 //! orientation unknown (`orientation_covariance[0] = -1`, the message's convention),
@@ -17,6 +21,7 @@
 //! σ. JSON in a String (not `diagnostic_msgs`) so any tool can print it and a script can parse
 //! it without ROS message definitions.
 
+use crate::frame::mcap_out::{ChunkCompression, McapStream};
 use crate::frame::ros2::{self, ImuMsg};
 use crate::frame::{AxisConvention, Descriptor};
 use crate::sample::{Sample, flags};
@@ -29,6 +34,8 @@ pub struct McapSinkOptions {
     pub topic: String,
     pub frame_id: String,
     pub health_topic: String,
+    /// Chunk compression: none (the `mcap` crate's writer) or LZ4 ([`McapStream`]).
+    pub compression: ChunkCompression,
 }
 
 impl Default for McapSinkOptions {
@@ -37,6 +44,7 @@ impl Default for McapSinkOptions {
             topic: "/imu/clean".into(),
             frame_id: "imu_link".into(),
             health_topic: "/imuprep/health".into(),
+            compression: ChunkCompression::None,
         }
     }
 }
@@ -56,9 +64,134 @@ struct Counts {
     repeated: u64,
 }
 
+/// Where the records go: the `mcap` crate's writer (uncompressed chunks; it seeks back to
+/// finish them), or imuprep's own stream writer (compressed chunks; front to back). One per
+/// sink, so the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
+enum Out<W: Write + Seek> {
+    Crate(::mcap::Writer<W>),
+    Stream {
+        s: McapStream,
+        w: W,
+        buf: bytes::BytesMut,
+    },
+}
+
+/// Append a length-prefixed (u32) string.
+fn put_str(b: &mut Vec<u8>, v: &str) {
+    b.extend_from_slice(&(v.len() as u32).to_le_bytes());
+    b.extend_from_slice(v.as_bytes());
+}
+
+/// One MCAP record: opcode, u64 length, body.
+fn record(op: u8, body: &[u8]) -> Vec<u8> {
+    let mut r = Vec::with_capacity(9 + body.len());
+    r.push(op);
+    r.extend_from_slice(&(body.len() as u64).to_le_bytes());
+    r.extend_from_slice(body);
+    r
+}
+
+/// The ROS 2 profile's (empty) QoS entry in each channel's metadata, as rosbag2 writes it.
+const QOS_KEY: &str = "offered_qos_profiles";
+/// Ids of the stream writer's schemas (Imu, String) and channels (Imu, health).
+const STREAM_SCHEMAS: [u16; 2] = [1, 2];
+const STREAM_CHANNELS: [u16; 2] = [0, 1];
+/// The bag header's `library`.
+const LIBRARY: &str = concat!("imuprep ", env!("CARGO_PKG_VERSION"));
+
+impl<W: Write + Seek> Out<W> {
+    /// The stream writer: magic, header, both schemas and channels.
+    fn stream(w: W, c: ChunkCompression, opts: &McapSinkOptions) -> std::io::Result<Self> {
+        let mut o = Out::Stream {
+            s: McapStream::with_compression(c),
+            w,
+            buf: bytes::BytesMut::new(),
+        };
+        o.put(&ros2::MAGIC)?;
+        let mut h = Vec::new();
+        put_str(&mut h, "ros2");
+        put_str(&mut h, LIBRARY);
+        o.put(&record(0x01, &h))?;
+        let defs = [
+            (ros2::IMU_SCHEMA, ros2::IMU_DEFINITION),
+            (ros2::STRING_SCHEMA, ros2::STRING_DEFINITION),
+        ];
+        for (id, (name, def)) in STREAM_SCHEMAS.iter().zip(defs) {
+            let mut b = id.to_le_bytes().to_vec();
+            put_str(&mut b, name);
+            put_str(&mut b, "ros2msg");
+            put_str(&mut b, def);
+            o.put(&record(0x03, &b))?;
+        }
+        let topics = [&opts.topic, &opts.health_topic];
+        for ((id, schema), topic) in STREAM_CHANNELS.iter().zip(STREAM_SCHEMAS).zip(topics) {
+            let mut b = id.to_le_bytes().to_vec();
+            b.extend_from_slice(&schema.to_le_bytes());
+            put_str(&mut b, topic);
+            put_str(&mut b, "cdr");
+            let mut map = Vec::new();
+            put_str(&mut map, QOS_KEY);
+            put_str(&mut map, "");
+            b.extend_from_slice(&(map.len() as u32).to_le_bytes());
+            b.extend_from_slice(&map);
+            o.put(&record(0x04, &b))?;
+        }
+        Ok(o)
+    }
+
+    /// One record (or the magic) into the stream writer; what it writes goes to the file.
+    fn put(&mut self, rec: &[u8]) -> std::io::Result<()> {
+        if let Out::Stream { s, w, buf } = self {
+            s.other(rec, buf);
+            if !buf.is_empty() {
+                w.write_all(buf)?;
+                buf.clear();
+            }
+        }
+        Ok(())
+    }
+
+    fn message(
+        &mut self,
+        h: &::mcap::records::MessageHeader,
+        data: &[u8],
+    ) -> ::mcap::McapResult<()> {
+        if let Out::Crate(w) = self {
+            return w.write_to_known_channel(h, data);
+        }
+        let mut b = Vec::with_capacity(22 + data.len());
+        b.extend_from_slice(&h.channel_id.to_le_bytes());
+        b.extend_from_slice(&h.sequence.to_le_bytes());
+        b.extend_from_slice(&h.log_time.to_le_bytes());
+        b.extend_from_slice(&h.publish_time.to_le_bytes());
+        b.extend_from_slice(data);
+        Ok(self.put(&record(0x05, &b))?)
+    }
+
+    fn finish(self) -> ::mcap::McapResult<W> {
+        match self {
+            Out::Crate(mut w) => {
+                w.finish()?;
+                Ok(w.into_inner())
+            }
+            Out::Stream {
+                mut s,
+                mut w,
+                mut buf,
+            } => {
+                s.finish(&mut buf);
+                w.write_all(&buf)?;
+                w.flush()?;
+                Ok(w)
+            }
+        }
+    }
+}
+
 /// Writes samples into a ROS 2 MCAP bag.
 pub struct ImuBagWriter<W: Write + Seek> {
-    w: ::mcap::Writer<W>,
+    w: Out<W>,
     opts: McapSinkOptions,
     imu: u16,
     health: u16,
@@ -73,21 +206,24 @@ pub struct ImuBagWriter<W: Write + Seek> {
 
 impl<W: Write + Seek> ImuBagWriter<W> {
     pub fn new(w: W, opts: McapSinkOptions) -> ::mcap::McapResult<Self> {
-        let mut w = ::mcap::WriteOptions::new()
-            .compression(None)
-            .profile("ros2")
-            .library(concat!("imuprep ", env!("CARGO_PKG_VERSION")))
-            .create(w)?;
-        let meta: BTreeMap<String, String> =
-            [("offered_qos_profiles".to_string(), String::new())].into();
-        let s_imu = w.add_schema(ros2::IMU_SCHEMA, "ros2msg", ros2::IMU_DEFINITION.as_bytes())?;
-        let s_str = w.add_schema(
-            ros2::STRING_SCHEMA,
-            "ros2msg",
-            ros2::STRING_DEFINITION.as_bytes(),
-        )?;
-        let imu = w.add_channel(s_imu, &opts.topic, "cdr", &meta)?;
-        let health = w.add_channel(s_str, &opts.health_topic, "cdr", &meta)?;
+        let (w, imu, health) = if opts.compression == ChunkCompression::None {
+            let mut w = ::mcap::WriteOptions::new()
+                .compression(None)
+                .profile("ros2")
+                .library(LIBRARY)
+                .create(w)?;
+            let meta: BTreeMap<String, String> = [(QOS_KEY.to_string(), String::new())].into();
+            let imu_def = ros2::IMU_DEFINITION.as_bytes();
+            let s_imu = w.add_schema(ros2::IMU_SCHEMA, "ros2msg", imu_def)?;
+            let str_def = ros2::STRING_DEFINITION.as_bytes();
+            let s_str = w.add_schema(ros2::STRING_SCHEMA, "ros2msg", str_def)?;
+            let imu = w.add_channel(s_imu, &opts.topic, "cdr", &meta)?;
+            let health = w.add_channel(s_str, &opts.health_topic, "cdr", &meta)?;
+            (Out::Crate(w), imu, health)
+        } else {
+            let [imu, health] = STREAM_CHANNELS;
+            (Out::stream(w, opts.compression, &opts)?, imu, health)
+        };
         Ok(ImuBagWriter {
             w,
             opts,
@@ -170,7 +306,7 @@ impl<W: Write + Seek> ImuBagWriter<W> {
             publish_time: s.t_ns,
         };
         self.seq = self.seq.wrapping_add(1);
-        self.w.write_to_known_channel(&h, &self.buf)?;
+        self.w.message(&h, &self.buf)?;
         let c = &mut self.counts;
         c.samples += 1;
         let f = s.flags;
@@ -225,7 +361,7 @@ impl<W: Write + Seek> ImuBagWriter<W> {
             publish_time: t,
         };
         self.hseq = self.hseq.wrapping_add(1);
-        self.w.write_to_known_channel(&h, &b)
+        self.w.message(&h, &b)
     }
 
     /// Last health message, summary section, closing magic.
@@ -233,8 +369,7 @@ impl<W: Write + Seek> ImuBagWriter<W> {
         if self.counts.samples > 0 {
             self.write_health()?;
         }
-        self.w.finish()?;
-        Ok(self.w.into_inner())
+        self.w.finish()
     }
 }
 

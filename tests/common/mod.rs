@@ -164,3 +164,13 @@ pub fn inline_identity(
     enc.flush(&mut out);
     out.to_vec()
 }
+
+/// The rows of a reference CSV (comment lines starting with `#` and the header skipped), as
+/// strings.
+pub fn csv_rows(csv: &str) -> Vec<Vec<String>> {
+    csv.lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}

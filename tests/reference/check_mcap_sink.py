@@ -6,17 +6,21 @@ and the two covariance diagonals; per /imuprep/health message its JSON.
 
     IMUPREP_BLESS=1 cargo test --release --features ros2 --test ros2_mcap
     python3 tests/reference/check_mcap_sink.py
+    python3 tests/reference/check_mcap_sink.py mcap_sink_lz4_bag.mcap mcap_sink_lz4_rosbags.csv
+
+The second reads the sink's LZ4-chunked bag (`compression = "lz4"`) the same way.
 """
-import csv, json
+import csv, json, sys
 from pathlib import Path
 
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 
 HERE = Path(__file__).resolve().parent
+BAG, OUT = (sys.argv[1:3] if len(sys.argv) > 2 else ("mcap_sink_bag.mcap", "mcap_sink_rosbags.csv"))
 ts = get_typestore(Stores.ROS2_HUMBLE)
 rows = []
-with Reader(HERE / "mcap_sink_bag.mcap") as r:
+with Reader(HERE / BAG) as r:
     topics = {c.topic: c.msgtype for c in r.connections}
     assert topics == {"/imu/clean": "sensor_msgs/msg/Imu", "/imuprep/health": "std_msgs/msg/String"}, topics
     for conn, t, raw in r.messages():
@@ -29,7 +33,7 @@ with Reader(HERE / "mcap_sink_bag.mcap") as r:
                                                     gc[0], gc[4], gc[8], ac[0], ac[4], ac[8]))])
         else:
             rows.append([conn.topic, json.dumps(json.loads(m.data), sort_keys=True)])
-with open(HERE / "mcap_sink_rosbags.csv", "w", newline="") as f:
+with open(HERE / OUT, "w", newline="") as f:
     w = csv.writer(f, quoting=csv.QUOTE_MINIMAL)
     w.writerow(["topic", "sec", "nanosec", "gx", "gy", "gz", "ax", "ay", "az",
                 "gcov_xx", "gcov_yy", "gcov_zz", "acov_xx", "acov_yy", "acov_zz"])

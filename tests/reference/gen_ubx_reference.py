@@ -15,6 +15,7 @@ and ubx_expected.csv: one row per IMU sample, values from pyubx2's parse of the 
 import math, random, struct, io
 from pyubx2 import UBXMessage, UBXReader, SET, GET
 from pynmeagps import NMEAMessage
+from ubx_rows import add_imu, csv_line
 
 random.seed(14)
 out = bytearray()
@@ -64,36 +65,11 @@ out += UBXMessage("ESF", "ESF-STATUS", 0, iTOW=1, version=2, fusionMode=1, numSe
 open("ubx_stream.bin", "wb").write(bytes(out))
 
 # Read back with pyubx2 and write the expected samples.
-def s24(v):
-    return v - (1 << 24) if v & 0x800000 else v
-
 rows = []
 nmea_n = other_n = 0
 for raw, parsed in UBXReader(io.BytesIO(bytes(out)), protfilter=7):
-    if parsed.identity == "ESF-RAW":
-        n = (len(raw) - 8 - 4) // 8
-        sets = {}
-        order = []
-        for i in range(1, n + 1):
-            d = getattr(parsed, f"data_{i:02d}")
-            t = getattr(parsed, f"sTag_{i:02d}")
-            # pyubx2 keeps X4 fields as little-endian bytes.
-            d = int.from_bytes(d, "little") if isinstance(d, bytes) else d
-            t = (int.from_bytes(t, "little") if isinstance(t, bytes) else t) & 0xFFFFFF
-            if t not in sets:
-                sets[t] = {}
-                order.append(t)
-            sets[t][d >> 24] = s24(d & 0xFFFFFF)
-        for t in order:
-            rows.append(("raw", t, sets[t]))
-    elif parsed.identity == "ESF-MEAS":
-        vals = {}
-        for i in range(1, parsed.numMeas + 1):
-            vals[getattr(parsed, f"dataType_{i:02d}")] = s24(getattr(parsed, f"dataField_{i:02d}"))
-        if rows and rows[-1][0] == "meas" and rows[-1][1] == parsed.timeTag and len(rows[-1][2]) < 7:
-            rows[-1][2].update(vals)
-        else:
-            rows.append(("meas", parsed.timeTag, vals))
+    if add_imu(rows, raw, parsed):
+        pass
     elif hasattr(parsed, "talker"):
         nmea_n += 1
     else:
@@ -102,8 +78,5 @@ for raw, parsed in UBXReader(io.BytesIO(bytes(out)), protfilter=7):
 with open("ubx_expected.csv", "w") as f:
     f.write(f"# pyubx2 read {len(rows)} IMU samples, {nmea_n} NMEA, {other_n} other UBX messages\n")
     f.write("kind,tag,gx,gy,gz,ax,ay,az,temp\n")
-    for kind, t, v in rows:
-        g = [math.radians(v[ty] * 2.0**-12) for ty in (14, 13, 5)]
-        a = [v[ty] * 2.0**-10 for ty in (16, 17, 18)]
-        f.write(f"{kind},{t}," + ",".join(repr(x) for x in g + a) + f",{v[12] * 0.01!r}\n")
+    f.writelines(csv_line(r) for r in rows)
 print(len(rows), "samples;", nmea_n, "NMEA;", other_n, "other UBX;", len(out), "bytes")

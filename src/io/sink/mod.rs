@@ -279,20 +279,26 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
             topic,
             frame_id,
             health_topic,
+            compression,
         } => {
             #[cfg(feature = "ros2")]
             {
+                use crate::frame::mcap_out::ChunkCompression;
                 let opts = crate::io::mcap_sink::McapSinkOptions {
                     topic,
                     frame_id,
                     health_topic,
+                    compression: match compression {
+                        crate::config::McapCompression::None => ChunkCompression::None,
+                        crate::config::McapCompression::Lz4 => ChunkCompression::Lz4,
+                    },
                 };
                 let name = format!("mcap:{}", path.display());
                 (name, crate::io::mcap_sink::start(path, opts, rx, st)?)
             }
             #[cfg(not(feature = "ros2"))]
             {
-                let _ = (path, topic, frame_id, health_topic, rx, st);
+                let _ = (path, topic, frame_id, health_topic, compression, rx, st);
                 return Err(std::io::Error::other(
                     "mcap sink: this build has no ROS 2 support (cargo build --release --features ros2)",
                 ));
