@@ -5,7 +5,7 @@
 //! pre-generated block of 200 Hz samples (AR noise, 0.2 % spikes, some runs). Throughput is in
 //! channel-samples, so criterion's time per element is the cost per channel per sample. The last
 //! pair compares the default stage (two-sided confirmation, look-ahead 16) with the causal one,
-//! both through `push`, as the pipeline calls them.
+//! both through `push`, as the pipeline calls them, and the default with `run_fit_side = 8`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use imuprep::model::arima::{ArimaChannelModel, ArimaModelFile};
@@ -105,12 +105,15 @@ fn bench(c: &mut Criterion) {
     }
     // The default stage (confirmation, look-ahead 16) against the causal one in the same run:
     // both through `push` into a reused buffer, as the pipeline calls them.
-    for (name, lookahead) in [
-        ("arima302_push_causal", 0usize),
-        ("arima302_push_default_lookahead16", 16),
+    // And the default with runs interpolated on a longer baseline (`run_fit_side = 8`).
+    for (name, lookahead, run_fit_side) in [
+        ("arima302_push_causal", 0usize, 3usize),
+        ("arima302_push_default_lookahead16", 16, 3),
+        ("arima302_push_lookahead16_run_fit_side8", 16, 8),
     ] {
         let s = GrossErrorSettings {
             lookahead_samples: lookahead,
+            run_fit_side,
             ..Default::default()
         };
         let mut st = GrossErrorStage::new(s, Some(&models(0))).unwrap();

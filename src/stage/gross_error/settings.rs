@@ -103,6 +103,10 @@ pub struct GrossErrorSettings {
     /// is what `stand_out = 2` has always meant for the edges; 2 would be the same bar as the
     /// interpolation's, and is measured as a trade-off in `docs/gross_error_results.md`).
     pub edge_stand_out: f64,
+    /// Confirmation: the interpolation across an event of m samples uses the nearest
+    /// `clamp(m, 3, run_fit_side)` samples on each side (default 3: three for every event;
+    /// at most 10; see `confirm.rs`).
+    pub run_fit_side: usize,
     /// Samples before an event whose roughness sets the confirmation scale (default 32: the
     /// scale's own sampling error is then ~12 %, small enough not to make 4σ noise look 6σ).
     pub context_samples: usize,
@@ -145,6 +149,7 @@ impl Default for GrossErrorSettings {
             edge_k: 2.5,
             stand_out: 2.0,
             edge_stand_out: 4.0,
+            run_fit_side: 3,
             context_samples: 32,
             post_samples: 4,
             plausible_gyro_rad_s: 60.0,
@@ -241,6 +246,13 @@ impl GrossErrorSettings {
             e.push(format!(
                 "lookahead_samples = {} must be at most {MAX_LOOKAHEAD}",
                 self.lookahead_samples
+            ));
+        }
+        let max_side = super::confirm::MAX_FIT_SIDE;
+        if !(3..=max_side).contains(&self.run_fit_side) {
+            e.push(format!(
+                "run_fit_side = {} must be in 3..={max_side}",
+                self.run_fit_side
             ));
         }
         if !(2..=MAX_CONTEXT).contains(&self.context_samples) {

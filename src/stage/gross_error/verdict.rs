@@ -89,11 +89,12 @@ impl GrossErrorStage {
             };
         }
         let evidence = if eligible {
-            confirm::confirm(
+            confirm::confirm_with(
                 before,
                 &event[lead..keep],
                 &after[..n_after],
                 self.min_sigma(c),
+                self.s.run_fit_side,
                 &mut interp,
             )
         } else {
