@@ -41,6 +41,7 @@
 //! (structure re-polished there too: line frequencies, temperature lag, step times) — the test
 //! numbers never see it; the parameters gain the test part's data.
 
+use super::AnalysisError;
 use super::allan_check::{AllanFinding, AllanKind, allan_check};
 use super::changepoint::{ChangePoint, ChangePointSettings, binary_segmentation};
 use super::diagnose_terms::{Ctx, Term, decimate, effects_of, polish_structure, term_contribution};
@@ -52,10 +53,10 @@ use super::quantisation::{Quantisation, Saturation, quantisation, saturation};
 use super::spectrum::{
     PeakSettings, Psd, SpectralPeak, find_peaks, periodogram, refine_line, welch,
 };
-use super::{AnalysisError, check_finite};
 use crate::model::bias_model::Effect;
 use crate::stats::acf::{Whiteness, whiteness};
 use crate::stats::special::chi2_sf;
+use crate::stats::{NumError, check_series};
 use serde::Serialize;
 use std::ops::Range;
 
@@ -118,7 +119,7 @@ impl DiagnoseSettings {
             || !super::in_open_unit(self.alpha)
             || self.ljung_box_lags == 0
         {
-            return Err(AnalysisError::BadSetting("diagnose settings out of range"));
+            return Err(AnalysisError::bad("diagnose settings out of range"));
         }
         Ok(())
     }
@@ -165,10 +166,11 @@ pub fn split(n: usize, rate_hz: f64, s: &DiagnoseSettings) -> Result<Split, Anal
     // Each part must hold a usable AR fit and spectrum.
     let need = 8 * s.max_ar_order + 200;
     if a < need || b - a < need || n.saturating_sub(b) < need {
-        return Err(AnalysisError::TooShort {
-            len: n,
-            need: 3 * need,
-        });
+        return Err(NumError::TooShort {
+            needed: 3 * need,
+            got: n,
+        }
+        .into());
     }
     Ok(Split {
         train: 0..a,
@@ -450,17 +452,17 @@ pub fn diagnose_channel(
 ) -> Result<ChannelDiagnosis, AnalysisError> {
     s.validate()?;
     let y = input.values;
-    check_finite(y, 1)?;
+    check_series(y, 1)?;
     if !super::is_pos(input.rate_hz) {
-        return Err(AnalysisError::BadSetting("rate_hz must be > 0"));
+        return Err(AnalysisError::bad("rate_hz must be > 0"));
     }
     let n = y.len();
     if let Some(t) = input.exogenous.temperature_c {
-        check_finite(t, n)?;
+        check_series(t, n)?;
     }
     if let Some(f) = input.exogenous.specific_force_m_s2 {
         for c in f {
-            check_finite(c, n)?;
+            check_series(c, n)?;
         }
     }
     let sp = split(n, input.rate_hz, s)?;
@@ -597,7 +599,7 @@ pub fn diagnose_channel(
         let pos = terms.len() - 1;
         let effect = effects_of(&terms, &af, input.rate_hz)
             .pop()
-            .ok_or(AnalysisError::Singular("no effect"))?;
+            .ok_or_else(|| AnalysisError::singular("no effect"))?;
         // Overlay: the previous model's open-loop residual with the new effect's contribution.
         let prev_d = prev_fit.0.open_loop(y, &prev_fit.1);
         let contrib = match terms[pos] {

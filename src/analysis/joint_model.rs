@@ -31,6 +31,7 @@
 
 use super::AnalysisError;
 use crate::model::{ArFit, burg, burg_orders};
+use crate::stats::{NumError, check_same_len, check_series};
 use nalgebra::{DMatrix, DVector};
 use std::ops::Range;
 
@@ -84,7 +85,7 @@ fn lstsq(x: &DMatrix<f64>, y: &DVector<f64>) -> Result<DVector<f64>, AnalysisErr
         })
         .collect();
     if d.contains(&0.0) {
-        return Err(AnalysisError::Singular(
+        return Err(AnalysisError::singular(
             "joint model: a regressor is zero on the fit range",
         ));
     }
@@ -92,9 +93,9 @@ fn lstsq(x: &DMatrix<f64>, y: &DVector<f64>) -> Result<DVector<f64>, AnalysisErr
     let bs = DVector::from_fn(k, |i, _| b[i] * d[i]);
     let z = gs
         .cholesky()
-        .ok_or(AnalysisError::Singular(
-            "joint model: regressors collinear on the fit range",
-        ))?
+        .ok_or_else(|| {
+            AnalysisError::singular("joint model: regressors collinear on the fit range")
+        })?
         .solve(&bs);
     Ok(DVector::from_fn(k, |i, _| z[i] * d[i]))
 }
@@ -118,18 +119,17 @@ pub fn fit(
     ar_order: usize,
     level: LevelSpec,
 ) -> Result<JointFit, AnalysisError> {
-    super::check_finite(y, 1)?;
+    check_series(y, 1)?;
     if range.end > y.len() || range.len() < 4 * ar_order + cols.len() + 16 {
-        return Err(AnalysisError::TooShort {
-            len: range.len(),
-            need: 4 * ar_order + cols.len() + 16,
-        });
+        return Err(NumError::TooShort {
+            needed: 4 * ar_order + cols.len() + 16,
+            got: range.len(),
+        }
+        .into());
     }
     for c in cols {
-        if c.len() != y.len() {
-            return Err(AnalysisError::LengthMismatch(c.len(), y.len()));
-        }
-        super::check_finite(c, 1)?;
+        check_same_len(y.len(), c.len())?;
+        check_series(c, 1)?;
     }
     let x = design(cols, range.clone());
     let yv = DVector::from_column_slice(&y[range.clone()]);
@@ -337,7 +337,7 @@ fn set_level(
     k: f64,
 ) -> Result<(), AnalysisError> {
     if !super::in_open_unit(k) {
-        return Err(AnalysisError::BadSetting("level gain must be in (0, 1)"));
+        return Err(AnalysisError::bad("level gain must be in (0, 1)"));
     }
     let l = level_track(d, k);
     let z: Vec<f64> = d.iter().zip(&l).map(|(a, b)| a - b).collect();

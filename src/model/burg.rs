@@ -23,6 +23,7 @@
 use super::ar::ArFit;
 use super::kernels::{BLOCK, CrossEnergy, sum};
 use super::{ModelError, check_ar_input};
+use crate::stats::NumError;
 
 /// Fit AR(p) by Burg's method.
 pub fn burg(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
@@ -66,9 +67,9 @@ fn burg_lattice(x: &[f64], p: usize) -> Result<(Vec<ArFit>, Option<ModelError>),
         // den = sum_{n=m}^{N-1} f_{m-1}(n)^2 + b_{m-1}(n-1)^2
         if den.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             let e = if m == 1 {
-                ModelError::ZeroVariance
+                ModelError::Numeric(NumError::Constant)
             } else {
-                ModelError::Singular(format!("Burg error energy vanished at order {m}"))
+                ModelError::singular(format!("Burg error energy vanished at order {m}"))
             };
             return Ok((fits, Some(e)));
         }
@@ -247,12 +248,18 @@ mod tests {
         let all = burg_orders(&x, 3).unwrap();
         assert_eq!(all.len(), 1);
         assert!((all[0].coeffs[0] + 1.0).abs() < 1e-12, "{:?}", all[0]);
-        assert!(matches!(burg(&x, 2), Err(ModelError::Singular(_))));
+        assert!(matches!(
+            burg(&x, 2),
+            Err(ModelError::Numeric(NumError::Singular(_)))
+        ));
         assert!(burg(&x, 1).is_ok());
     }
 
     #[test]
     fn burg_rejects_constant_series() {
-        assert_eq!(burg(&[3.0; 50], 2), Err(ModelError::ZeroVariance));
+        assert_eq!(
+            burg(&[3.0; 50], 2),
+            Err(ModelError::Numeric(NumError::Constant))
+        );
     }
 }
