@@ -401,7 +401,7 @@ pub fn mse(x: &[f64], range: Range<usize>) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
+    use crate::rng::{Rng, ar_series};
 
     #[test]
     fn regression_with_ar1_errors_recovers_beta_and_phi() {
@@ -454,13 +454,9 @@ mod tests {
         // Without regressors or level, `fit_orders` must give what `fit` gives order by order
         // (same intercept, same AR to Burg's rounding: 1e-12); orders the range is too short
         // for are None, as `fit` errors there.
-        let mut rng = Rng::new(23);
-        let mut u = 0.0;
-        let y: Vec<f64> = (0..3000)
-            .map(|_| {
-                u = 0.9 * u + rng.normal();
-                2.0 + u
-            })
+        let y: Vec<f64> = ar_series(&mut Rng::new(23), 3000, &[0.9], 1.0)
+            .into_iter()
+            .map(|u| 2.0 + u)
             .collect();
         let range = 100..200; // 100 samples: orders up to 21 allowed (4 p + 16 <= 100)
         let all = fit_orders(&y, &[], range.clone(), 25, LevelSpec::None);

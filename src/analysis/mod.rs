@@ -14,6 +14,7 @@ pub mod diagnose;
 pub mod diagnose_blocks;
 pub mod diagnose_lines;
 pub mod diagnose_report;
+pub mod diagnose_result;
 pub mod diagnose_slow;
 mod diagnose_terms;
 pub mod diagnose_wander;

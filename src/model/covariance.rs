@@ -72,20 +72,14 @@ pub fn covariance(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
+    use crate::rng::{Rng, ar_series};
 
     #[test]
     fn covariance_ar2_recovers_coefficients() {
         // AR(2) with phi = (1.2, -0.5) (stable, complex poles), N = 100k.
-        let mut rng = Rng::new(8);
-        let (mut v1, mut v2) = (0.0, 0.0);
-        let x: Vec<f64> = (0..100_000)
-            .map(|_| {
-                let v = 1.2 * v1 - 0.5 * v2 + rng.normal();
-                v2 = v1;
-                v1 = v;
-                v + 3.0
-            })
+        let x: Vec<f64> = ar_series(&mut Rng::new(8), 100_000, &[1.2, -0.5], 1.0)
+            .into_iter()
+            .map(|v| v + 3.0)
             .collect();
         let f = covariance(&x, 2).unwrap();
         // asymptotic sd of each phi_hat is sqrt((1-phi2^2)/N) = 0.0027; 5 sd
