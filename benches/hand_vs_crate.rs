@@ -6,7 +6,7 @@
 //!   ChaCha20 with `rand_distr::StandardNormal` (ziggurat), and one million uniforms.
 //! * `csv`: the cells of a real 10-minute MPU-6050 recording (`../shared/data/real`, 5.5 MB,
 //!   8 columns) split and parsed to `f64` by the importer's tokeniser (`str::split(',')`) against
-//!   the `csv` crate (`StringRecord` and `ByteRecord`), and the whole import
+//!   the `csv` crate (`StringRecord`, as the importer reads since this bench), and the whole import
 //!   (`read_csv_report`) for the share tokenising takes of it. Skipped, with a `SKIPPED:` line,
 //!   when the recording is absent.
 //!
@@ -93,20 +93,6 @@ fn cells_csv_string(text: &str) -> f64 {
     sum
 }
 
-/// The same sum through the `csv` crate's `ByteRecord` (no UTF-8 check per record).
-fn cells_csv_bytes(text: &str) -> f64 {
-    let mut rd = csv::ReaderBuilder::new().from_reader(text.as_bytes());
-    let mut rec = csv::ByteRecord::new();
-    let mut sum = 0.0;
-    while rd.read_byte_record(&mut rec).unwrap() {
-        for c in rec.iter() {
-            let s = std::str::from_utf8(c).unwrap_or("");
-            sum += s.trim().parse::<f64>().unwrap_or(0.0);
-        }
-    }
-    sum
-}
-
 fn csv_tokenise(c: &mut Criterion) {
     let path = Path::new(CSV);
     let Ok(text) = std::fs::read_to_string(path) else {
@@ -114,10 +100,9 @@ fn csv_tokenise(c: &mut Criterion) {
         return;
     };
     let rows = text.lines().count() - 1;
-    // The three tokenisers must read the same numbers (the file has no quoted cells).
+    // The two tokenisers must read the same numbers (the file has no quoted cells).
     let want = cells_hand(&text);
     assert_eq!(cells_csv_string(&text), want);
-    assert_eq!(cells_csv_bytes(&text), want);
     let mut g = c.benchmark_group("csv_mpu6050_static_5.5MB");
     g.sample_size(20);
     g.throughput(Throughput::Elements(rows as u64));
@@ -126,9 +111,6 @@ fn csv_tokenise(c: &mut Criterion) {
     });
     g.bench_function("tokenise_parse/csv_string_record", |b| {
         b.iter(|| cells_csv_string(black_box(&text)))
-    });
-    g.bench_function("tokenise_parse/csv_byte_record", |b| {
-        b.iter(|| cells_csv_bytes(black_box(&text)))
     });
     g.bench_function("whole_import/read_csv_report", |b| {
         b.iter(|| {
