@@ -305,7 +305,11 @@ pub fn read_csv_report(
         .iter()
         .enumerate()
         .map(|(i, s)| {
-            let s = if i == 0 { s.trim_start_matches('\u{feff}') } else { s };
+            let s = if i == 0 {
+                s.trim_start_matches('\u{feff}')
+            } else {
+                s
+            };
             s.trim().to_string()
         })
         .collect();

@@ -50,15 +50,26 @@ pub fn diagnose(
     } else {
         super::diagnose_whole::diagnose_whole_samples
     };
-    run(
+    let stretch = Stretch {
         log,
-        &samples[..end],
+        samples: &samples[..end],
         rate,
         from_s,
         channels,
         out_dir,
-        progress,
-    )
+    };
+    run(&stretch, progress)
+}
+
+/// One stretch of a log to diagnose: its samples (cut to the stretch that starts `from_s` into
+/// `log`) at `rate` Hz, the channels asked for, the output folder.
+pub struct Stretch<'a> {
+    pub log: &'a Path,
+    pub samples: &'a [Sample],
+    pub rate: f64,
+    pub from_s: f64,
+    pub channels: &'a [String],
+    pub out_dir: &'a Path,
 }
 
 /// The other channels of `series` than `c`, named (candidate exogenous inputs).
@@ -107,19 +118,11 @@ pub fn exogenous<'a>(
     }
 }
 
-/// The loop on `samples` (already cut to the stretch that starts `from_s` into `log`): per
-/// channel a line on `progress`; `report.txt`, `report.json`, `bias.toml` and `plots/` in
+/// The loop on one stretch: per channel a line on `progress`; `report.txt`, `report.json`, `bias.toml` and `plots/` in
 /// `out_dir`.
-pub fn diagnose_samples(
-    log: &Path,
-    samples: &[Sample],
-    rate: f64,
-    from_s: f64,
-    channels: &[String],
-    out_dir: &Path,
-    progress: &mut dyn Write,
-) -> Result<Added> {
-    let p = prepare(log, samples, rate, from_s, channels, out_dir, progress)?;
+pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added> {
+    let (rate, out_dir) = (st.rate, st.out_dir);
+    let p = prepare(st, progress)?;
     let settings = DiagnoseSettings::default();
     let mut report = DiagnoseReport {
         source: p.source.clone(),
@@ -189,17 +192,17 @@ pub struct Prepared {
     pub source: String,
 }
 
-/// [`Prepared`] for `samples` (the stretch starting `from_s` into `log`); each channel asked for
+/// [`Prepared`] for a stretch; each channel asked for
 /// but left out is said on `progress` with why.
-pub fn prepare(
-    log: &Path,
-    samples: &[Sample],
-    rate: f64,
-    from_s: f64,
-    channels: &[String],
-    out_dir: &Path,
-    progress: &mut dyn Write,
-) -> Result<Prepared> {
+pub fn prepare(st: &Stretch, progress: &mut dyn Write) -> Result<Prepared> {
+    let Stretch {
+        log,
+        samples,
+        rate,
+        from_s,
+        channels,
+        out_dir,
+    } = *st;
     ensure!(!samples.is_empty(), "the chosen stretch is empty");
     let (chans, left_out) = present_channels(log, samples, &parse_channels(channels)?)?;
     for (name, why) in &left_out {

@@ -3,20 +3,19 @@
 //! stderr (hidden when stderr is not a terminal).
 
 use std::io::Write;
-use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::diagnose::{
-    Added, channel_input, channel_model, effects_text, others_of, prepare, write_outputs,
+    Added, Stretch, channel_input, channel_model, effects_text, others_of, prepare, write_outputs,
     write_plots,
 };
 use crate::analysis::diagnose_whole::{WholeDiagnosis, WholeSettings, diagnose_whole};
 use crate::analysis::diagnose_whole_report::{effect_lines, whole_plots, whole_text};
 use crate::model::bias_model::{ArOf, BiasModelFile};
-use crate::sample::{CHANNEL_NAMES, Sample};
+use crate::sample::CHANNEL_NAMES;
 
 /// The report of one run.
 #[derive(Debug, Serialize)]
@@ -42,17 +41,10 @@ impl WholeReport {
     }
 }
 
-/// The whole-log diagnosis of `samples` (the stretch starting `from_s` into `log`).
-pub fn diagnose_whole_samples(
-    log: &Path,
-    samples: &[Sample],
-    rate: f64,
-    from_s: f64,
-    channels: &[String],
-    out_dir: &Path,
-    progress: &mut dyn Write,
-) -> Result<Added> {
-    let p = prepare(log, samples, rate, from_s, channels, out_dir, progress)?;
+/// The whole-log diagnosis of one stretch.
+pub fn diagnose_whole_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added> {
+    let (rate, out_dir) = (st.rate, st.out_dir);
+    let p = prepare(st, progress)?;
     let mut model = BiasModelFile::default();
     let mut added_all: Added = Vec::new();
     let settings = WholeSettings::default();
