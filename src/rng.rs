@@ -83,6 +83,27 @@ impl Rng {
     }
 }
 
+/// `n` standard normal draws from a generator seeded with `seed`.
+pub fn normal_vec(n: usize, seed: u64) -> Vec<f64> {
+    let mut r = Rng::new(seed);
+    (0..n).map(|_| r.normal()).collect()
+}
+
+/// `n` samples of the AR process `x_t = Σ φ_i x_{t−i} + sd·e_t`, `e` standard normal from `rng`,
+/// started at zero (a random walk is `phi = [1.0]`): the test series of the model fitters.
+pub fn ar_series(rng: &mut Rng, n: usize, phi: &[f64], sd: f64) -> Vec<f64> {
+    let mut x: Vec<f64> = Vec::with_capacity(n);
+    for t in 0..n {
+        let past = phi
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| i < t)
+            .fold(0.0, |acc, (i, f)| acc + f * x[t - 1 - i]);
+        x.push(past + sd * rng.normal());
+    }
+    x
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

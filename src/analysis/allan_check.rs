@@ -13,8 +13,9 @@
 //!   s_ex ≤ −¼ → other short-term colour (e.g. a line or an under-fitted correlation).
 //! For a rate random walk, K² = 3 σ²_ex(τ)/τ is averaged over the excess region.
 
+use super::AnalysisError;
 use super::allan::oadev_octaves;
-use super::{AnalysisError, check_finite};
+use crate::stats::check_series;
 use crate::stats::special::chi2_sf;
 use serde::Serialize;
 
@@ -76,9 +77,9 @@ pub fn allan_check(
     rate_hz: f64,
     alpha: f64,
 ) -> Result<AllanFinding, AnalysisError> {
-    check_finite(residual, 64)?;
+    check_series(residual, 64)?;
     if !super::is_pos(rate_hz) || !super::in_open_unit(alpha) {
-        return Err(AnalysisError::BadSetting("allan_check: rate or alpha"));
+        return Err(AnalysisError::bad("allan_check: rate or alpha"));
     }
     let n = residual.len();
     let mean = residual.iter().sum::<f64>() / n as f64;

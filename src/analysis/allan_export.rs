@@ -134,30 +134,34 @@ pub fn kalibr_yaml(report: &AllanReport) -> Option<String> {
         a.axes.join(" "),
         g.axes.join(" ")
     );
-    let _ = writeln!(
-        s,
-        "accelerometer_noise_density: {:.6e}  # m/s^2/sqrt(Hz){}",
-        a.noise_density,
-        bound_note(&a.noise_density_bounds)
-    );
-    let _ = writeln!(
-        s,
-        "accelerometer_random_walk: {:.6e}  # m/s^3/sqrt(Hz){}",
-        a.random_walk,
-        bound_note(&a.random_walk_bounds)
-    );
-    let _ = writeln!(
-        s,
-        "gyroscope_noise_density: {:.6e}  # rad/s/sqrt(Hz){}",
-        g.noise_density,
-        bound_note(&g.noise_density_bounds)
-    );
-    let _ = writeln!(
-        s,
-        "gyroscope_random_walk: {:.6e}  # rad/s^2/sqrt(Hz){}",
-        g.random_walk,
-        bound_note(&g.random_walk_bounds)
-    );
+    for (key, v, unit, bounds) in [
+        (
+            "accelerometer_noise_density",
+            a.noise_density,
+            "m/s^2/sqrt(Hz)",
+            &a.noise_density_bounds,
+        ),
+        (
+            "accelerometer_random_walk",
+            a.random_walk,
+            "m/s^3/sqrt(Hz)",
+            &a.random_walk_bounds,
+        ),
+        (
+            "gyroscope_noise_density",
+            g.noise_density,
+            "rad/s/sqrt(Hz)",
+            &g.noise_density_bounds,
+        ),
+        (
+            "gyroscope_random_walk",
+            g.random_walk,
+            "rad/s^2/sqrt(Hz)",
+            &g.random_walk_bounds,
+        ),
+    ] {
+        let _ = writeln!(s, "{key}: {v:.6e}  # {unit}{}", bound_note(bounds));
+    }
     let _ = writeln!(s, "rostopic: /imu0");
     let _ = writeln!(s, "update_rate: {:.6}  # Hz", report.rate_hz);
     Some(s)

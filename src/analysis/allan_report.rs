@@ -12,6 +12,7 @@ use super::AnalysisError;
 use super::allan::{AllanReadings, overlapping_adev};
 use super::allan_terms::{FitSettings, Resolution, Term, TermFit, fit_terms};
 use crate::sample::{CHANNEL_NAMES, Sample};
+use crate::stats::NumError;
 use serde::Serialize;
 use std::fmt;
 
@@ -105,15 +106,14 @@ pub fn allan_report(
     settings: &FitSettings,
 ) -> Result<AllanReport, AnalysisError> {
     if !(rate_hz > 0.0 && rate_hz.is_finite()) {
-        return Err(AnalysisError::BadSetting(
-            "allan: the sample rate must be > 0",
-        ));
+        return Err(AnalysisError::bad("allan: the sample rate must be > 0"));
     }
     if samples.len() < 16 {
-        return Err(AnalysisError::TooShort {
-            len: samples.len(),
-            need: 16,
-        });
+        return Err(NumError::TooShort {
+            needed: 16,
+            got: samples.len(),
+        }
+        .into());
     }
     let mut out = AllanReport {
         source: source.to_string(),
@@ -129,7 +129,7 @@ pub fn allan_report(
     for &c in channels {
         let name = CHANNEL_NAMES
             .get(c)
-            .ok_or(AnalysisError::BadSetting("allan: channel index"))?;
+            .ok_or(AnalysisError::bad("allan: channel index"))?;
         for (v, s) in y.iter_mut().zip(samples) {
             *v = s.channel(c);
         }

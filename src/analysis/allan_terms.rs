@@ -52,6 +52,7 @@
 use super::AnalysisError;
 use super::allan::AllanResult;
 use super::allan_edf::{NoiseType, chi2_interval, edf_oadev};
+use crate::stats::NumError;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use statrs::function::gamma::digamma;
@@ -494,23 +495,20 @@ pub fn fit_terms(
     settings: &FitSettings,
 ) -> Result<TermFit, AnalysisError> {
     if !super::is_pos(rate_hz) || !rate_hz.is_finite() {
-        return Err(AnalysisError::BadSetting(
-            "allan terms: rate_hz must be > 0",
-        ));
+        return Err(AnalysisError::bad("allan terms: rate_hz must be > 0"));
     }
     if !super::in_open_unit(settings.confidence) {
-        return Err(AnalysisError::BadSetting(
-            "allan terms: confidence in (0, 1)",
-        ));
+        return Err(AnalysisError::bad("allan terms: confidence in (0, 1)"));
     }
     let keep: Vec<usize> = (0..curve.adev.len())
         .filter(|&i| curve.adev[i].is_finite() && curve.adev[i] > 0.0)
         .collect();
     if keep.len() < 3 {
-        return Err(AnalysisError::TooShort {
-            len: keep.len(),
-            need: 3,
-        });
+        return Err(NumError::TooShort {
+            needed: 3,
+            got: keep.len(),
+        }
+        .into());
     }
     let tau: Vec<f64> = keep.iter().map(|&i| curve.tau_s[i]).collect();
     let m: Vec<usize> = tau

@@ -32,6 +32,7 @@ use crate::model::fos::FosSettings;
 use crate::model::fos_candidates::Family;
 use crate::model::fos_model::{FosModel, FosModelSpec};
 use crate::model::{ModelError, burg, covariance, yule_walker};
+use crate::stats::{NumError, check_finite};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -193,14 +194,22 @@ pub struct CompareReport {
 /// Why a comparison could not run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CompareError {
-    #[error("invalid settings: {0}")]
-    Settings(String),
+    /// A setting out of range, a non-finite value, series of different lengths (the shared
+    /// numerical vocabulary, [`NumError`]).
+    #[error(transparent)]
+    Numeric(#[from] NumError),
+    /// The record cannot hold the split: kept apart from [`NumError::TooShort`] so that the
+    /// message says what the samples are needed for.
     #[error("record too short: {got} samples, need {needed} for train + validation + test")]
     TooShort { needed: usize, got: usize },
-    #[error("non-finite value at index {0}")]
-    NonFinite(usize),
     #[error(transparent)]
     Wavelet(#[from] WaveletError),
+}
+
+impl CompareError {
+    fn bad(msg: &str) -> Self {
+        NumError::bad(msg).into()
+    }
 }
 
 /// A fitted predictor of any kind.
@@ -370,28 +379,20 @@ pub fn compare_channel(
     s: &CompareSettings,
 ) -> Result<CompareReport, CompareError> {
     if !(s.sample_rate_hz > 0.0 && s.sample_rate_hz.is_finite()) {
-        return Err(CompareError::Settings("sample_rate_hz must be > 0".into()));
+        return Err(CompareError::bad("sample_rate_hz must be > 0"));
     }
     if !(s.train_s > 0.0 && s.validation_s >= 0.0) {
-        return Err(CompareError::Settings(
-            "train_s must be > 0, validation_s >= 0".into(),
-        ));
+        return Err(CompareError::bad("train_s must be > 0, validation_s >= 0"));
     }
     if s.orders.contains(&0) {
-        return Err(CompareError::Settings("orders must be >= 1".into()));
+        return Err(CompareError::bad("orders must be >= 1"));
     }
-    if let Some(i) = y.iter().position(|v| !v.is_finite()) {
-        return Err(CompareError::NonFinite(i));
-    }
+    check_finite(y)?;
     for x in exo {
         if x.len() != y.len() {
-            return Err(CompareError::Settings(
-                "exogenous series must be as long as y".into(),
-            ));
+            return Err(CompareError::bad("exogenous series must be as long as y"));
         }
-        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-            return Err(CompareError::NonFinite(i));
-        }
+        check_finite(x)?;
     }
     let n_train = (s.train_s * s.sample_rate_hz).round() as usize;
     let n_val = (s.validation_s * s.sample_rate_hz).round() as usize;

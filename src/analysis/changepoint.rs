@@ -19,7 +19,8 @@
 //! Binary segmentation (Scott & Knott 1974; Vostrikova 1981): test the whole series; if the
 //! shift is significant at `alpha`, split at k̂ and test each half; stop where none is.
 
-use super::{AnalysisError, check_finite};
+use super::AnalysisError;
+use crate::stats::{NumError, check_series};
 use serde::Serialize;
 
 /// Settings of the step detector.
@@ -110,7 +111,7 @@ pub fn mean_shift_test(
 ) -> Result<(usize, f64, f64, f64), AnalysisError> {
     let m = x.len();
     let kk = lrv_ordinates.max(2);
-    check_finite(x, (2 * min_segment).max(4 * kk + 8))?;
+    check_series(x, (2 * min_segment).max(4 * kk + 8))?;
     let mf = m as f64;
     let mean = x.iter().sum::<f64>() / mf;
     let mut c = 0.0;
@@ -131,10 +132,11 @@ pub fn mean_shift_test(
         }
     }
     if best_k == 0 {
-        return Err(AnalysisError::TooShort {
-            len: m,
-            need: 2 * min_segment,
-        });
+        return Err(NumError::TooShort {
+            needed: 2 * min_segment,
+            got: m,
+        }
+        .into());
     }
     let m1 = x[..best_k].iter().sum::<f64>() / best_k as f64;
     let m2 = x[best_k..].iter().sum::<f64>() / (m - best_k) as f64;
@@ -153,7 +155,7 @@ pub fn mean_shift_test(
     }
     let lrv = acc / (kk as f64 - 0.5);
     if !super::is_pos(lrv) {
-        return Err(AnalysisError::Singular(
+        return Err(AnalysisError::singular(
             "mean_shift_test: zero long-run variance",
         ));
     }
@@ -170,11 +172,9 @@ pub fn binary_segmentation(
     s: &ChangePointSettings,
 ) -> Result<Vec<ChangePoint>, AnalysisError> {
     if !super::is_pos(rate_hz) || !super::in_open_unit(s.alpha) {
-        return Err(AnalysisError::BadSetting(
-            "binary_segmentation: rate or alpha",
-        ));
+        return Err(AnalysisError::bad("binary_segmentation: rate or alpha"));
     }
-    check_finite(x, 1)?;
+    check_series(x, 1)?;
     let min_seg = ((s.min_segment_s * rate_hz).round() as usize).max(8);
     let mut found = Vec::new();
     let mut stack = vec![(0usize, x.len())];

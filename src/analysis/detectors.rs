@@ -277,12 +277,7 @@ pub fn score(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
-
-    fn noise(n: usize, seed: u64) -> Vec<f64> {
-        let mut r = Rng::new(seed);
-        (0..n).map(|_| r.normal()).collect()
-    }
+    use crate::rng::normal_vec as noise;
 
     #[test]
     fn interpolation_fills_runs_linearly_and_holds_at_the_ends() {

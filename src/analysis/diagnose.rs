@@ -41,21 +41,20 @@
 //! (structure re-polished there too: line frequencies, temperature lag, step times) — the test
 //! numbers never see it; the parameters gain the test part's data.
 
-use super::allan_check::{AllanFinding, AllanKind, allan_check};
-use super::changepoint::{ChangePoint, ChangePointSettings, binary_segmentation};
+use super::AnalysisError;
+use super::allan_check::{AllanKind, allan_check};
+use super::changepoint::{ChangePointSettings, binary_segmentation};
+pub use super::diagnose_result::{
+    CandidateScore, ChannelDiagnosis, Findings, Iteration, Overlay, PlotData, TestMetrics,
+};
 use super::diagnose_terms::{Ctx, Term, decimate, effects_of, polish_structure, term_contribution};
-use super::exogenous::{
-    Exogenous, ExogenousReport, analyse as exo_analyse, lagged_polynomial_scan,
-};
+use super::exogenous::{Exogenous, analyse as exo_analyse, lagged_polynomial_scan};
 use super::joint_model::{JointFit, mse};
-use super::quantisation::{Quantisation, Saturation, quantisation, saturation};
-use super::spectrum::{
-    PeakSettings, Psd, SpectralPeak, find_peaks, periodogram, refine_line, welch,
-};
-use super::{AnalysisError, check_finite};
-use crate::model::bias_model::Effect;
-use crate::stats::acf::{Whiteness, whiteness};
+use super::quantisation::{quantisation, saturation};
+use super::spectrum::{PeakSettings, find_peaks, periodogram, refine_line, welch};
+use crate::stats::acf::whiteness;
 use crate::stats::special::chi2_sf;
+use crate::stats::{NumError, check_series};
 use serde::Serialize;
 use std::ops::Range;
 
@@ -118,7 +117,7 @@ impl DiagnoseSettings {
             || !super::in_open_unit(self.alpha)
             || self.ljung_box_lags == 0
         {
-            return Err(AnalysisError::BadSetting("diagnose settings out of range"));
+            return Err(AnalysisError::bad("diagnose settings out of range"));
         }
         Ok(())
     }
@@ -165,10 +164,11 @@ pub fn split(n: usize, rate_hz: f64, s: &DiagnoseSettings) -> Result<Split, Anal
     // Each part must hold a usable AR fit and spectrum.
     let need = 8 * s.max_ar_order + 200;
     if a < need || b - a < need || n.saturating_sub(b) < need {
-        return Err(AnalysisError::TooShort {
-            len: n,
-            need: 3 * need,
-        });
+        return Err(NumError::TooShort {
+            needed: 3 * need,
+            got: n,
+        }
+        .into());
     }
     Ok(Split {
         train: 0..a,
@@ -176,137 +176,6 @@ pub fn split(n: usize, rate_hz: f64, s: &DiagnoseSettings) -> Result<Split, Anal
         test: b..n,
         proportional: prop,
     })
-}
-
-/// A candidate's score on validation.
-#[derive(Clone, Debug, Serialize)]
-pub struct CandidateScore {
-    /// Effect family.
-    pub family: String,
-    /// The candidate's structure (frequency, lag, time ...).
-    pub description: String,
-    /// Parameters it adds.
-    pub n_params: usize,
-    /// Q = validation one-step MSE reduction, units².
-    pub q: f64,
-    /// Λ = N_val ln(SSE₀/SSE₁).
-    pub lr: f64,
-    /// P(χ²(k) > Λ).
-    pub p_value: f64,
-}
-
-/// Test-set metrics of one model (fitted on train ∪ validation).
-#[derive(Clone, Debug, Serialize)]
-pub struct TestMetrics {
-    /// AR order.
-    pub ar_order: usize,
-    /// One-step innovation MSE on test, units².
-    pub mse_one_step: f64,
-    /// Open-loop MSE on test: mean of (y − c − Xβ)², units².
-    pub mse_open_loop: f64,
-    /// Ljung–Box of the test innovations.
-    pub ljung_box: Option<Whiteness>,
-}
-
-/// One added effect.
-#[derive(Clone, Debug, Serialize)]
-pub struct Iteration {
-    /// 1-based.
-    pub index: usize,
-    /// Family name.
-    pub family: String,
-    /// The effect with its parameters (from the train ∪ validation refit).
-    pub effect: Effect,
-    /// Its score and test.
-    pub score: CandidateScore,
-    /// Earlier effects dropped by the backward step of this iteration.
-    pub removed: Vec<String>,
-    /// All candidates scored in this iteration.
-    pub candidates: Vec<CandidateScore>,
-    /// Before adding it.
-    pub before: TestMetrics,
-    /// After adding it.
-    pub after: TestMetrics,
-    /// (before − after)/before of the one-step test MSE.
-    pub share_removed_one_step: f64,
-    /// (before − after)/before of the open-loop test MSE.
-    pub share_removed_open_loop: f64,
-}
-
-/// Residual analyses of one model on the test set.
-#[derive(Clone, Debug, Serialize)]
-pub struct Findings {
-    /// Whiteness of the innovations.
-    pub ljung_box: Option<Whiteness>,
-    /// Significant lines in the open-loop residual.
-    pub spectral_peaks: Vec<SpectralPeak>,
-    /// Steps in the open-loop residual.
-    pub change_points: Vec<ChangePoint>,
-    /// Exogenous correlation of the open-loop residual.
-    pub exogenous: Option<ExogenousReport>,
-    /// Allan deviation of the innovations vs a white residual.
-    pub allan: Option<AllanFinding>,
-}
-
-/// One effect's fitted contribution over the residual before it was added.
-#[derive(Clone, Debug, Default)]
-pub struct Overlay {
-    /// Effect family.
-    pub family: String,
-    /// Time, s from the start of the log.
-    pub t_s: Vec<f64>,
-    /// Open-loop residual of the previous model.
-    pub residual: Vec<f64>,
-    /// The new effect's fitted contribution.
-    pub effect: Vec<f64>,
-}
-
-/// Plot data (not serialised).
-#[derive(Clone, Debug, Default)]
-pub struct PlotData {
-    /// Welch spectrum of the test innovations, first and final model.
-    pub spectrum_before: Option<Psd>,
-    pub spectrum_after: Option<Psd>,
-    /// Allan deviation of the test innovations, first and final model.
-    pub allan_before: Vec<(f64, f64)>,
-    pub allan_after: Vec<(f64, f64)>,
-    /// Per iteration: the effect over the residual it explains.
-    pub overlays: Vec<Overlay>,
-}
-
-/// The diagnosis of one channel.
-#[derive(Clone, Debug, Serialize)]
-pub struct ChannelDiagnosis {
-    pub channel: String,
-    pub sample_rate_hz: f64,
-    pub n: usize,
-    pub split: Split,
-    /// Quantisation of the raw values.
-    pub quantisation: Option<Quantisation>,
-    /// Saturation of the raw values.
-    pub saturation: Option<Saturation>,
-    /// The first model on test.
-    pub baseline: TestMetrics,
-    /// What the first model left (test set).
-    pub baseline_findings: Findings,
-    /// Effects added, in order.
-    pub iterations: Vec<Iteration>,
-    /// Candidates of the last (rejected) round.
-    pub rejected: Vec<CandidateScore>,
-    /// The final model on test.
-    pub final_metrics: TestMetrics,
-    /// What the final model leaves (test set).
-    pub final_findings: Findings,
-    /// Learned effects for the bias model TOML (deployment refit on the whole log).
-    pub effects: Vec<Effect>,
-    /// Intercept of the deployment refit (the bias model's `mean` when effects apply on top).
-    pub intercept: f64,
-    /// AR coefficients of the deployment refit.
-    pub ar: Vec<f64>,
-    /// One-step innovation variance of the deployment refit.
-    pub innovation_var: f64,
-    #[serde(skip)]
-    pub plots: PlotData,
 }
 
 fn test_metrics(
@@ -450,17 +319,17 @@ pub fn diagnose_channel(
 ) -> Result<ChannelDiagnosis, AnalysisError> {
     s.validate()?;
     let y = input.values;
-    check_finite(y, 1)?;
+    check_series(y, 1)?;
     if !super::is_pos(input.rate_hz) {
-        return Err(AnalysisError::BadSetting("rate_hz must be > 0"));
+        return Err(AnalysisError::bad("rate_hz must be > 0"));
     }
     let n = y.len();
     if let Some(t) = input.exogenous.temperature_c {
-        check_finite(t, n)?;
+        check_series(t, n)?;
     }
     if let Some(f) = input.exogenous.specific_force_m_s2 {
         for c in f {
-            check_finite(c, n)?;
+            check_series(c, n)?;
         }
     }
     let sp = split(n, input.rate_hz, s)?;
@@ -597,7 +466,7 @@ pub fn diagnose_channel(
         let pos = terms.len() - 1;
         let effect = effects_of(&terms, &af, input.rate_hz)
             .pop()
-            .ok_or(AnalysisError::Singular("no effect"))?;
+            .ok_or_else(|| AnalysisError::singular("no effect"))?;
         // Overlay: the previous model's open-loop residual with the new effect's contribution.
         let prev_d = prev_fit.0.open_loop(y, &prev_fit.1);
         let contrib = match terms[pos] {

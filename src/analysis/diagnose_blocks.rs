@@ -19,6 +19,7 @@
 //! worsens held-out error passes.
 
 use super::AnalysisError;
+use crate::stats::NumError;
 use crate::stats::special::normal_sf;
 use serde::Serialize;
 use std::ops::Range;
@@ -53,10 +54,11 @@ impl Blocks {
         let len = steps * dec;
         let count = n / len;
         if count < 20 || len < 64 {
-            return Err(AnalysisError::TooShort {
-                len: n,
-                need: 20 * len.max(64),
-            });
+            return Err(NumError::TooShort {
+                needed: 20 * len.max(64),
+                got: n,
+            }
+            .into());
         }
         Ok(Blocks { n, dec, len, count })
     }

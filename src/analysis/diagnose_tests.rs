@@ -9,6 +9,7 @@
 
 use super::*;
 use crate::analysis::synth_test::{SynthLog, SynthSpec, generate};
+use crate::model::bias_model::Effect;
 
 fn run_on(log: &SynthLog, y: &[f64]) -> ChannelDiagnosis {
     let f = &log.specific_force;

@@ -28,6 +28,7 @@
 //! Cost: a handful of passes over the full-rate series (FFTs of the selection blocks, 10 phasor
 //! passes per candidate line and one AR lattice) and everything slow on the decimated series.
 
+use super::AnalysisError;
 use super::diagnose::ChannelInput;
 use super::diagnose_blocks::{Blocks, HeldOutTest, held_out_test_floor, step_means};
 use super::diagnose_lines::{
@@ -36,9 +37,9 @@ use super::diagnose_lines::{
 use super::diagnose_slow::{SlowCtx, SlowTerm, lagged, select};
 use super::diagnose_wander::{WanderKind, WanderParams, classify, innovations};
 use super::quantisation::{Quantisation, quantisation};
-use super::{AnalysisError, check_finite};
 use crate::model::bias_model::Effect;
 use crate::model::{ArFit, burg, burg_orders};
+use crate::stats::check_series;
 use serde::Serialize;
 
 /// Settings of the whole-log diagnosis.
@@ -216,7 +217,7 @@ fn ar_aic(x: &[f64], max: usize) -> Result<ArFit, AnalysisError> {
             let aic = |f: &ArFit| n * f.noise_var.max(1e-300).ln() + 2.0 * f.order() as f64;
             aic(a).total_cmp(&aic(b))
         })
-        .ok_or(AnalysisError::Singular("no AR fit"))
+        .ok_or_else(|| AnalysisError::singular("no AR fit"))
 }
 
 /// One-step AR errors of `x` (mean `ar.mean`) at every sample.
@@ -281,18 +282,18 @@ pub fn diagnose_whole(
 ) -> Result<WholeDiagnosis, AnalysisError> {
     let y = input.values;
     let fs = input.rate_hz;
-    check_finite(y, 1)?;
+    check_series(y, 1)?;
     if !super::is_pos(fs) || !super::in_open_unit(s.alpha) {
-        return Err(AnalysisError::BadSetting("rate_hz > 0 and alpha in (0, 1)"));
+        return Err(AnalysisError::bad("rate_hz > 0 and alpha in (0, 1)"));
     }
     let n = y.len();
     let exo = &input.exogenous;
     if let Some(t) = exo.temperature_c {
-        check_finite(t, n)?;
+        check_series(t, n)?;
     }
     if let Some(f) = exo.specific_force_m_s2 {
         for c in f {
-            check_finite(c, n)?;
+            check_series(c, n)?;
         }
     }
     let blocks = Blocks::new(n, fs, s.dec_s, s.blocks_target, s.block_s)?;
@@ -390,7 +391,7 @@ pub fn diagnose_whole(
     };
     let min_gap = blocks.len / dec;
     let slow = select(&ctx, s.alpha, s.max_slow_terms, min_gap)
-        .ok_or(AnalysisError::Singular("slow model"))?;
+        .ok_or_else(|| AnalysisError::singular("slow model"))?;
     rejected.extend(slow.rejected.iter().cloned());
     // 3. Wander of what the slow model leaves.
     progress("wander");
@@ -607,5 +608,5 @@ fn ctx_all_fit(
     terms: &[SlowTerm],
 ) -> Result<super::diagnose_slow::SlowFit, AnalysisError> {
     ctx.fit(terms, true)
-        .ok_or(AnalysisError::Singular("slow model refit on the whole log"))
+        .ok_or_else(|| AnalysisError::singular("slow model refit on the whole log"))
 }

@@ -11,7 +11,8 @@
 //! R² on serially correlated data is descriptive only: the close-the-loop decision is made by the
 //! validation test in `diagnose`, never here.
 
-use super::{AnalysisError, check_finite};
+use super::AnalysisError;
+use crate::stats::{NumError, check_same_len, check_series};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
@@ -32,12 +33,10 @@ pub struct Regression {
 pub fn ols(y: &[f64], columns: &[&[f64]]) -> Result<Regression, AnalysisError> {
     let n = y.len();
     let k = columns.len();
-    check_finite(y, k + 2)?;
+    check_series(y, k + 2)?;
     for c in columns {
-        if c.len() != n {
-            return Err(AnalysisError::LengthMismatch(c.len(), n));
-        }
-        check_finite(c, 1)?;
+        check_same_len(n, c.len())?;
+        check_series(c, 1)?;
     }
     let nf = n as f64;
     let ym = y.iter().sum::<f64>() / nf;
@@ -70,9 +69,7 @@ pub fn ols(y: &[f64], columns: &[&[f64]]) -> Result<Regression, AnalysisError> {
     }
     let sol = ata
         .cholesky()
-        .ok_or(AnalysisError::Singular(
-            "ols: dependent or constant columns",
-        ))?
+        .ok_or_else(|| AnalysisError::singular("ols: dependent or constant columns"))?
         .solve(&atb);
     let coefficients: Vec<f64> = sol.iter().copied().collect();
     let ssr: f64 = coefficients
@@ -135,14 +132,18 @@ pub fn lagged_polynomial_scan(
         || !(super::is_pos(max_lag_s) || max_lag_s == 0.0)
         || degree == 0
     {
-        return Err(AnalysisError::BadSetting(
+        return Err(AnalysisError::bad(
             "lagged_polynomial_scan: rate, lag grid or degree",
         ));
     }
     if offset + y.len() > x.len() {
-        return Err(AnalysisError::LengthMismatch(offset + y.len(), x.len()));
+        return Err(NumError::LengthMismatch {
+            expected: offset + y.len(),
+            got: x.len(),
+        }
+        .into());
     }
-    check_finite(x, 1)?;
+    check_series(x, 1)?;
     let step = ((step_s * rate_hz).round() as usize).max(1);
     let max_lag = (max_lag_s * rate_hz).round() as usize;
     let mut best: Option<LagScan> = None;
@@ -177,9 +178,9 @@ pub fn lagged_polynomial_scan(
         }
         lag += step;
     }
-    let mut b = best.ok_or(AnalysisError::Singular(
-        "lagged_polynomial_scan: exogenous series constant",
-    ))?;
+    let mut b = best.ok_or_else(|| {
+        AnalysisError::singular("lagged_polynomial_scan: exogenous series constant")
+    })?;
     b.share_by_lag = shares;
     Ok(b)
 }
@@ -235,7 +236,11 @@ pub fn analyse(
     }
     for (name, a) in exo.other_axes {
         if a.len() < range.end {
-            return Err(AnalysisError::LengthMismatch(a.len(), range.end));
+            return Err(NumError::LengthMismatch {
+                expected: range.end,
+                got: a.len(),
+            }
+            .into());
         }
         let seg = &a[range.clone()];
         if let Ok(fit) = ols(y, &[seg]) {
@@ -249,7 +254,11 @@ pub fn analyse(
     if let Some(f) = exo.specific_force_m_s2 {
         for c in f {
             if c.len() < range.end {
-                return Err(AnalysisError::LengthMismatch(c.len(), range.end));
+                return Err(NumError::LengthMismatch {
+                    expected: range.end,
+                    got: c.len(),
+                }
+                .into());
             }
         }
         let segs = [

@@ -15,6 +15,7 @@
 //!   ACF grows quickly). Lag 0 is excluded, so additive white noise does not bias sigma or T_c.
 
 use crate::model::ar::autocovariance_biased;
+use crate::stats::{NumError, check_series};
 use serde::{Deserialize, Serialize};
 
 /// How to read the GM parameters off the autocorrelation.
@@ -43,14 +44,11 @@ pub struct GaussMarkovFit {
 /// Why a GM fit failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum GmError {
-    #[error("need at least {needed} samples, got {got}")]
-    TooShort { needed: usize, got: usize },
+    /// Too short, non-finite or constant (the shared numerical vocabulary, [`NumError`]).
+    #[error(transparent)]
+    Numeric(#[from] NumError),
     #[error("sample rate must be positive and finite")]
     BadRate,
-    #[error("non-finite value at index {0}")]
-    NonFinite(usize),
-    #[error("series has zero variance")]
-    ZeroVariance,
     #[error(
         "autocorrelation does not decay within {0} lags (correlation time too long for the record or max_lag)"
     )]
@@ -70,19 +68,11 @@ pub fn fit_gauss_markov(
         return Err(GmError::BadRate);
     }
     let needed = (max_lag + 1).max(8) * 2;
-    if x.len() < needed {
-        return Err(GmError::TooShort {
-            needed,
-            got: x.len(),
-        });
-    }
-    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-        return Err(GmError::NonFinite(i));
-    }
+    check_series(x, needed)?;
     let dt = 1.0 / rate_hz;
     let (r, _) = autocovariance_biased(x, max_lag.max(2));
     if r[0].is_nan() || r[0] <= 0.0 {
-        return Err(GmError::ZeroVariance);
+        return Err(NumError::Constant.into());
     }
     match method {
         GmMethod::OneOverE => {

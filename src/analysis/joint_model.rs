@@ -31,6 +31,7 @@
 
 use super::AnalysisError;
 use crate::model::{ArFit, burg, burg_orders};
+use crate::stats::{NumError, check_same_len, check_series};
 use nalgebra::{DMatrix, DVector};
 use std::ops::Range;
 
@@ -84,7 +85,7 @@ fn lstsq(x: &DMatrix<f64>, y: &DVector<f64>) -> Result<DVector<f64>, AnalysisErr
         })
         .collect();
     if d.contains(&0.0) {
-        return Err(AnalysisError::Singular(
+        return Err(AnalysisError::singular(
             "joint model: a regressor is zero on the fit range",
         ));
     }
@@ -92,9 +93,9 @@ fn lstsq(x: &DMatrix<f64>, y: &DVector<f64>) -> Result<DVector<f64>, AnalysisErr
     let bs = DVector::from_fn(k, |i, _| b[i] * d[i]);
     let z = gs
         .cholesky()
-        .ok_or(AnalysisError::Singular(
-            "joint model: regressors collinear on the fit range",
-        ))?
+        .ok_or_else(|| {
+            AnalysisError::singular("joint model: regressors collinear on the fit range")
+        })?
         .solve(&bs);
     Ok(DVector::from_fn(k, |i, _| z[i] * d[i]))
 }
@@ -118,18 +119,17 @@ pub fn fit(
     ar_order: usize,
     level: LevelSpec,
 ) -> Result<JointFit, AnalysisError> {
-    super::check_finite(y, 1)?;
+    check_series(y, 1)?;
     if range.end > y.len() || range.len() < 4 * ar_order + cols.len() + 16 {
-        return Err(AnalysisError::TooShort {
-            len: range.len(),
-            need: 4 * ar_order + cols.len() + 16,
-        });
+        return Err(NumError::TooShort {
+            needed: 4 * ar_order + cols.len() + 16,
+            got: range.len(),
+        }
+        .into());
     }
     for c in cols {
-        if c.len() != y.len() {
-            return Err(AnalysisError::LengthMismatch(c.len(), y.len()));
-        }
-        super::check_finite(c, 1)?;
+        check_same_len(y.len(), c.len())?;
+        check_series(c, 1)?;
     }
     let x = design(cols, range.clone());
     let yv = DVector::from_column_slice(&y[range.clone()]);
@@ -337,7 +337,7 @@ fn set_level(
     k: f64,
 ) -> Result<(), AnalysisError> {
     if !super::in_open_unit(k) {
-        return Err(AnalysisError::BadSetting("level gain must be in (0, 1)"));
+        return Err(AnalysisError::bad("level gain must be in (0, 1)"));
     }
     let l = level_track(d, k);
     let z: Vec<f64> = d.iter().zip(&l).map(|(a, b)| a - b).collect();
@@ -401,7 +401,7 @@ pub fn mse(x: &[f64], range: Range<usize>) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
+    use crate::rng::{Rng, ar_series};
 
     #[test]
     fn regression_with_ar1_errors_recovers_beta_and_phi() {
@@ -454,13 +454,9 @@ mod tests {
         // Without regressors or level, `fit_orders` must give what `fit` gives order by order
         // (same intercept, same AR to Burg's rounding: 1e-12); orders the range is too short
         // for are None, as `fit` errors there.
-        let mut rng = Rng::new(23);
-        let mut u = 0.0;
-        let y: Vec<f64> = (0..3000)
-            .map(|_| {
-                u = 0.9 * u + rng.normal();
-                2.0 + u
-            })
+        let y: Vec<f64> = ar_series(&mut Rng::new(23), 3000, &[0.9], 1.0)
+            .into_iter()
+            .map(|u| 2.0 + u)
             .collect();
         let range = 100..200; // 100 samples: orders up to 21 allowed (4 p + 16 <= 100)
         let all = fit_orders(&y, &[], range.clone(), 25, LevelSpec::None);

@@ -14,6 +14,7 @@ pub mod diagnose;
 pub mod diagnose_blocks;
 pub mod diagnose_lines;
 pub mod diagnose_report;
+pub mod diagnose_result;
 pub mod diagnose_slow;
 mod diagnose_terms;
 pub mod diagnose_wander;
@@ -29,38 +30,29 @@ pub mod svg;
 pub(crate) mod synth_test;
 pub mod wavelet;
 
+use crate::stats::NumError;
+
 /// Why an analysis could not run.
 #[derive(Debug, thiserror::Error)]
 pub enum AnalysisError {
-    /// Too few samples for the analysis.
-    #[error("series too short: {len} samples, need {need}")]
-    TooShort { len: usize, need: usize },
-    /// NaN or infinite input.
-    #[error("non-finite input")]
-    NonFinite,
-    /// Series that must have equal length do not.
-    #[error("length mismatch: {0} vs {1}")]
-    LengthMismatch(usize, usize),
-    /// A setting outside its domain.
-    #[error("bad setting: {0}")]
-    BadSetting(&'static str),
-    /// A least-squares system was singular.
-    #[error("singular least-squares system: {0}")]
-    Singular(&'static str),
+    /// Too few samples, non-finite input, lengths that do not match, a setting outside its
+    /// domain, a singular least-squares system (the shared numerical vocabulary, [`NumError`]).
+    #[error(transparent)]
+    Numeric(#[from] NumError),
     /// The underlying model fitter failed.
     #[error(transparent)]
     Model(#[from] crate::model::ModelError),
 }
 
-/// Reject empty or non-finite input once, at the boundary of each analysis.
-pub(crate) fn check_finite(x: &[f64], need: usize) -> Result<(), AnalysisError> {
-    if x.len() < need {
-        return Err(AnalysisError::TooShort { len: x.len(), need });
+impl AnalysisError {
+    /// [`NumError::BadSetting`] with a message, as an analysis error.
+    pub(crate) fn bad(msg: impl Into<String>) -> Self {
+        NumError::bad(msg).into()
     }
-    if x.iter().any(|v| !v.is_finite()) {
-        return Err(AnalysisError::NonFinite);
+    /// [`NumError::Singular`] naming the system, as an analysis error.
+    pub(crate) fn singular(what: impl Into<String>) -> Self {
+        NumError::singular(what).into()
     }
-    Ok(())
 }
 
 /// `x > 0` and not NaN (settings checks that must reject NaN too).

@@ -13,7 +13,8 @@
 //! code next to it. The extreme is flagged when it occurs at least 3 times and more often than
 //! the neighbouring code (or at all repeatedly, for unquantised data).
 
-use super::{AnalysisError, check_finite};
+use super::AnalysisError;
+use crate::stats::check_series;
 use serde::Serialize;
 
 /// Quantisation finding.
@@ -35,7 +36,7 @@ pub struct Quantisation {
 
 /// Estimate the LSB of `x` (None when the data are not visibly quantised).
 pub fn quantisation(x: &[f64]) -> Result<Quantisation, AnalysisError> {
-    check_finite(x, 16)?;
+    check_series(x, 16)?;
     let n = x.len();
     let mut s = x.to_vec();
     s.sort_by(|a, b| a.total_cmp(b));
@@ -117,7 +118,7 @@ pub struct Saturation {
 
 /// Detect clipping at either extreme of `x`, given its LSB if quantised.
 pub fn saturation(x: &[f64], lsb: Option<f64>) -> Result<Saturation, AnalysisError> {
-    check_finite(x, 2)?;
+    check_series(x, 2)?;
     let max = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let min = x.iter().copied().fold(f64::INFINITY, f64::min);
     let at_max = x.iter().filter(|v| **v == max).count();

@@ -26,8 +26,9 @@
 //! x ≈ a sin(2πft) + b cos(2πft) = A sin(2πft + φ), A = √(a²+b²), φ = atan2(b, a). Time t is
 //! measured from sample 0 of the whole log (`t0_index`), so the phase is absolute.
 
-use super::{AnalysisError, check_finite};
+use super::AnalysisError;
 use crate::model::fos::{FosSettings, fos_search};
+use crate::stats::{NumError, check_series};
 use rustfft::{FftPlanner, num_complex::Complex};
 use serde::Serialize;
 use std::f64::consts::PI;
@@ -45,9 +46,9 @@ pub struct Psd {
 
 /// Hann-windowed periodogram of `x` (mean removed) sampled at `rate_hz`.
 pub fn periodogram(x: &[f64], rate_hz: f64) -> Result<Psd, AnalysisError> {
-    check_finite(x, 8)?;
+    check_series(x, 8)?;
     if !super::is_pos(rate_hz) {
-        return Err(AnalysisError::BadSetting("rate_hz must be > 0"));
+        return Err(AnalysisError::bad("rate_hz must be > 0"));
     }
     let n = x.len();
     let mean = x.iter().sum::<f64>() / n as f64;
@@ -81,9 +82,9 @@ pub fn periodogram(x: &[f64], rate_hz: f64) -> Result<Psd, AnalysisError> {
 
 /// Welch average of Hann periodograms over segments of `seg_len` samples with 50 % overlap.
 pub fn welch(x: &[f64], rate_hz: f64, seg_len: usize) -> Result<Psd, AnalysisError> {
-    check_finite(x, seg_len.max(8))?;
+    check_series(x, seg_len.max(8))?;
     if seg_len < 8 {
-        return Err(AnalysisError::BadSetting("welch: seg_len must be >= 8"));
+        return Err(AnalysisError::bad("welch: seg_len must be >= 8"));
     }
     let step = seg_len / 2;
     let mut acc: Option<Psd> = None;
@@ -102,9 +103,9 @@ pub fn welch(x: &[f64], rate_hz: f64, seg_len: usize) -> Result<Psd, AnalysisErr
         count += 1;
         start += step;
     }
-    let mut a = acc.ok_or(AnalysisError::TooShort {
-        len: x.len(),
-        need: seg_len,
+    let mut a = acc.ok_or(NumError::TooShort {
+        needed: seg_len,
+        got: x.len(),
     })?;
     a.density.iter_mut().for_each(|v| *v /= count as f64);
     Ok(a)
@@ -265,13 +266,13 @@ pub fn refine_line(
     f_guess_hz: f64,
     half_width_hz: f64,
 ) -> Result<RefinedLine, AnalysisError> {
-    check_finite(x, 16)?;
+    check_series(x, 16)?;
     if !super::is_pos(rate_hz)
         || !super::is_pos(half_width_hz)
         || !super::is_pos(f_guess_hz)
         || f_guess_hz >= rate_hz / 2.0
     {
-        return Err(AnalysisError::BadSetting(
+        return Err(AnalysisError::bad(
             "refine_line: frequency window outside (0, f_s/2)",
         ));
     }
@@ -308,7 +309,7 @@ pub fn refine_line(
     let first = *fit
         .selected
         .first()
-        .ok_or(AnalysisError::Singular("refine_line: FOS selected nothing"))?;
+        .ok_or_else(|| AnalysisError::singular("refine_line: FOS selected nothing"))?;
     let f_fos = freqs[first / 2];
     // Golden-section maximisation of the pair's Q over ±½ bin around the FOS pick. A single
     // sin or cos column peaks where its phase best matches, which can sit a few grid steps from

@@ -15,6 +15,8 @@
 //! soft-threshold every detail level `d <- sign(d) max(|d| - lambda, 0)`, keep the
 //! approximation, reconstruct.
 
+use crate::stats::{NumError, check_series};
+
 /// db4 decomposition low-pass filter (PyWavelets `Wavelet("db4").dec_lo`).
 pub const DB4_DEC_LO: [f64; 8] = [
     -0.010_597_401_785_069_032,
@@ -40,12 +42,12 @@ pub fn db4_dec_hi() -> [f64; 8] {
 /// Why a wavelet operation failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum WaveletError {
-    #[error("signal of length {len} too short for {levels} levels")]
-    TooShort { len: usize, levels: usize },
+    /// Too short for the levels asked (`levels` levels need 2^(levels−1) + 1 samples), or
+    /// non-finite (the shared numerical vocabulary, [`NumError`]).
+    #[error(transparent)]
+    Numeric(#[from] NumError),
     #[error("levels must be 1..=8, got {0}")]
     BadLevels(usize),
-    #[error("non-finite value at index {0}")]
-    NonFinite(usize),
     #[error("coefficient lengths do not match the decomposition")]
     Inconsistent,
 }
@@ -101,19 +103,13 @@ pub fn wavedec(x: &[f64], levels: usize) -> Result<Decomposition, WaveletError> 
     if levels == 0 || levels > 8 {
         return Err(WaveletError::BadLevels(levels));
     }
-    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-        return Err(WaveletError::NonFinite(i));
-    }
+    // Each level halves the length (rounding up) and needs at least 2 samples in.
+    check_series(x, (1 << (levels - 1)) + 1)?;
     let mut cur = x.to_vec();
     let mut details = Vec::with_capacity(levels);
     let mut lengths = Vec::with_capacity(levels);
     for _ in 0..levels {
-        if cur.len() < 2 {
-            return Err(WaveletError::TooShort {
-                len: x.len(),
-                levels,
-            });
-        }
+        debug_assert!(cur.len() >= 2);
         lengths.push(cur.len());
         if cur.len() % 2 == 1 {
             let last = cur[cur.len() - 1];

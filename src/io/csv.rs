@@ -287,19 +287,31 @@ pub fn read_csv_report(
     path: &Path,
     o: &ImportOptions,
 ) -> Result<(Descriptor, Vec<Sample>, ImportReport), CsvError> {
-    let mut lines = open_text(path)?.lines();
-    let io = |err| CsvError::Io {
+    // RFC 4180 records (quoted cells, CRLF) by the `csv` crate; rows may have any number of
+    // cells (a short row is reported below with the column it lacks).
+    let mut rd = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(open_text(path)?);
+    let io = |err: csv::Error| CsvError::Io {
         path: path.into(),
-        err,
+        err: err.into(),
     };
-    let header_line = match lines.next() {
-        Some(l) => l.map_err(io)?,
-        None => return Err(CsvError::Empty { path: path.into() }),
-    };
-    let header: Vec<String> = header_line
-        .trim_start_matches('\u{feff}')
-        .split(',')
-        .map(|s| s.trim().to_string())
+    let mut rec = csv::StringRecord::new();
+    if !rd.read_record(&mut rec).map_err(io)? {
+        return Err(CsvError::Empty { path: path.into() });
+    }
+    let header: Vec<String> = rec
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let s = if i == 0 {
+                s.trim_start_matches('\u{feff}')
+            } else {
+                s
+            };
+            s.trim().to_string()
+        })
         .collect();
     let lay = detect(&header, o, path)?;
     let gscale = if lay.gyro == GyroUnit::DegS {
@@ -313,13 +325,12 @@ pub fn read_csv_report(
     // Empty cells per channel, and the line of the first.
     let mut empty = [0usize; 6];
     let mut first_empty: [Option<usize>; 6] = [None; 6];
-    for (i, line) in lines.enumerate() {
-        let line = line.map_err(io)?;
-        let lineno = i + 2;
-        if line.trim().is_empty() {
+    while rd.read_record(&mut rec).map_err(io)? {
+        let lineno = rec.position().map_or(0, |p| p.line() as usize);
+        if rec.len() == 1 && rec[0].trim().is_empty() {
             continue;
         }
-        let cells: Vec<&str> = line.split(',').collect();
+        let cells = &rec;
         let get = |k: usize| -> Result<Option<f64>, CsvError> {
             let Some(p) = lay.idx[k] else { return Ok(None) };
             let cell = cells

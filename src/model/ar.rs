@@ -15,6 +15,7 @@
 //! (statsmodels `yule_walker(method="mle")` uses the same estimate).
 
 use super::{ModelError, check_ar_input, mean};
+use crate::stats::NumError;
 use crate::stats::ar_poly::levinson;
 
 /// A fitted AR(p) model.
@@ -82,10 +83,10 @@ pub fn yule_walker(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
     check_ar_input(x, p)?;
     let (r, mu) = autocovariance_biased(x, p);
     if r[0].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-        return Err(ModelError::ZeroVariance);
+        return Err(ModelError::Numeric(NumError::Constant));
     }
     let l = levinson(&r, p).ok_or_else(|| {
-        ModelError::Singular("Levinson-Durbin error energy reached zero".to_string())
+        ModelError::singular("Levinson-Durbin error energy reached zero".to_string())
     })?;
     Ok(ArFit {
         coeffs: l.phi,
@@ -105,7 +106,7 @@ pub fn yule_walker_orders(x: &[f64], p: usize) -> Result<Vec<ArFit>, ModelError>
     check_ar_input(x, p)?;
     let (r, mu) = autocovariance_biased(x, p);
     if r[0].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-        return Err(ModelError::ZeroVariance);
+        return Err(ModelError::Numeric(NumError::Constant));
     }
     // The recursion of `levinson_durbin`, keeping each order's (phi, E_m).
     let mut fits: Vec<ArFit> = Vec::with_capacity(p);
@@ -133,7 +134,7 @@ pub fn yule_walker_orders(x: &[f64], p: usize) -> Result<Vec<ArFit>, ModelError>
         });
     }
     if fits.is_empty() {
-        return Err(ModelError::Singular(format!(
+        return Err(ModelError::singular(format!(
             "Levinson-Durbin error energy reached {e} at order 1"
         )));
     }
@@ -203,7 +204,7 @@ mod tests {
         }
         assert_eq!(
             yule_walker_orders(&[2.0; 20], 2),
-            Err(ModelError::ZeroVariance)
+            Err(ModelError::Numeric(NumError::Constant))
         );
     }
 
@@ -212,13 +213,16 @@ mod tests {
         assert_eq!(yule_walker(&[1.0; 10], 0), Err(ModelError::BadOrder(0)));
         assert!(matches!(
             yule_walker(&[1.0, 2.0], 3),
-            Err(ModelError::TooShort { .. })
+            Err(ModelError::Numeric(NumError::TooShort { .. }))
         ));
         assert_eq!(
             yule_walker(&[1.0, f64::NAN, 2.0, 3.0], 1),
-            Err(ModelError::NonFinite { index: 1 })
+            Err(ModelError::Numeric(NumError::NonFinite { index: 1 }))
         );
-        assert_eq!(yule_walker(&[2.0; 20], 2), Err(ModelError::ZeroVariance));
+        assert_eq!(
+            yule_walker(&[2.0; 20], 2),
+            Err(ModelError::Numeric(NumError::Constant))
+        );
     }
 
     #[test]

@@ -3,7 +3,7 @@
 use super::*;
 use crate::model::fos::FosSettings;
 use crate::model::fos_model::FosModelSpec;
-use crate::rng::Rng;
+use crate::rng::{Rng, ar_series};
 
 /// One-step prediction of the file's AR model: `mean + sum ar[i-1] (y[n-i] - mean)`, with
 /// `history` newest last (at least `ar.len()` values).
@@ -31,15 +31,9 @@ fn assert_same_prediction(m: &ChannelBiasModel, fos: &FosModel, history: &[f64])
 fn linear_fos_converts_to_the_same_ar_predictor() {
     // Seed 20240605: y(n) = 3 + x(n), x(n) = 0.6 x(n-1) + 0.25 x(n-2) + 0.1 e(n), 20 000
     // samples; FOS CP=1, L=10 as `fit --bias-method fos` runs it.
-    let mut rng = Rng::new(20_240_605);
-    let (mut x1, mut x2) = (0.0f64, 0.0f64);
-    let y: Vec<f64> = (0..20_000)
-        .map(|_| {
-            let x = 0.6 * x1 + 0.25 * x2 + 0.1 * rng.normal();
-            x2 = x1;
-            x1 = x;
-            3.0 + x
-        })
+    let y: Vec<f64> = ar_series(&mut Rng::new(20_240_605), 20_000, &[0.6, 0.25], 0.1)
+        .into_iter()
+        .map(|x| 3.0 + x)
         .collect();
     let l = 10;
     let (fos, _) =
@@ -208,7 +202,7 @@ fn hand_written_toml_with_inline_effects_parses() {
 
 #[test]
 fn unknown_fields_are_rejected() {
-    let text = r#"
+    let base = r#"
         [[channels]]
         channel = "gx"
         method = "burg"
@@ -217,27 +211,19 @@ fn unknown_fields_are_rejected() {
         ar = []
         innovation_var = 1e-6
         white_noise_var = 0.0
-        colour = "blue"
     "#;
-    assert!(matches!(
-        BiasModelFile::from_toml_str(text),
-        Err(BiasModelError::Parse(_))
-    ));
-    let text_effect = r#"
-        [[channels]]
-        channel = "gx"
-        method = "burg"
-        sample_rate_hz = 100.0
-        mean = 0.0
-        ar = []
-        innovation_var = 1e-6
-        white_noise_var = 0.0
-        effects = [ { kind = "step", t_s = 1.0, size = 0.1, extra = 2 } ]
-    "#;
-    assert!(matches!(
-        BiasModelFile::from_toml_str(text_effect),
-        Err(BiasModelError::Parse(_))
-    ));
+    for extra in [
+        r#"colour = "blue""#,
+        r#"effects = [ { kind = "step", t_s = 1.0, size = 0.1, extra = 2 } ]"#,
+    ] {
+        assert!(
+            matches!(
+                BiasModelFile::from_toml_str(&format!("{base}{extra}\n")),
+                Err(BiasModelError::Parse(_))
+            ),
+            "{extra}"
+        );
+    }
 }
 
 #[test]

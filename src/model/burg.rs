@@ -23,6 +23,7 @@
 use super::ar::ArFit;
 use super::kernels::{BLOCK, CrossEnergy, sum};
 use super::{ModelError, check_ar_input};
+use crate::stats::NumError;
 
 /// Fit AR(p) by Burg's method.
 pub fn burg(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
@@ -66,9 +67,9 @@ fn burg_lattice(x: &[f64], p: usize) -> Result<(Vec<ArFit>, Option<ModelError>),
         // den = sum_{n=m}^{N-1} f_{m-1}(n)^2 + b_{m-1}(n-1)^2
         if den.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             let e = if m == 1 {
-                ModelError::ZeroVariance
+                ModelError::Numeric(NumError::Constant)
             } else {
-                ModelError::Singular(format!("Burg error energy vanished at order {m}"))
+                ModelError::singular(format!("Burg error energy vanished at order {m}"))
             };
             return Ok((fits, Some(e)));
         }
@@ -117,18 +118,12 @@ fn burg_lattice(x: &[f64], p: usize) -> Result<(Vec<ArFit>, Option<ModelError>),
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
+    use crate::rng::{Rng, ar_series};
+    use crate::stats::ar_poly::reflection_coefficients;
 
     #[test]
     fn burg_ar1_recovers_phi() {
-        let mut rng = Rng::new(21);
-        let mut v = 0.0;
-        let x: Vec<f64> = (0..100_000)
-            .map(|_| {
-                v = -0.6 * v + 0.5 * rng.normal();
-                v
-            })
-            .collect();
+        let x = ar_series(&mut Rng::new(21), 100_000, &[-0.6], 0.5);
         let f = burg(&x, 1).unwrap();
         // sd(phi_hat) = sqrt((1-0.36)/1e5) = 0.0025; 5 sd
         assert!((f.coeffs[0] + 0.6).abs() < 0.013, "{:?}", f.coeffs);
@@ -136,37 +131,15 @@ mod tests {
         assert!((f.noise_var - 0.25).abs() < 0.0056, "{}", f.noise_var);
     }
 
-    /// Step-down (inverse Levinson) recursion: AR coefficients back to reflection coefficients.
-    fn step_down(phi: &[f64]) -> Vec<f64> {
-        let mut a = phi.to_vec();
-        let mut k = vec![0.0; a.len()];
-        for m in (1..=a.len()).rev() {
-            let km = a[m - 1];
-            k[m - 1] = km;
-            let prev: Vec<f64> = (1..m)
-                .map(|i| (a[i - 1] + km * a[m - i - 1]) / (1.0 - km * km))
-                .collect();
-            a.truncate(m - 1);
-            a.copy_from_slice(&prev);
-        }
-        k
-    }
-
     #[test]
     fn burg_model_is_stable_even_near_a_unit_root() {
         // A random walk (unit root): Burg's reflection coefficients, recovered from the AR
         // coefficients by the step-down recursion, must all have |k| < 1 (a stable model).
-        let mut rng = Rng::new(4);
-        let mut v = 0.0;
-        let x: Vec<f64> = (0..5000)
-            .map(|_| {
-                v += rng.normal();
-                v
-            })
-            .collect();
+        let x = ar_series(&mut Rng::new(4), 5000, &[1.0], 1.0);
         let f = burg(&x, 6).unwrap();
-        let k = step_down(&f.coeffs);
-        assert!(k.iter().all(|k| k.abs() < 1.0), "{k:?}");
+        let k = reflection_coefficients(&f.coeffs, 0.0);
+        assert!(k.is_some(), "{:?}", f.coeffs);
+        let k = k.unwrap();
         // the first reflection coefficient of a random walk is close to 1
         assert!(k[0] > 0.99, "{k:?}");
     }
@@ -247,12 +220,18 @@ mod tests {
         let all = burg_orders(&x, 3).unwrap();
         assert_eq!(all.len(), 1);
         assert!((all[0].coeffs[0] + 1.0).abs() < 1e-12, "{:?}", all[0]);
-        assert!(matches!(burg(&x, 2), Err(ModelError::Singular(_))));
+        assert!(matches!(
+            burg(&x, 2),
+            Err(ModelError::Numeric(NumError::Singular(_)))
+        ));
         assert!(burg(&x, 1).is_ok());
     }
 
     #[test]
     fn burg_rejects_constant_series() {
-        assert_eq!(burg(&[3.0; 50], 2), Err(ModelError::ZeroVariance));
+        assert_eq!(
+            burg(&[3.0; 50], 2),
+            Err(ModelError::Numeric(NumError::Constant))
+        );
     }
 }

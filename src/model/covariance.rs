@@ -9,6 +9,7 @@
 
 use super::ar::ArFit;
 use super::{ModelError, check_ar_input, mean};
+use crate::stats::NumError;
 use nalgebra::{DMatrix, DVector};
 
 /// Fit AR(p) by the covariance (least-squares) method.
@@ -30,14 +31,14 @@ pub fn covariance(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
         }
     }
     if c[(0, 0)] <= 0.0 {
-        return Err(ModelError::ZeroVariance);
+        return Err(ModelError::Numeric(NumError::Constant));
     }
     let a = c.view((1, 1), (p, p)).into_owned();
     let rhs = DVector::from_fn(p, |i, _| c[(i + 1, 0)]);
     let max_diag = (0..p).map(|i| a[(i, i)]).fold(0.0, f64::max);
     let chol = a
         .cholesky()
-        .ok_or_else(|| ModelError::Singular("covariance matrix not positive definite".into()))?;
+        .ok_or_else(|| ModelError::singular("covariance matrix not positive definite"))?;
     // Cholesky may "succeed" on an exactly singular matrix through rounding; a pivot below
     // 1e-12 of the largest diagonal means fewer than ~4 significant digits would survive in
     // phi, so report the system as singular instead of returning noise.
@@ -46,7 +47,7 @@ pub fn covariance(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
         .map(|i| l[(i, i)] * l[(i, i)])
         .fold(f64::INFINITY, f64::min);
     if min_pivot_sq.is_nan() || min_pivot_sq <= 1e-12 * max_diag {
-        return Err(ModelError::Singular(format!(
+        return Err(ModelError::singular(format!(
             "covariance matrix ill-conditioned (pivot^2 {min_pivot_sq:e} vs diag {max_diag:e})"
         )));
     }
@@ -71,20 +72,14 @@ pub fn covariance(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
+    use crate::rng::{Rng, ar_series};
 
     #[test]
     fn covariance_ar2_recovers_coefficients() {
         // AR(2) with phi = (1.2, -0.5) (stable, complex poles), N = 100k.
-        let mut rng = Rng::new(8);
-        let (mut v1, mut v2) = (0.0, 0.0);
-        let x: Vec<f64> = (0..100_000)
-            .map(|_| {
-                let v = 1.2 * v1 - 0.5 * v2 + rng.normal();
-                v2 = v1;
-                v1 = v;
-                v + 3.0
-            })
+        let x: Vec<f64> = ar_series(&mut Rng::new(8), 100_000, &[1.2, -0.5], 1.0)
+            .into_iter()
+            .map(|v| v + 3.0)
             .collect();
         let f = covariance(&x, 2).unwrap();
         // asymptotic sd of each phi_hat is sqrt((1-phi2^2)/N) = 0.0027; 5 sd
@@ -118,6 +113,9 @@ mod tests {
         let x: Vec<f64> = (0..40)
             .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
             .collect();
-        assert!(matches!(covariance(&x, 2), Err(ModelError::Singular(_))));
+        assert!(matches!(
+            covariance(&x, 2),
+            Err(ModelError::Numeric(NumError::Singular(_)))
+        ));
     }
 }

@@ -46,8 +46,9 @@
 //! `D(m,m)` has fallen below `1e-11 mean(p_m^2)` is dropped as linearly dependent on the selected
 //! terms (fewer than ~5 significant digits would be left in its g_m).
 
-use super::{ModelError, check_finite};
+use super::ModelError;
 use crate::stats::special::normal_quantile;
+use crate::stats::{NumError, check_finite, check_same_len};
 
 /// Family-wise false-alarm level of the noise-level test (probability that pure white noise
 /// adds a term at a given step).
@@ -182,12 +183,7 @@ pub fn fos_search(
 ) -> Result<FosFit, ModelError> {
     check_finite(y)?;
     for c in candidates {
-        if c.len() != y.len() {
-            return Err(ModelError::LengthMismatch {
-                expected: y.len(),
-                got: c.len(),
-            });
-        }
+        check_same_len(y.len(), c.len())?;
         check_finite(c)?;
     }
     let mut corr = ColumnCorrelator {
@@ -203,21 +199,21 @@ pub fn fos_search_with<C: Correlator + ?Sized>(
     settings: &FosSettings,
 ) -> Result<FosFit, ModelError> {
     if !(settings.min_mse_ratio >= 0.0 && settings.min_mse_ratio.is_finite()) {
-        return Err(ModelError::InvalidSettings(format!(
+        return Err(ModelError::bad(format!(
             "min_mse_ratio must be finite and >= 0, got {}",
             settings.min_mse_ratio
         )));
     }
     let n = corr.n_samples();
     if n < 2 {
-        return Err(ModelError::TooShort { needed: 2, got: n });
+        return Err(NumError::TooShort { needed: 2, got: n }.into());
     }
     let k = corr.n_candidates();
     let m_max = settings.max_terms.min(k);
 
     let yy = corr.yy();
     if !yy.is_finite() {
-        return Err(ModelError::NonFinite { index: 0 });
+        return Err(ModelError::Numeric(NumError::NonFinite { index: 0 }));
     }
     // Per-candidate running state: C(m) (eq 22 partial sums), D(m,m) (eq 19 with r = m,
     // partial sums), the raw mean(p_m^2) for the dependence test, and the stored D(m, r) for
@@ -511,11 +507,11 @@ mod tests {
         let c = vec![vec![1.0; 5]];
         assert!(matches!(
             fos_search(&[1.0; 4], &c, &FosSettings::default()),
-            Err(ModelError::LengthMismatch { .. })
+            Err(ModelError::Numeric(NumError::LengthMismatch { .. }))
         ));
         assert!(matches!(
             fos_search(&[1.0, f64::NAN, 1.0, 1.0, 1.0], &c, &FosSettings::default()),
-            Err(ModelError::NonFinite { index: 1 })
+            Err(ModelError::Numeric(NumError::NonFinite { index: 1 }))
         ));
     }
 }

@@ -18,6 +18,7 @@
 //! variant listing its terms. Nothing in the search itself changes.
 
 use super::ModelError;
+use crate::stats::{NumError, check_same_len};
 use serde::{Deserialize, Serialize};
 
 /// One model term, serialisable (TOML: `[[terms]] kind = "lag", lag = 3`).
@@ -81,7 +82,7 @@ impl TermSpec {
     /// Check the lags are in range (`Lag` and `CrossProduct` need lags >= 1: they are
     /// predictors of y(n) from its past).
     pub fn validate(&self, n_exo: usize) -> Result<(), ModelError> {
-        let bad = |s: String| Err(ModelError::InvalidSettings(s));
+        let bad = |s: String| Err(ModelError::bad(s));
         match *self {
             TermSpec::Lag { lag: 0 } => bad("Lag needs lag >= 1".into()),
             TermSpec::CrossProduct { lag1, lag2 } if lag1 == 0 || lag2 == 0 => {
@@ -215,22 +216,18 @@ impl CandidateSet {
     /// Build the columns of explicit terms.
     pub fn from_specs(y: &[f64], exo: &[&[f64]], specs: &[TermSpec]) -> Result<Self, ModelError> {
         for x in exo {
-            if x.len() != y.len() {
-                return Err(ModelError::LengthMismatch {
-                    expected: y.len(),
-                    got: x.len(),
-                });
-            }
+            check_same_len(y.len(), x.len())?;
         }
         for t in specs {
             t.validate(exo.len())?;
         }
         let first_row = specs.iter().map(|t| t.history_needed()).max().unwrap_or(0);
         if y.len() <= first_row + 1 {
-            return Err(ModelError::TooShort {
+            return Err(NumError::TooShort {
                 needed: first_row + 2,
                 got: y.len(),
-            });
+            }
+            .into());
         }
         let columns = specs
             .iter()

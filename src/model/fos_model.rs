@@ -21,7 +21,8 @@
 
 use super::fos::{Correlator, FosFit, FosSettings, dot, fos_search_with};
 use super::fos_candidates::{BaseKey, Family, TermSpec, family_terms};
-use super::{ModelError, check_finite, mean};
+use super::{ModelError, mean};
+use crate::stats::{NumError, check_finite, check_same_len};
 use serde::{Deserialize, Serialize};
 
 /// What to fit: the candidate families and whether to standardise.
@@ -77,17 +78,12 @@ impl FosModel {
     ) -> Result<(FosModel, FosFit), ModelError> {
         check_finite(y)?;
         for x in exo {
-            if x.len() != y.len() {
-                return Err(ModelError::LengthMismatch {
-                    expected: y.len(),
-                    got: x.len(),
-                });
-            }
+            check_same_len(y.len(), x.len())?;
             check_finite(x)?;
         }
         let terms = family_terms(&spec.families);
         if terms.is_empty() {
-            return Err(ModelError::InvalidSettings("no candidate terms".into()));
+            return Err(ModelError::bad("no candidate terms"));
         }
         for t in &terms {
             t.validate(exo.len())?;
@@ -191,25 +187,22 @@ impl FosModel {
 
     /// Parse from TOML, checking the terms and coefficient counts agree.
     pub fn from_toml(s: &str) -> Result<Self, ModelError> {
-        let m: FosModel =
-            toml::from_str(s).map_err(|e| ModelError::InvalidSettings(e.to_string()))?;
+        let m: FosModel = toml::from_str(s).map_err(|e| ModelError::bad(e.to_string()))?;
         if m.terms.len() != m.coefficients.len() {
-            return Err(ModelError::InvalidSettings(format!(
+            return Err(ModelError::bad(format!(
                 "{} terms but {} coefficients",
                 m.terms.len(),
                 m.coefficients.len()
             )));
         }
         if m.exo_center.len() != m.exo_scale.len() {
-            return Err(ModelError::InvalidSettings(
-                "exo_center and exo_scale differ in length".into(),
-            ));
+            return Err(ModelError::bad("exo_center and exo_scale differ in length"));
         }
         for t in &m.terms {
             t.validate(m.exo_center.len())?;
         }
         if !(m.scale.is_finite() && m.scale != 0.0 && m.center.is_finite()) {
-            return Err(ModelError::InvalidSettings("bad center/scale".into()));
+            return Err(ModelError::bad("bad center/scale"));
         }
         Ok(m)
     }
@@ -220,7 +213,7 @@ fn centre_scale(x: &[f64]) -> Result<(f64, f64), ModelError> {
     let mu = mean(x);
     let var = x.iter().map(|v| (v - mu) * (v - mu)).sum::<f64>() / x.len().max(1) as f64;
     if var.is_nan() || var <= 0.0 {
-        return Err(ModelError::ZeroVariance);
+        return Err(ModelError::Numeric(NumError::Constant));
     }
     Ok((mu, var.sqrt()))
 }
@@ -262,10 +255,11 @@ impl ShiftCorrelator {
         let n0 = terms.iter().map(|t| t.history_needed()).max().unwrap_or(0);
         let s_max = items.iter().map(|&(_, s)| s).max().unwrap_or(0);
         if n < n0 + s_max + 2 {
-            return Err(ModelError::TooShort {
+            return Err(NumError::TooShort {
                 needed: n0 + s_max + 2,
                 got: n,
-            });
+            }
+            .into());
         }
         let bases: Vec<Vec<f64>> = keys
             .iter()

@@ -17,37 +17,28 @@ pub use ar::{ArFit, yule_walker, yule_walker_orders};
 pub use burg::{burg, burg_orders};
 pub use covariance::covariance;
 
+use crate::stats::{NumError, check_series};
+
 /// Why a model could not be fitted. Fitting never panics on user data; it returns one of these.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ModelError {
-    /// The series is too short for the requested order / lag structure.
-    #[error("series too short: need at least {needed} samples, got {got}")]
-    TooShort { needed: usize, got: usize },
+    /// The series is too short, non-finite or constant, a system is singular, lengths do not
+    /// match or a setting is out of range (the shared numerical vocabulary, [`NumError`]).
+    #[error(transparent)]
+    Numeric(#[from] NumError),
     /// The requested model order is not usable (e.g. zero).
     #[error("bad model order {0}")]
     BadOrder(usize),
-    /// An input value is NaN or infinite.
-    #[error("non-finite input value at index {index}")]
-    NonFinite { index: usize },
-    /// The series has (numerically) zero variance, so no correlation structure exists.
-    #[error("series has zero variance")]
-    ZeroVariance,
-    /// The normal equations / Gram matrix are singular or not positive definite.
-    #[error("singular system: {0}")]
-    Singular(String),
-    /// Series or candidate columns of different lengths were passed together.
-    #[error("length mismatch: expected {expected}, got {got}")]
-    LengthMismatch { expected: usize, got: usize },
-    /// A setting is out of range.
-    #[error("invalid settings: {0}")]
-    InvalidSettings(String),
 }
 
-/// Return the index of the first non-finite value, as an error.
-pub(crate) fn check_finite(x: &[f64]) -> Result<(), ModelError> {
-    match x.iter().position(|v| !v.is_finite()) {
-        Some(index) => Err(ModelError::NonFinite { index }),
-        None => Ok(()),
+impl ModelError {
+    /// [`NumError::BadSetting`] with a message, as a model error.
+    pub(crate) fn bad(msg: impl Into<String>) -> Self {
+        NumError::bad(msg).into()
+    }
+    /// [`NumError::Singular`] naming the system, as a model error.
+    pub(crate) fn singular(what: impl Into<String>) -> Self {
+        NumError::singular(what).into()
     }
 }
 
@@ -58,14 +49,7 @@ pub(crate) fn check_ar_input(x: &[f64], p: usize) -> Result<(), ModelError> {
     }
     // At least 2p+1 samples so that every lagged product used has a few terms and the
     // covariance method's p x p system is not trivially rank deficient.
-    let needed = 2 * p + 1;
-    if x.len() < needed {
-        return Err(ModelError::TooShort {
-            needed,
-            got: x.len(),
-        });
-    }
-    check_finite(x)
+    Ok(check_series(x, 2 * p + 1)?)
 }
 
 /// Arithmetic mean (0 for an empty slice).

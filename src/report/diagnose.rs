@@ -45,26 +45,31 @@ pub fn diagnose(
         Some(t) => (((t - from_s) * rate).round() as usize).min(samples.len()),
         None => samples.len(),
     };
-    if !paper_split {
-        return super::diagnose_whole::diagnose_whole_samples(
-            log,
-            &samples[..end],
-            rate,
-            from_s,
-            channels,
-            out_dir,
-            progress,
-        );
-    }
-    diagnose_samples(
+    let run = if paper_split {
+        diagnose_samples
+    } else {
+        super::diagnose_whole::diagnose_whole_samples
+    };
+    let stretch = Stretch {
         log,
-        &samples[..end],
+        samples: &samples[..end],
         rate,
         from_s,
         channels,
         out_dir,
-        progress,
-    )
+    };
+    run(&stretch, progress)
+}
+
+/// One stretch of a log to diagnose: its samples (cut to the stretch that starts `from_s` into
+/// `log`) at `rate` Hz, the channels asked for, the output folder.
+pub struct Stretch<'a> {
+    pub log: &'a Path,
+    pub samples: &'a [Sample],
+    pub rate: f64,
+    pub from_s: f64,
+    pub channels: &'a [String],
+    pub out_dir: &'a Path,
 }
 
 /// The other channels of `series` than `c`, named (candidate exogenous inputs).
@@ -113,39 +118,22 @@ pub fn exogenous<'a>(
     }
 }
 
-/// The loop on `samples` (already cut to the stretch that starts `from_s` into `log`): per
-/// channel a line on `progress`; `report.txt`, `report.json`, `bias.toml` and `plots/` in
+/// The loop on one stretch: per channel a line on `progress`; `report.txt`, `report.json`, `bias.toml` and `plots/` in
 /// `out_dir`.
-pub fn diagnose_samples(
-    log: &Path,
-    samples: &[Sample],
-    rate: f64,
-    from_s: f64,
-    channels: &[String],
-    out_dir: &Path,
-    progress: &mut dyn Write,
-) -> Result<Added> {
-    let Prepared {
-        chans,
-        series,
-        temp,
-        source,
-        left_out,
-    } = prepare(log, samples, rate, from_s, channels, out_dir)?;
-    for (name, why) in &left_out {
-        writeln!(progress, "{name}: skipped: {why}")?;
-    }
+pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added> {
+    let (rate, out_dir) = (st.rate, st.out_dir);
+    let p = prepare(st, progress)?;
     let settings = DiagnoseSettings::default();
     let mut report = DiagnoseReport {
-        source,
+        source: p.source.clone(),
         channels: vec![],
     };
     let mut model = BiasModelFile::default();
     let mut added_all: Added = Vec::new();
-    for c in chans {
+    for &c in &p.chans {
         let name = CHANNEL_NAMES[c];
-        let others = others_of(&series, c);
-        let input = channel_input(&series, temp.as_deref(), &others, rate, c);
+        let others = others_of(&p.series, c);
+        let input = channel_input(&p.series, p.temp.as_deref(), &others, rate, c);
         let d = match diagnose_channel(&input, &settings) {
             Ok(d) => d,
             Err(e) => {
@@ -176,9 +164,7 @@ pub fn diagnose_samples(
             "{name}: effects in the model file (refit on the whole log): {}",
             effects_text(&written)
         )?;
-        for (stem, svg) in channel_plots(&d) {
-            std::fs::write(out_dir.join("plots").join(format!("{stem}.svg")), svg)?;
-        }
+        write_plots(out_dir, channel_plots(&d))?;
         model.channels.push(channel_model(
             name,
             rate,
@@ -198,27 +184,30 @@ pub fn diagnose_samples(
 
 /// What both diagnose loops start from: the channels asked for that the log has, every
 /// channel's series (empty for a channel absent in the log: a partial sensor) and the
-/// temperature (when every sample has one), the report's source line, the channels left out
-/// and why; `out_dir/plots` made.
+/// temperature (when every sample has one), the report's source line; `out_dir/plots` made.
 pub struct Prepared {
     pub chans: Vec<usize>,
     pub series: Vec<Vec<f64>>,
     pub temp: Option<Vec<f64>>,
     pub source: String,
-    pub left_out: Vec<super::LeftOut>,
 }
 
-/// [`Prepared`] for `samples` (the stretch starting `from_s` into `log`).
-pub fn prepare(
-    log: &Path,
-    samples: &[Sample],
-    rate: f64,
-    from_s: f64,
-    channels: &[String],
-    out_dir: &Path,
-) -> Result<Prepared> {
+/// [`Prepared`] for a stretch; each channel asked for
+/// but left out is said on `progress` with why.
+pub fn prepare(st: &Stretch, progress: &mut dyn Write) -> Result<Prepared> {
+    let Stretch {
+        log,
+        samples,
+        rate,
+        from_s,
+        channels,
+        out_dir,
+    } = *st;
     ensure!(!samples.is_empty(), "the chosen stretch is empty");
     let (chans, left_out) = present_channels(log, samples, &parse_channels(channels)?)?;
+    for (name, why) in &left_out {
+        writeln!(progress, "{name}: skipped: {why}")?;
+    }
     let absent = samples.iter().fold(0u8, |m, s| m | s.absent);
     let series: Vec<Vec<f64>> = (0..6)
         .map(|c| {
@@ -241,8 +230,15 @@ pub fn prepare(
         series,
         temp,
         source,
-        left_out,
     })
+}
+
+/// Each `(stem, svg)` plot into `out_dir/plots/stem.svg`.
+pub fn write_plots(out_dir: &Path, plots: Vec<(String, String)>) -> Result<()> {
+    for (stem, svg) in plots {
+        std::fs::write(out_dir.join("plots").join(format!("{stem}.svg")), svg)?;
+    }
+    Ok(())
 }
 
 /// One channel of the model file a diagnosis writes: its Burg AR part `(mean, ar,

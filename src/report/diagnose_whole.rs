@@ -3,19 +3,19 @@
 //! stderr (hidden when stderr is not a terminal).
 
 use std::io::Write;
-use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::diagnose::{
-    Added, Prepared, channel_input, channel_model, effects_text, others_of, prepare, write_outputs,
+    Added, Stretch, channel_input, channel_model, effects_text, others_of, prepare, write_outputs,
+    write_plots,
 };
 use crate::analysis::diagnose_whole::{WholeDiagnosis, WholeSettings, diagnose_whole};
 use crate::analysis::diagnose_whole_report::{effect_lines, whole_plots, whole_text};
 use crate::model::bias_model::{ArOf, BiasModelFile};
-use crate::sample::{CHANNEL_NAMES, Sample};
+use crate::sample::CHANNEL_NAMES;
 
 /// The report of one run.
 #[derive(Debug, Serialize)]
@@ -41,44 +41,28 @@ impl WholeReport {
     }
 }
 
-/// The whole-log diagnosis of `samples` (the stretch starting `from_s` into `log`).
-pub fn diagnose_whole_samples(
-    log: &Path,
-    samples: &[Sample],
-    rate: f64,
-    from_s: f64,
-    channels: &[String],
-    out_dir: &Path,
-    progress: &mut dyn Write,
-) -> Result<Added> {
-    let Prepared {
-        chans,
-        series,
-        temp,
-        source,
-        left_out,
-    } = prepare(log, samples, rate, from_s, channels, out_dir)?;
-    for (name, why) in &left_out {
-        writeln!(progress, "{name}: skipped: {why}")?;
-    }
+/// The whole-log diagnosis of one stretch.
+pub fn diagnose_whole_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added> {
+    let (rate, out_dir) = (st.rate, st.out_dir);
+    let p = prepare(st, progress)?;
+    let mut model = BiasModelFile::default();
+    let mut added_all: Added = Vec::new();
     let settings = WholeSettings::default();
     let mut report = WholeReport {
-        source,
+        source: p.source.clone(),
         method: METHOD,
         channels: vec![],
     };
-    let bar = ProgressBar::new(7 * chans.len() as u64);
+    let bar = ProgressBar::new(7 * p.chans.len() as u64);
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
             .map_err(|e| anyhow!(e.to_string()))?
             .progress_chars("=> "),
     );
-    let mut model = BiasModelFile::default();
-    let mut added_all: Added = Vec::new();
-    for c in chans {
+    for &c in &p.chans {
         let name = CHANNEL_NAMES[c];
-        let others = others_of(&series, c);
-        let input = channel_input(&series, temp.as_deref(), &others, rate, c);
+        let others = others_of(&p.series, c);
+        let input = channel_input(&p.series, p.temp.as_deref(), &others, rate, c);
         let start = bar.position();
         let d = match diagnose_whole(&input, &settings, &mut |stage| {
             bar.set_message(format!("{name}: {stage}"));
@@ -106,9 +90,7 @@ pub fn diagnose_whole_samples(
                 effects_text(&lines)
             )
         })?;
-        for (stem, svg) in whole_plots(&d) {
-            std::fs::write(out_dir.join("plots").join(format!("{stem}.svg")), svg)?;
-        }
+        write_plots(out_dir, whole_plots(&d))?;
         let effects: Vec<_> = d.effects.iter().map(|e| e.effect.clone()).collect();
         let mut m = channel_model(
             name,

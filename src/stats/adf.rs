@@ -305,7 +305,7 @@ pub fn adf(x: &[f64], lag: AdfLag) -> Result<AdfResult, NumError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
+    use crate::rng::{Rng, ar_series};
 
     #[test]
     fn mackinnon_crit_is_the_asymptotic_value_for_large_n() {
@@ -342,13 +342,7 @@ mod tests {
         let wn: Vec<f64> = (0..2000).map(|_| rng.normal()).collect();
         let r = adf(&wn, AdfLag::default()).unwrap();
         assert!(r.stat < r.crit[0] && r.p_value < 1e-6, "{r:?}");
-        let mut acc = 0.0;
-        let rw: Vec<f64> = (0..2000)
-            .map(|_| {
-                acc += rng.normal();
-                acc
-            })
-            .collect();
+        let rw = ar_series(&mut rng, 2000, &[1.0], 1.0);
         let r = adf(&rw, AdfLag::default()).unwrap();
         assert!(r.stat > r.crit[2] && r.p_value > 0.1, "{r:?}");
     }
@@ -357,14 +351,7 @@ mod tests {
     fn adf_fixed_lag_zero_is_the_dickey_fuller_t_statistic() {
         // With no lags, τ is the OLS t-statistic of γ in Δx_t = α + γ x_{t−1}: recompute it by
         // the textbook formulas γ̂ = Sxy/Sxx, se² = s²/Sxx.
-        let mut rng = Rng::new(5);
-        let mut v = 0.0;
-        let x: Vec<f64> = (0..300)
-            .map(|_| {
-                v = 0.8 * v + rng.normal();
-                v
-            })
-            .collect();
+        let x = ar_series(&mut Rng::new(5), 300, &[0.8], 1.0);
         let r = adf(&x, AdfLag::Fixed { lags: 0 }).unwrap();
         let lv = &x[..x.len() - 1];
         let dy: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();

@@ -144,12 +144,7 @@ pub fn hampel(x: &[f64], half_width: usize, k: f64) -> Result<Detection, NumErro
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
-
-    fn noise(n: usize, seed: u64) -> Vec<f64> {
-        let mut r = Rng::new(seed);
-        (0..n).map(|_| r.normal()).collect()
-    }
+    use crate::rng::normal_vec as noise;
 
     #[test]
     fn medians_match_a_full_sort() {
