@@ -75,16 +75,16 @@ fn a_channel_engages_when_its_estimate_leaves_its_3_sigma_interval_around_zero()
     let r = run(3.0, 0xB1A5_0001);
     let mut first = [None; 3];
     for k in 0..N {
-        for c in 0..3 {
+        for (c, first) in first.iter_mut().enumerate() {
             let (b, sd) = (r.estimate[k][c], r.est_sd[k][c]);
             if r.engaged[k][c] {
                 // Engaged: the estimate is subtracted, with its own σ.
                 assert!(same(r.subtracted[k][c], b), "c{c} k{k}");
                 assert!(same(r.published_sd[k][c], sd), "c{c} k{k}");
-                if first[c].is_none() {
+                if first.is_none() {
                     // The first engaged sample is the first whose estimate lies beyond 3σ of 0.
                     assert!(b.abs() > 3.0 * sd, "c{c} k{k}: {b} within 3 × {sd}");
-                    first[c] = Some(k);
+                    *first = Some(k);
                 }
             } else {
                 // Not engaged: nothing subtracted; the estimate (if any) within 3σ of zero, and the
@@ -138,13 +138,13 @@ fn the_published_sigma_covers_the_bias_left_in_the_output() {
     // (Gaussian 3σ: 99.7 %; the margin is for the warm-up's first seconds, when σ comes from a
     // handful of samples), on every channel, engaged or not.
     let r = run(3.0, 0xB1A5_0003);
-    for c in 0..3 {
+    for (c, truth) in BIAS.iter().enumerate() {
         let (mut n, mut covered) = (0usize, 0usize);
         for k in 0..N {
             if r.estimate[k][c] != 0.0 {
                 n += 1;
                 covered +=
-                    usize::from((r.subtracted[k][c] - BIAS[c]).abs() <= 3.0 * r.published_sd[k][c]);
+                    usize::from((r.subtracted[k][c] - truth).abs() <= 3.0 * r.published_sd[k][c]);
             }
         }
         assert!(n > N * 9 / 10, "c{c}: an estimate on {n} samples only");
