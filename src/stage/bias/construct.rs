@@ -49,6 +49,7 @@ impl BiasStage {
             stationary_sd: 0.0,
             bias: 0.0,
             bias_sd: 0.0,
+            engaged: false,
             diag: ChannelDiagnostics::default(),
             origin: BiasModelOrigin::None,
         };
@@ -78,6 +79,7 @@ impl BiasStage {
             step_inflation: settings.step_inflation_factor,
             default_step: settings.default_step_rad_s,
             default_rrw_q_per_s: settings.default_rate_random_walk_q_per_s,
+            apply_k: settings.apply_k,
             counters,
         };
         for (c, state) in ch.iter_mut().enumerate() {

@@ -35,11 +35,14 @@ pub struct BiasCounters {
     pub reanchors: u64,
     /// Stale repeats (`REPEATED`): given the current bias, no measurement.
     pub repeats: u64,
+    /// Gyro channels that started subtracting their estimate (a model file's at once, the
+    /// warm-up model's once distinguishable from zero, `apply_k`; at most once per channel).
+    pub engagements: u64,
 }
 
 impl BiasCounters {
     /// Every counter, named as the summary prints it, in a fixed order.
-    pub fn named(&self) -> [(&'static str, u64); 13] {
+    pub fn named(&self) -> [(&'static str, u64); 14] {
         [
             ("samples", self.samples),
             ("still_samples", self.still_samples),
@@ -57,6 +60,7 @@ impl BiasCounters {
             ("rejected_updates", self.rejected_updates),
             ("reanchors", self.reanchors),
             ("repeats", self.repeats),
+            ("engagements", self.engagements),
         ]
     }
 }
@@ -109,6 +113,10 @@ pub struct BiasChannelHealth {
     pub bias: f64,
     /// Its 1-σ, same unit (accel with a model: the stationary σ of the bias nobody subtracted).
     pub bias_sd: f64,
+    /// The estimate (`bias`) is subtracted: a model file's from the start, the warm-up model's
+    /// once distinguishable from zero (`apply_k`). Before, nothing is subtracted and `bias` is
+    /// published only here.
+    pub engaged: bool,
     /// Step alarms of this channel.
     pub step_alarms: u64,
 }
@@ -159,6 +167,7 @@ impl BiasStage {
                         + st.lines.iter().flatten().count() as u32,
                     bias: st.bias,
                     bias_sd: st.bias_sd,
+                    engaged: st.engaged,
                     step_alarms: st.diag.step_alarms,
                 }
             }),

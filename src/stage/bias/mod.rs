@@ -35,10 +35,28 @@
 //!    right place for accel bias. The published `bias_sd` of an accel channel with a model is the
 //!    stationary 1-σ of its bias process: the uncertainty of the bias nobody subtracted.
 //!
+//! **Engaging on evidence** (`apply_k`, default 3). A gyro channel running the warm-up model
+//! (the default: no model file) subtracts its estimate only once it is statistically
+//! distinguishable from zero: |estimate| > `apply_k`·σ (99.7 % at 3σ, Gaussian). The channel is
+//! then *engaged* for the rest of the run and follows its estimate. Until then the sample keeps
+//! its value; the estimate and its σ are published in the stage health (`bias`, `bias_sd`,
+//! `engaged`) and the sample's `bias_sd` is √(σ² + estimate²), the error of subtracting nothing.
+//! Why: a GPS/INS filter downstream learns the residual constant bias itself; a correction with
+//! no evidence behind it is noise that filter must learn again, and while the estimate settles
+//! each change is a step — one made during a GNSS outage becomes attitude error
+//! (docs/navigation.md, "Do no harm"). Measured alternatives, both rejected: holding an engaged
+//! estimate until it moved by 3σ left a staircase that raised the ADIS16405 bench's output Allan
+//! deviation above the raw's at τ = 20–80 s; asking a model file's estimate for the same
+//! evidence (against the model's mean) withheld corrections that work — the MPU6050 bench's gy
+//! never engaged, its τ = 165 s deviation stayed the raw's 3.4e-5 against 5.5e-6 when subtracted
+//! (`tests/learned_allan_real.rs`). A fitted model's σ carries its AR part's stationary spread,
+//! so its estimate is subtracted from the start, as before.
+//!
 //! Published per channel: `bias[c] = corrected - output` (everything subtracted after the
-//! calibration: effects, line estimate, stochastic estimate), `bias_sd[c]` = 1-σ of the stochastic
-//! estimate from the filter covariance. Flags: `STILL`, `BIAS_REMOVED` (a gyro filter subtracted
-//! its estimate), `WARMING_UP` (a gyro channel is still being identified: only calibration and
+//! calibration: effects, line estimate, the stochastic estimate once engaged), `bias_sd[c]` = 1-σ
+//! of what was subtracted as an estimate of the bias: σ from the filter covariance once engaged,
+//! √(σ² + estimate²) before. Flags: `STILL`, `BIAS_REMOVED` (a gyro estimate runs: subtracted
+//! where engaged, published with its σ), `WARMING_UP` (a gyro channel is still being identified: only calibration and
 //! effects applied to it), `EFFECT_COMPENSATED` (a temperature, g-sensitivity or vibration term
 //! was subtracted, or a step re-anchored the estimate), `NON_FINITE`.
 //!
@@ -172,9 +190,12 @@ struct ChannelState {
     provisional: Option<(f64, f64)>,
     /// Accel channels: stationary 1-σ of the modelled bias (unit), else 0.
     stationary_sd: f64,
-    /// Published stochastic estimate (unit, mean included) of the last sample.
+    /// Stochastic estimate (unit, mean included) of the last sample, and its 1-σ.
     bias: f64,
     bias_sd: f64,
+    /// The estimate has been distinguishable from zero (`apply_k`) and is subtracted (module
+    /// docs, "Engaging on evidence").
+    engaged: bool,
     diag: ChannelDiagnostics,
     /// Where the channel's model came from.
     origin: BiasModelOrigin,
@@ -200,6 +221,7 @@ pub struct BiasStage {
     step_inflation: f64,
     default_step: f64,
     default_rrw_q_per_s: f64,
+    apply_k: f64,
     counters: BiasCounters,
 }
 
@@ -539,6 +561,8 @@ impl BiasStage {
         let mut any_est = false;
         let mut any_warm = false;
         let lead_steps = self.lead_steps;
+        let apply_k = self.apply_k;
+        let mut engagements = 0;
         let mut out = [0.0; N_CHANNELS];
         for (c, st) in self.ch.iter_mut().enumerate() {
             if s.is_absent(c) {
@@ -549,6 +573,7 @@ impl BiasStage {
                 continue;
             }
             let mut sub = eff[c];
+            let mut published_sd = st.bias_sd;
             if let Some(est) = st.est.as_ref() {
                 let (b, var) = if lead_steps == est.lead_nominal.steps {
                     est.kf.predict_ahead(&est.lead_nominal)
@@ -557,19 +582,37 @@ impl BiasStage {
                 };
                 st.bias = b;
                 st.bias_sd = var.sqrt();
-                sub += b;
                 any_est = true;
             } else if let (Some((m, se)), true) = (st.provisional, st.warm.is_some()) {
                 // Warming up with a provisional bias (module docs).
                 st.bias = m;
                 st.bias_sd = se;
-                sub += m;
                 any_est = true;
                 any_warm = true;
             } else {
                 st.bias = 0.0;
                 st.bias_sd = st.stationary_sd;
                 any_warm |= st.warm.is_some();
+                published_sd = st.bias_sd;
+            }
+            if st.est.is_some() || (st.provisional.is_some() && st.warm.is_some()) {
+                // Engaging on evidence (module docs).
+                // A model file's estimate is subtracted from the start (module docs).
+                let k = if st.origin == BiasModelOrigin::File {
+                    0.0
+                } else {
+                    apply_k
+                };
+                if !st.engaged && (k == 0.0 || st.bias.abs() > k * st.bias_sd) {
+                    st.engaged = true;
+                    engagements += 1;
+                }
+                published_sd = if st.engaged {
+                    sub += st.bias;
+                    st.bias_sd
+                } else {
+                    st.bias_sd.hypot(st.bias)
+                };
             }
             st.diag.estimating = st.est.is_some();
             st.diag.warming_up = st.warm.is_some();
@@ -579,8 +622,9 @@ impl BiasStage {
                 s.channel(c)
             };
             s.bias[c] = sub as f32;
-            s.bias_sd[c] = st.bias_sd as f32;
+            s.bias_sd[c] = published_sd as f32;
         }
+        self.counters.engagements += engagements;
         s.set_channels(&out);
         if any_est {
             s.flags |= flags::BIAS_REMOVED;

@@ -168,6 +168,17 @@ pub struct BiasSettings {
     /// fitted on minutes of data cannot reveal the slow wander, and without it the constant state
     /// becomes certain after the first stop and never follows the bias again.
     pub default_rate_random_walk_q_per_s: f64,
+    /// Evidence a gyro channel's warm-up estimate (no model file) needs before it is
+    /// subtracted, in σ of the estimate: the channel engages (and follows its estimate from then
+    /// on) once |estimate| > `apply_k`·σ; before, the sample keeps its value and the estimate is
+    /// published (stage health) with a σ that covers it. 0 = subtract from the first estimate. A
+    /// model file's estimate is subtracted from the start. Default 3: if the true bias were 0, an
+    /// estimate beyond 3σ would have a 0.27 % chance (Gaussian) — a correction is made on
+    /// evidence at the 99.7 % level. Why it matters: a GPS/INS filter downstream learns the
+    /// residual bias at its own zero-rate updates; a correction that settles while the vehicle
+    /// moves is a step it must learn again, and in a GNSS outage an unexplained step becomes
+    /// attitude error (docs/navigation.md, "Do no harm").
+    pub apply_k: f64,
 }
 
 impl Default for BiasSettings {
@@ -185,6 +196,7 @@ impl Default for BiasSettings {
             step_inflation_factor: 3.0,
             default_step_rad_s: 0.0,
             default_rate_random_walk_q_per_s: 1e-10,
+            apply_k: 3.0,
         }
     }
 }
@@ -274,6 +286,12 @@ impl BiasSettings {
                 e.push(format!("{key}: must be >= 0 (got {v})"));
             }
         }
+        if !(self.apply_k.is_finite() && (0.0..=100.0).contains(&self.apply_k)) {
+            e.push(format!(
+                "apply_k: must be in [0, 100] (got {})",
+                self.apply_k
+            ));
+        }
         if !(self.step_inflation_factor.is_finite() && self.step_inflation_factor > 0.0) {
             e.push(format!(
                 "step_inflation_factor: must be > 0 (got {})",
@@ -332,6 +350,7 @@ mod tests {
             step_inflation_factor = 3.0
             default_step_rad_s = 0.0
             default_rate_random_walk_q_per_s = 1e-10
+            apply_k = 3.0
             [gyro]
             bias = [0.001, -0.002, 0.0]
             scale = [1.0, 1.0, 1.0]
