@@ -75,7 +75,7 @@ impl Health {
         self.flagged_non_finite += u64::from(f & flags::NON_FINITE != 0);
         self.flagged_saturated += u64::from(f & flags::SAT_ANY != 0);
         self.flagged_warming_up += u64::from(f & flags::WARMING_UP != 0);
-        self.flagged_bias_removed += u64::from(f & flags::BIAS_REMOVED != 0);
+        self.flagged_bias_removed += u64::from(s.bias_subtracted());
     }
 
     /// Human-readable summary (several lines).

@@ -52,7 +52,10 @@ pub mod flags {
     pub const DUPLICATE: u32 = 1 << 9;
     /// At least one channel held NaN or ±Inf on arrival.
     pub const NON_FINITE: u32 = 1 << 10;
-    /// The bias stage subtracted its estimate from this sample.
+    /// The bias stage ran an estimate for this sample and publishes it with its σ (`bias`,
+    /// `bias_sd`). `bias[c]` is what it subtracted from channel `c`: 0 for a gyro whose warm-up
+    /// estimate is not yet beyond `apply_k` σ of zero (published, not subtracted). Whether
+    /// anything was subtracted: [`Sample::bias_subtracted`](crate::sample::Sample::bias_subtracted).
     pub const BIAS_REMOVED: u32 = 1 << 11;
     /// A stage is still identifying its model; its correction was not applied.
     pub const WARMING_UP: u32 = 1 << 12;
@@ -195,5 +198,13 @@ impl Sample {
     #[inline]
     pub fn has(&self, flag: u32) -> bool {
         self.flags & flag != 0
+    }
+
+    /// The bias stage subtracted something from this sample (a running estimate beyond its
+    /// evidence bar, a provisional warm-up mean, or an effect): `BIAS_REMOVED` with a non-zero
+    /// published `bias` on some channel.
+    #[inline]
+    pub fn bias_subtracted(&self) -> bool {
+        self.has(flags::BIAS_REMOVED) && self.bias.iter().any(|b| *b != 0.0)
     }
 }

@@ -11,8 +11,8 @@
 //!   Target ≤ 1e-4 on every channel (static) and over each moving recording.
 //! - **Invented angle.** `|Σ (out − raw + bias) dt|` per gyro axis: what replacements (not the
 //!   bias) changed in the integrated angle. Target ≤ 0.5°.
-//! - **Bias.** Share of samples with the bias removed by a running estimate (`BIAS_REMOVED`, not
-//!   `WARMING_UP`), the time to the first; on static recordings ≥ 95 % and ≤ 60 s. Around every
+//! - **Bias.** Share of samples with the bias removed by a running estimate (`BIAS_REMOVED` with a
+//!   non-zero published bias, not `WARMING_UP`), the time to the first; on static recordings ≥ 95 % and ≤ 60 s. Around every
 //!   motion onset (STILL → not STILL, and a 1-s window of the raw gyro 3× rougher than the
 //!   recording's quietest within the next second) with an estimate running 2 s before it, the
 //!   estimate may not move by more than its own published 3σ from then to 2 s after the onset
@@ -312,7 +312,7 @@ pub fn audit_recording(
     }
 
     // Bias engagement and motion onsets.
-    let engaged = |s: &Sample| s.has(flags::BIAS_REMOVED) && !s.has(flags::WARMING_UP);
+    let engaged = |s: &Sample| s.bias_subtracted() && !s.has(flags::WARMING_UP);
     let n_engaged = out.iter().filter(|s| engaged(s)).count();
     let bias_first_engaged_s = out
         .iter()

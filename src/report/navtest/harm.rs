@@ -139,7 +139,7 @@ fn explain(
             samples += 1;
             let rep = s.flags & (flags::REPLACED | flags::REPLACED_ANY) != 0;
             replaced += usize::from(rep);
-            bias_removed += usize::from(s.flags & flags::BIAS_REMOVED != 0);
+            bias_removed += usize::from(s.bias_subtracted());
             // The body-frame epoch of this sample (same time stamp in both inputs).
             let i = raw.t.partition_point(|&x| x < t);
             if rep && i < raw.t.len().min(clean.w.len()) && (raw.t[i] - t).abs() < 1e-6 {

@@ -181,7 +181,7 @@ fn summary(
     VariantSummary {
         variant: variant.into(),
         replaced: count(flags::REPLACED | flags::REPLACED_ANY),
-        bias_removed: count(flags::BIAS_REMOVED),
+        bias_removed: out.map(|s| s.iter().filter(|x| x.bias_subtracted()).count()),
         mean_change_dps: chg,
         zupt_updates: run.stats.zupt_updates,
         median_gyro_bias_dps: run.median_gyro_bias_dps,
