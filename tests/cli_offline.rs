@@ -136,18 +136,20 @@ fn compare_detectors_scores_every_detector_on_the_truth() {
     }
 }
 
-#[test]
-fn diagnose_writes_report_plots_and_a_loadable_bias_model() {
+/// `diagnose replay/static_bench.log --channel gz` with `extra` into a fresh directory.
+fn diagnose_gz(extra: &[&str]) -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().to_str().unwrap();
-    run(&[
-        "diagnose",
-        "replay/static_bench.log",
-        "--channel",
-        "gz",
-        "--out-dir",
-        d,
-    ]);
+    let mut args = vec!["diagnose", "replay/static_bench.log", "--channel", "gz"];
+    args.extend(extra);
+    args.extend(["--out-dir", d]);
+    run(&args);
+    dir
+}
+
+#[test]
+fn diagnose_writes_report_plots_and_a_loadable_bias_model() {
+    let dir = diagnose_gz(&[]);
     for f in ["report.txt", "report.json", "bias.toml"] {
         assert!(dir.path().join(f).exists(), "{f}");
     }
@@ -175,17 +177,7 @@ fn diagnose_writes_report_plots_and_a_loadable_bias_model() {
 
 #[test]
 fn diagnose_paper_split_writes_a_well_formed_plot_of_each_series() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path().to_str().unwrap();
-    run(&[
-        "diagnose",
-        "replay/static_bench.log",
-        "--channel",
-        "gz",
-        "--paper-split",
-        "--out-dir",
-        d,
-    ]);
+    let dir = diagnose_gz(&["--paper-split"]);
     let plots = dir.path().join("plots");
     let (first, last) = ("first model", "final model");
     common::assert_plot(

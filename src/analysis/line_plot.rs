@@ -243,11 +243,11 @@ mod tests {
     #[test]
     fn linear_plot_spans_nice_multiples_and_draws_every_point() {
         let t: Vec<f64> = (0..200).map(|i| i as f64 * 0.05).collect();
-        let wave = t.iter().map(|v| (v * 3.0).sin() * 0.013 + 0.002).collect();
-        let step = t
-            .iter()
-            .map(|v| if *v > 4.0 { 0.01 } else { 0.0 })
-            .collect();
+        let series = |label: &str, f: &dyn Fn(f64) -> f64| Series {
+            label: label.into(),
+            x: t.clone(),
+            y: t.iter().map(|&v| f(v)).collect(),
+        };
         let p = Plot {
             title: "gz: effect 1 (step) over the residual before it".into(),
             x_label: "t (s)".into(),
@@ -255,16 +255,8 @@ mod tests {
             log_x: false,
             log_y: false,
             series: vec![
-                Series {
-                    label: "residual before".into(),
-                    x: t.clone(),
-                    y: wave,
-                },
-                Series {
-                    label: "fitted step".into(),
-                    x: t,
-                    y: step,
-                },
+                series("residual before", &|v| (v * 3.0).sin() * 0.013 + 0.002),
+                series("fitted step", &|v| if v > 4.0 { 0.01 } else { 0.0 }),
             ],
         };
         let s = render(&p, 800, 480).unwrap();
