@@ -296,7 +296,7 @@ fn main() -> Result<(), String> {
                         d.final_metrics.mse_one_step,
                         100.0 * (1.0 - d.final_metrics.mse_one_step / d.baseline.mse_one_step)
                     );
-                    for (stem, svg) in channel_plots(&d) {
+                    for (stem, svg) in channel_plots(&d)? {
                         std::fs::write(
                             out.join("plots").join(format!("{}_{stem}.svg", rec.name)),
                             svg,

@@ -136,18 +136,20 @@ fn compare_detectors_scores_every_detector_on_the_truth() {
     }
 }
 
-#[test]
-fn diagnose_writes_report_plots_and_a_loadable_bias_model() {
+/// `diagnose replay/static_bench.log --channel gz` with `extra` into a fresh directory.
+fn diagnose_gz(extra: &[&str]) -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().to_str().unwrap();
-    run(&[
-        "diagnose",
-        "replay/static_bench.log",
-        "--channel",
-        "gz",
-        "--out-dir",
-        d,
-    ]);
+    let mut args = vec!["diagnose", "replay/static_bench.log", "--channel", "gz"];
+    args.extend(extra);
+    args.extend(["--out-dir", d]);
+    run(&args);
+    dir
+}
+
+#[test]
+fn diagnose_writes_report_plots_and_a_loadable_bias_model() {
+    let dir = diagnose_gz(&[]);
     for f in ["report.txt", "report.json", "bias.toml"] {
         assert!(dir.path().join(f).exists(), "{f}");
     }
@@ -155,6 +157,54 @@ fn diagnose_writes_report_plots_and_a_loadable_bias_model() {
     let m = std::fs::read_to_string(dir.path().join("bias.toml")).unwrap();
     imuprep::model::bias_model::BiasModelFile::from_toml_str(&m)
         .expect("diagnose writes a valid bias model");
+    let plots = dir.path().join("plots");
+    let legend = ["intercept only", "with the effects"];
+    common::assert_plot(
+        &plots.join("gz_spectrum.svg"),
+        &[
+            &["gz: open-loop residual spectrum (Welch)", "frequency (Hz)"],
+            &legend[..],
+        ]
+        .concat(),
+        2,
+    );
+    common::assert_plot(
+        &plots.join("gz_allan.svg"),
+        &[&["tau (s)", "Allan deviation"], &legend[..]].concat(),
+        2,
+    );
+}
+
+#[test]
+fn diagnose_paper_split_writes_a_well_formed_plot_of_each_series() {
+    let dir = diagnose_gz(&["--paper-split"]);
+    let plots = dir.path().join("plots");
+    let (first, last) = ("first model", "final model");
+    common::assert_plot(
+        &plots.join("gz_spectrum.svg"),
+        &[
+            "gz: residual spectrum (test, Welch)",
+            "PSD (units²/Hz)",
+            first,
+            last,
+        ],
+        2,
+    );
+    common::assert_plot(
+        &plots.join("gz_allan.svg"),
+        &["tau (s)", first, last, "white (slope -1/2)"],
+        3,
+    );
+    // Each added effect over the residual before it (this log adds at least one).
+    let effects: Vec<_> = std::fs::read_dir(&plots)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.to_str().unwrap().contains("gz_effect"))
+        .collect();
+    assert!(!effects.is_empty());
+    for p in effects {
+        common::assert_plot(&p, &["t (s)", "residual", "residual before"], 2);
+    }
 }
 
 /// `replay replay/drive.log` with the gross-error stage's look-ahead set to `lookahead`; the

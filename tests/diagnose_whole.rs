@@ -191,6 +191,21 @@ fn a_line_appearing_half_way_is_found_and_tracked_from_there() {
             assert!(!present, "{b}");
         }
     }
+    // The line's track is plotted: `plots/gz_line<i>_track.svg`, i its place among the effects.
+    let plots = dir.path().join("out/plots");
+    let track = std::fs::read_dir(&plots)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| {
+            let n = p.file_name().unwrap().to_str().unwrap();
+            n.starts_with("gz_line") && n.ends_with("_track.svg")
+        })
+        .expect("a line-track plot");
+    common::assert_plot(
+        &track,
+        &["t (s)", "frequency (Hz)", "frequency where present"],
+        1,
+    );
     // No other channel got a line.
     for ch in ["gx", "gy", "ax", "ay", "az"] {
         assert!(

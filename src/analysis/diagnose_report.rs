@@ -2,8 +2,8 @@
 //! (residual spectrum before/after, Allan deviation before/after, each effect over the residual).
 
 use super::diagnose::{ChannelDiagnosis, Findings, TestMetrics};
+use super::line_plot::{Plot, Series, render};
 use super::spectrum::Psd;
-use super::svg::{Plot, Series, render};
 use crate::model::bias_model::Effect;
 use serde::Serialize;
 use std::fmt::Write;
@@ -228,7 +228,11 @@ pub fn channel_text(c: &ChannelDiagnosis) -> String {
 }
 
 /// A log-log plot of two residual spectra, before and after (the DC bin left out).
-pub fn spectrum_plot(title: String, before: (&str, &Psd), after: (&str, &Psd)) -> String {
+pub fn spectrum_plot(
+    title: String,
+    before: (&str, &Psd),
+    after: (&str, &Psd),
+) -> Result<String, String> {
     let skip0 = |v: &Vec<f64>| v.iter().skip(1).copied().collect::<Vec<f64>>();
     let series = [before, after]
         .into_iter()
@@ -250,12 +254,12 @@ pub fn spectrum_plot(title: String, before: (&str, &Psd), after: (&str, &Psd)) -
 }
 
 /// SVG plots of one channel: (file stem, svg text).
-pub fn channel_plots(c: &ChannelDiagnosis) -> Vec<(String, String)> {
+pub fn channel_plots(c: &ChannelDiagnosis) -> Result<Vec<(String, String)>, String> {
     let mut out = Vec::new();
     let p = &c.plots;
     if let (Some(a), Some(b)) = (&p.spectrum_before, &p.spectrum_after) {
         let title = format!("{}: residual spectrum (test, Welch)", c.channel);
-        let svg = spectrum_plot(title, ("first model", a), ("final model", b));
+        let svg = spectrum_plot(title, ("first model", a), ("final model", b))?;
         out.push((format!("{}_spectrum", c.channel), svg));
     }
     if !p.allan_before.is_empty() {
@@ -286,7 +290,7 @@ pub fn channel_plots(c: &ChannelDiagnosis) -> Vec<(String, String)> {
                 },
             ],
         };
-        out.push((format!("{}_allan", c.channel), render(&plot, 800, 480)));
+        out.push((format!("{}_allan", c.channel), render(&plot, 800, 480)?));
     }
     for (i, ov) in p.overlays.iter().enumerate() {
         let (fam, t, r, e) = (&ov.family, &ov.t_s, &ov.residual, &ov.effect);
@@ -315,8 +319,8 @@ pub fn channel_plots(c: &ChannelDiagnosis) -> Vec<(String, String)> {
         };
         out.push((
             format!("{}_effect{}_{fam}", c.channel, i + 1),
-            render(&plot, 800, 480),
+            render(&plot, 800, 480)?,
         ));
     }
-    out
+    Ok(out)
 }

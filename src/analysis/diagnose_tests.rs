@@ -288,7 +288,7 @@ fn report_serialises_with_contract_effects_and_renders_plots() {
     let json = rep.to_json().unwrap();
     assert!(json.contains("\"kind\": \"vibration_line\""), "{json}");
     assert!(rep.to_text().contains("vibration line f = 23.45"));
-    let plots = crate::analysis::diagnose_report::channel_plots(&rep.channels[0]);
+    let plots = crate::analysis::diagnose_report::channel_plots(&rep.channels[0]).unwrap();
     let names: Vec<&str> = plots.iter().map(|p| p.0.as_str()).collect();
     assert_eq!(
         names,

@@ -5,7 +5,7 @@
 use super::diagnose_report::{effect_text, spectrum_plot};
 use super::diagnose_wander::WanderKind;
 use super::diagnose_whole::WholeDiagnosis;
-use super::svg::{Plot, Series, render};
+use super::line_plot::{Plot, Series, render};
 use std::fmt::Write;
 
 /// One line per kept effect: "family: parameters [span]".
@@ -161,12 +161,12 @@ pub fn whole_text(d: &WholeDiagnosis) -> String {
 }
 
 /// SVG plots of one channel: (file stem, svg).
-pub fn whole_plots(d: &WholeDiagnosis) -> Vec<(String, String)> {
+pub fn whole_plots(d: &WholeDiagnosis) -> Result<Vec<(String, String)>, String> {
     let mut out = Vec::new();
     let p = &d.plots;
     if let (Some(a), Some(b)) = (&p.spectrum_before, &p.spectrum_after) {
         let title = format!("{}: open-loop residual spectrum (Welch)", d.channel);
-        let svg = spectrum_plot(title, ("intercept only", a), ("with the effects", b));
+        let svg = spectrum_plot(title, ("intercept only", a), ("with the effects", b))?;
         out.push((format!("{}_spectrum", d.channel), svg));
     }
     if !p.allan_before.is_empty() && !p.allan_after.is_empty() {
@@ -189,7 +189,7 @@ pub fn whole_plots(d: &WholeDiagnosis) -> Vec<(String, String)> {
                 s(&p.allan_after, "with the effects"),
             ],
         };
-        out.push((format!("{}_allan", d.channel), render(&plot, 800, 480)));
+        out.push((format!("{}_allan", d.channel), render(&plot, 800, 480)?));
     }
     for (i, e) in d
         .effects
@@ -215,8 +215,8 @@ pub fn whole_plots(d: &WholeDiagnosis) -> Vec<(String, String)> {
         };
         out.push((
             format!("{}_line{}_track", d.channel, i + 1),
-            render(&plot, 800, 480),
+            render(&plot, 800, 480)?,
         ));
     }
-    out
+    Ok(out)
 }

@@ -23,9 +23,9 @@ pub mod diagnose_whole_report;
 pub mod exogenous;
 pub mod gauss_markov;
 pub mod joint_model;
+pub mod line_plot;
 pub mod quantisation;
 pub mod spectrum;
-pub mod svg;
 #[cfg(test)]
 pub(crate) mod synth_test;
 pub mod wavelet;

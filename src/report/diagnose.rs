@@ -164,7 +164,7 @@ pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added>
             "{name}: effects in the model file (refit on the whole log): {}",
             effects_text(&written)
         )?;
-        write_plots(out_dir, channel_plots(&d))?;
+        write_plots(out_dir, channel_plots(&d).map_err(anyhow::Error::msg)?)?;
         model.channels.push(channel_model(
             name,
             rate,

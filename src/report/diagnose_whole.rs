@@ -90,7 +90,7 @@ pub fn diagnose_whole_samples(st: &Stretch, progress: &mut dyn Write) -> Result<
                 effects_text(&lines)
             )
         })?;
-        write_plots(out_dir, whole_plots(&d))?;
+        write_plots(out_dir, whole_plots(&d).map_err(anyhow::Error::msg)?)?;
         let effects: Vec<_> = d.effects.iter().map(|e| e.effect.clone()).collect();
         let mut m = channel_model(
             name,

@@ -174,3 +174,81 @@ pub fn csv_rows(csv: &str) -> Vec<Vec<String>> {
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect()
 }
+
+/// What a plot file holds, read with an XML parser.
+pub struct SvgParts {
+    /// The text of every `<text>` element (titles, axis labels, ticks, legend), trimmed.
+    pub texts: Vec<String>,
+    /// The `points` attribute of every `<polyline>` (the series, axes and legend samples).
+    pub polylines: Vec<String>,
+}
+
+/// Parse the SVG at `path`: a panic (naming the file) unless it is a well-formed XML document
+/// whose root is `<svg>`, with every element closed.
+pub fn svg_parts(path: &std::path::Path) -> SvgParts {
+    use quick_xml::events::Event;
+    let doc = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut r = quick_xml::Reader::from_str(&doc);
+    let (mut open, mut root, mut text) = (Vec::<String>::new(), None, String::new());
+    let mut parts = SvgParts {
+        texts: Vec::new(),
+        polylines: Vec::new(),
+    };
+    loop {
+        let ev = r
+            .read_event()
+            .unwrap_or_else(|e| panic!("{}: not well-formed XML: {e}", path.display()));
+        match &ev {
+            Event::Start(e) | Event::Empty(e) => {
+                if e.local_name().as_ref() == b"polyline" {
+                    let pts = e.try_get_attribute("points").ok().flatten();
+                    let pts = pts.map(|a| String::from_utf8_lossy(&a.value).into_owned());
+                    parts.polylines.push(pts.unwrap_or_default());
+                }
+                if matches!(ev, Event::Start(_)) {
+                    let name = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
+                    root.get_or_insert_with(|| name.clone());
+                    open.push(name);
+                    text.clear();
+                }
+            }
+            Event::Text(t) => text.push_str(&t.decode().unwrap()),
+            Event::GeneralRef(g) => {
+                let name = g.decode().unwrap();
+                text.push_str(quick_xml::escape::resolve_predefined_entity(&name).unwrap());
+            }
+            Event::End(_) => {
+                if open.pop().as_deref() == Some("text") {
+                    parts.texts.push(text.trim().to_string());
+                }
+                text.clear();
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    assert!(open.is_empty(), "{}: unclosed {open:?}", path.display());
+    assert_eq!(root.as_deref(), Some("svg"), "{}", path.display());
+    parts
+}
+
+/// The plot at `path` is well-formed SVG, shows every text of `texts` (title, axis labels,
+/// legend) and draws at least `series` lines of three points or more (axes, ticks and legend
+/// samples are two-point polylines).
+pub fn assert_plot(path: &std::path::Path, texts: &[&str], series: usize) {
+    let p = svg_parts(path);
+    for t in texts {
+        assert!(
+            p.texts.iter().any(|x| x == t),
+            "{}: no text {t:?} in {:?}",
+            path.display(),
+            p.texts
+        );
+    }
+    let lines = p
+        .polylines
+        .iter()
+        .filter(|l| l.split_whitespace().count() >= 3)
+        .count();
+    assert!(lines >= series, "{}: {lines} series lines", path.display());
+}
