@@ -104,35 +104,35 @@ impl Health {
             "  frames     : {} bytes in, {} good frames ({} samples, {} descriptors)",
             d.bytes_in, d.frames_ok, d.samples, d.descriptors
         );
-        let _ = writeln!(
-            o,
-            "  faults     : {} CRC errors, {} header errors, {} bad lengths, {} resyncs, {} garbage bytes, {} truncated, {} unknown type, {} bad payload",
-            d.crc_errors,
-            d.header_errors,
-            d.bad_length,
-            d.resyncs,
-            d.garbage_bytes,
-            d.truncated,
-            d.unknown_type,
-            d.bad_payload
-        );
+        let faults = counts(&[
+            (d.crc_errors, "CRC errors"),
+            (d.header_errors, "header errors"),
+            (d.bad_length, "bad lengths"),
+            (d.resyncs, "resyncs"),
+            (d.garbage_bytes, "garbage bytes"),
+            (d.truncated, "truncated"),
+            (d.unknown_type, "unknown type"),
+            (d.bad_payload, "bad payload"),
+        ]);
+        let _ = writeln!(o, "  faults     : {faults}");
         let _ = writeln!(
             o,
             "  sequence   : {} gaps ({} frames missing), {} duplicates, {} restarts",
             d.gaps, d.missing_frames, d.duplicates, d.seq_restarts
         );
+        let flagged = counts(&[
+            (self.flagged_replaced, "replaced"),
+            (self.flagged_suspect, "suspect"),
+            (self.flagged_repeated, "repeated"),
+            (self.flagged_non_finite, "non-finite"),
+            (self.flagged_saturated, "saturated"),
+            (self.flagged_warming_up, "warming up"),
+            (self.flagged_bias_removed, "bias removed"),
+        ]);
         let _ = writeln!(
             o,
-            "  samples    : {} in, {} out; flagged: {} replaced, {} suspect, {} repeated, {} non-finite, {} saturated, {} warming up, {} bias removed",
-            self.samples_in,
-            self.samples_out,
-            self.flagged_replaced,
-            self.flagged_suspect,
-            self.flagged_repeated,
-            self.flagged_non_finite,
-            self.flagged_saturated,
-            self.flagged_warming_up,
-            self.flagged_bias_removed
+            "  samples    : {} in, {} out; flagged: {flagged}",
+            self.samples_in, self.samples_out
         );
         if self.samples_partial > 0 {
             let _ = writeln!(
@@ -313,6 +313,15 @@ impl Health {
 
 /// What the summary and the log say when no cleaning stage runs.
 pub const NO_CLEANING: &str = "NONE — no cleaning stage is enabled ([gross_error] and [bias] are off): samples are published raw";
+
+/// `"n1 what1, n2 what2, …"`: a summary line's counters, in order.
+fn counts(items: &[(u64, &str)]) -> String {
+    let parts: Vec<String> = items
+        .iter()
+        .map(|(n, what)| format!("{n} {what}"))
+        .collect();
+    parts.join(", ")
+}
 
 fn cleaning_stages(p: &Pipeline) -> Vec<String> {
     p.cleaning_stage_names()

@@ -5,16 +5,11 @@
 
 use super::allan_report::{AllanReport, ChannelAllan};
 use super::allan_terms::Term;
+use super::line_plot::palette::{BLUE, BROWN, GREEN, ORANGE, PURPLE, RED};
 use plotters::prelude::*;
 
-const TERM_COLORS: [RGBColor; 5] = [
-    RGBColor(148, 103, 189),
-    RGBColor(44, 160, 44),
-    RGBColor(255, 127, 14),
-    RGBColor(214, 39, 40),
-    RGBColor(140, 86, 75),
-];
-const CURVE: RGBColor = RGBColor(31, 119, 180);
+const TERM_COLORS: [RGBColor; 5] = [PURPLE, GREEN, ORANGE, RED, BROWN];
+const CURVE: RGBColor = BLUE;
 
 fn decade_label(v: &f64) -> String {
     format!("{v:.0e}")

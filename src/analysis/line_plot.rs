@@ -33,14 +33,22 @@ pub struct Plot {
     pub series: Vec<Series>,
 }
 
-const COLORS: [RGBColor; 6] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
-    RGBColor(44, 160, 44),
-    RGBColor(255, 127, 14),
-    RGBColor(148, 103, 189),
-    RGBColor(85, 85, 85),
-];
+/// The plots' colours (matplotlib's "tab10" and a grey), by name; shared with `allan_plot.rs`.
+pub(super) mod palette {
+    use plotters::style::RGBColor;
+    pub const BLUE: RGBColor = RGBColor(31, 119, 180);
+    pub const ORANGE: RGBColor = RGBColor(255, 127, 14);
+    pub const GREEN: RGBColor = RGBColor(44, 160, 44);
+    pub const RED: RGBColor = RGBColor(214, 39, 40);
+    pub const PURPLE: RGBColor = RGBColor(148, 103, 189);
+    pub const BROWN: RGBColor = RGBColor(140, 86, 75);
+    pub const GREY: RGBColor = RGBColor(85, 85, 85);
+}
+
+const COLORS: [RGBColor; 6] = {
+    use palette::*;
+    [BLUE, RED, GREEN, ORANGE, PURPLE, GREY]
+};
 
 /// plotters' SVG backend writes a font of size `n` as `n / 1.24` px: 15 gives 12 px.
 const FONT: (&str, u32) = ("sans-serif", 15);

@@ -197,11 +197,7 @@ pub struct MavlinkDecoder {
     settle: Settle,
 }
 
-impl Default for MavlinkDecoder {
-    fn default() -> Self {
-        Self::new(MavlinkOptions::default())
-    }
-}
+super::protocol::default_from_options!(MavlinkDecoder, MavlinkOptions);
 
 impl MavlinkDecoder {
     pub fn new(opts: MavlinkOptions) -> Self {

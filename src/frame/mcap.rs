@@ -119,11 +119,7 @@ pub struct McapDecoder {
     bad_cdr: u64,
 }
 
-impl Default for McapDecoder {
-    fn default() -> Self {
-        Self::new(McapOptions::default())
-    }
-}
+super::protocol::default_from_options!(McapDecoder, McapOptions);
 
 impl McapDecoder {
     pub fn new(opts: McapOptions) -> Self {

@@ -17,6 +17,19 @@ use super::{DecoderStats, Descriptor, Message};
 use crate::sample::{Sample, flags};
 use bytes::{Bytes, BytesMut};
 
+/// `impl Default for $decoder`: `$decoder::new` with `$options::default()` (every protocol
+/// decoder is built from its options).
+macro_rules! default_from_options {
+    ($decoder:ty, $options:ty) => {
+        impl Default for $decoder {
+            fn default() -> Self {
+                Self::new(<$options>::default())
+            }
+        }
+    };
+}
+pub(crate) use default_from_options;
+
 /// The wire formats imuprep reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]

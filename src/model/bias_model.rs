@@ -176,6 +176,20 @@ fn finite(errors: &mut Vec<String>, key: &str, v: f64) -> bool {
     }
 }
 
+/// [`finite`], then `v > 0`.
+fn positive(errors: &mut Vec<String>, key: &str, v: f64) {
+    if finite(errors, key, v) && v <= 0.0 {
+        errors.push(format!("{key}: must be > 0 (got {v})"));
+    }
+}
+
+/// [`finite`], then `v ≥ 0`.
+fn non_negative(errors: &mut Vec<String>, key: &str, v: f64) {
+    if finite(errors, key, v) && v < 0.0 {
+        errors.push(format!("{key}: must be >= 0 (got {v})"));
+    }
+}
+
 impl BiasModelFile {
     /// Parse a model from TOML text and validate it.
     pub fn from_toml_str(text: &str) -> Result<Self, BiasModelError> {
@@ -340,17 +354,11 @@ impl ChannelBiasModel {
         if self.method.trim().is_empty() {
             errors.push(format!("{key}.method: must name the fitting method"));
         }
-        if finite(
+        positive(
             errors,
             &format!("{key}.sample_rate_hz"),
             self.sample_rate_hz,
-        ) && self.sample_rate_hz <= 0.0
-        {
-            errors.push(format!(
-                "{key}.sample_rate_hz: must be > 0 (got {})",
-                self.sample_rate_hz
-            ));
-        }
+        );
         finite(errors, &format!("{key}.mean"), self.mean);
         if self.ar.len() > MAX_FILE_AR_ORDER {
             errors.push(format!(
@@ -364,28 +372,16 @@ impl ChannelBiasModel {
         } else {
             errors.push(format!("{key}.ar: all coefficients must be finite"));
         }
-        if finite(
+        positive(
             errors,
             &format!("{key}.innovation_var"),
             self.innovation_var,
-        ) && self.innovation_var <= 0.0
-        {
-            errors.push(format!(
-                "{key}.innovation_var: must be > 0 (got {})",
-                self.innovation_var
-            ));
-        }
-        if finite(
+        );
+        non_negative(
             errors,
             &format!("{key}.white_noise_var"),
             self.white_noise_var,
-        ) && self.white_noise_var < 0.0
-        {
-            errors.push(format!(
-                "{key}.white_noise_var: must be >= 0 (got {})",
-                self.white_noise_var
-            ));
-        }
+        );
         let nyquist = 0.5 * self.sample_rate_hz;
         let mut n_temperature = 0;
         let mut n_gsens = 0;
@@ -402,9 +398,7 @@ impl ChannelBiasModel {
                     finite(errors, &format!("{ek}.t0_c"), t0_c);
                     finite(errors, &format!("{ek}.c1_per_c"), c1_per_c);
                     finite(errors, &format!("{ek}.c2_per_c2"), c2_per_c2);
-                    if finite(errors, &format!("{ek}.lag_s"), lag_s) && lag_s < 0.0 {
-                        errors.push(format!("{ek}.lag_s: must be >= 0 (got {lag_s})"));
-                    }
+                    non_negative(errors, &format!("{ek}.lag_s"), lag_s);
                 }
                 Effect::VibrationLine {
                     freq_hz,
@@ -418,9 +412,7 @@ impl ChannelBiasModel {
                             "{ek}.freq_hz: must be in (0, sample_rate_hz/2 = {nyquist}) (got {freq_hz})"
                         ));
                     }
-                    if finite(errors, &format!("{ek}.amplitude"), amplitude) && amplitude < 0.0 {
-                        errors.push(format!("{ek}.amplitude: must be >= 0 (got {amplitude})"));
-                    }
+                    non_negative(errors, &format!("{ek}.amplitude"), amplitude);
                     finite(errors, &format!("{ek}.phase_rad"), phase_rad);
                 }
                 Effect::Step { t_s, size } => {
@@ -442,9 +434,7 @@ impl ChannelBiasModel {
                     }
                 }
                 Effect::RateRandomWalk { q_per_s } => {
-                    if finite(errors, &format!("{ek}.q_per_s"), q_per_s) && q_per_s < 0.0 {
-                        errors.push(format!("{ek}.q_per_s: must be >= 0 (got {q_per_s})"));
-                    }
+                    non_negative(errors, &format!("{ek}.q_per_s"), q_per_s);
                 }
             }
         }

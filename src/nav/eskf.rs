@@ -150,6 +150,19 @@ pub struct ZuptConfig {
     pub rate_sd: f64,
 }
 
+impl ZuptConfig {
+    /// The reference GPS/INS filter's settings: 50 still epochs judged on 10-epoch averages,
+    /// |‖f‖ − g| < 0.25 m/s² and ‖ω‖ < 0.25 °/s; σ 0.01 m/s and 0.01 °/s.
+    pub const REFERENCE: ZuptConfig = ZuptConfig {
+        window: 50,
+        smooth: 10,
+        accel_thresh: 0.25,
+        gyro_thresh: 0.25f64.to_radians(),
+        vel_sd: 0.01,
+        rate_sd: 0.01f64.to_radians(),
+    };
+}
+
 /// Initial 1-σ uncertainties.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct InitSd {

@@ -158,11 +158,7 @@ pub struct UbxDecoder {
     seen: u8,
 }
 
-impl Default for UbxDecoder {
-    fn default() -> Self {
-        Self::new(UbxOptions::default())
-    }
-}
+crate::frame::protocol::default_from_options!(UbxDecoder, UbxOptions);
 
 impl UbxDecoder {
     pub fn new(opts: UbxOptions) -> Self {

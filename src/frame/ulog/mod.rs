@@ -95,11 +95,7 @@ pub struct UlogDecoder {
 /// `sizes` entry of a msg_id without a subscription.
 const NO_SIZE: u32 = u32::MAX;
 
-impl Default for UlogDecoder {
-    fn default() -> Self {
-        Self::new(UlogOptions::default())
-    }
-}
+crate::frame::protocol::default_from_options!(UlogDecoder, UlogOptions);
 
 fn f32_at(p: &[u8], o: usize) -> f32 {
     f32::from_le_bytes([p[o], p[o + 1], p[o + 2], p[o + 3]])
