@@ -103,6 +103,16 @@ pub enum Decoded {
     Other(Bytes),
 }
 
+impl Decoded {
+    /// The sample, if this item is one.
+    pub fn sample(&self) -> Option<&Sample> {
+        match self {
+            Decoded::Sample(s, _) => Some(s),
+            _ => None,
+        }
+    }
+}
+
 /// The decoder contract. `decode` takes at most one item from the front of `buf` and returns
 /// `None` when it needs more bytes; `decode_eof` is called when no more bytes will come and
 /// counts what is left as truncated or garbage. Neither ever panics on any input.
@@ -192,31 +202,33 @@ impl tokio_util::codec::Decoder for Codec {
     }
 }
 
+/// The native decoder's next item (`decode`, or `decode_eof` at the end of the input).
+fn native_item(dec: &mut super::FrameDecoder, buf: &mut BytesMut, eof: bool) -> Option<Decoded> {
+    use tokio_util::codec::Decoder;
+    // Health reports are data for consumers, not input: skip them (counted) and go on.
+    loop {
+        let m = if eof {
+            Decoder::decode_eof(dec, buf)
+        } else {
+            Decoder::decode(dec, buf)
+        };
+        match m.ok().flatten()? {
+            Message::Descriptor(d) => return Some(Decoded::Descriptor(d)),
+            Message::Sample(s) => return Some(Decoded::Sample(s, None)),
+            Message::Health(_) => continue,
+        }
+    }
+}
+
 impl ProtocolDecoder for super::FrameDecoder {
     fn protocol(&self) -> Protocol {
         Protocol::Native
     }
     fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        use tokio_util::codec::Decoder;
-        // Health reports are data for consumers, not input: skip them (counted) and go on.
-        loop {
-            match Decoder::decode(self, buf).ok().flatten()? {
-                Message::Descriptor(d) => return Some(Decoded::Descriptor(d)),
-                Message::Sample(s) => return Some(Decoded::Sample(s, None)),
-                Message::Health(_) => continue,
-            }
-        }
+        native_item(self, buf, false)
     }
     fn decode_item_eof(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        use tokio_util::codec::Decoder;
-        // Health reports are data for consumers, not input: skip them (counted) and go on.
-        loop {
-            match Decoder::decode_eof(self, buf).ok().flatten()? {
-                Message::Descriptor(d) => return Some(Decoded::Descriptor(d)),
-                Message::Sample(s) => return Some(Decoded::Sample(s, None)),
-                Message::Health(_) => continue,
-            }
-        }
+        native_item(self, buf, true)
     }
     fn discard_tail(&mut self, buf: &mut BytesMut) {
         use tokio_util::codec::Decoder;

@@ -484,13 +484,7 @@ mod tests {
         b.extend_from_slice(b"$GNGGA,,,,,,0,00,99.99,,,,,,*56\r\n");
         for chunk in [1, 5, 1000] {
             let (out, st) = decode_all(&b, chunk);
-            let samples: Vec<&Sample> = out
-                .iter()
-                .filter_map(|d| match d {
-                    Decoded::Sample(s, _) => Some(s),
-                    _ => None,
-                })
-                .collect();
+            let samples: Vec<&Sample> = out.iter().filter_map(Decoded::sample).collect();
             assert_eq!(samples.len(), 2, "chunk {chunk}");
             assert_eq!(st.other_messages, 2);
             assert_eq!(st.garbage_bytes, 0);

@@ -567,13 +567,7 @@ mod tests {
         encode_sensor_combined_log(&samples, &mut b);
         for chunk in [1, 3, 17, 4096] {
             let (out, st) = decode_all(&b, chunk);
-            let got: Vec<&Sample> = out
-                .iter()
-                .filter_map(|d| match d {
-                    Decoded::Sample(s, _) => Some(s),
-                    _ => None,
-                })
-                .collect();
+            let got: Vec<&Sample> = out.iter().filter_map(Decoded::sample).collect();
             assert_eq!(got.len(), 40, "chunk {chunk}");
             assert_eq!(st.garbage_bytes, 0);
             assert_eq!(got[7].gyro[0], 0.007f32 as f64);
