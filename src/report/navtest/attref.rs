@@ -14,7 +14,7 @@ use nalgebra::Vector3;
 use serde::Serialize;
 
 use super::comma::read_pose_attitude;
-use super::outages::{OutageError, percentile, wrap_deg};
+use super::outages::{OutageError, median_p95, percentile, wrap_deg};
 use super::setup::{AttRefSource, GnssSource, RecordSpec};
 use crate::nav::pos::PosEpoch;
 
@@ -110,10 +110,6 @@ fn errors(att_deg: [f64; 3], r: &RefAttitude, off: &[f64; 3]) -> (f64, Option<f6
 
 /// The GNSS-aided filter's attitude and the reference's at one epoch.
 type Pair = (Vector3<f64>, RefAttitude);
-
-fn median_p95(mut v: Vec<f64>) -> [f64; 2] {
-    [percentile(&mut v, 50.0), percentile(&mut v, 95.0)]
-}
 
 /// The report for one record: `aided` is the raw-IMU no-outage filter's attitude at each GNSS
 /// epoch (rad, [`super::RunResult::attitude_at_epoch`]), `t_first` the first outage start

@@ -8,7 +8,7 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
-use super::outages::{Oracle, Outage, OutageError, percentile, run_filter_with};
+use super::outages::{Oracle, Outage, OutageError, median_p95, run_filter_with};
 use super::setup::BodyImu;
 use crate::nav::eskf::EskfConfig;
 use crate::nav::pos::PosEpoch;
@@ -82,19 +82,17 @@ pub fn cases() -> Vec<(&'static str, Oracle)> {
 
 /// Summary of one case's errors.
 pub fn budget_row(case: &str, errs: &[OutageError]) -> BudgetRow {
-    let col = |f: fn(&OutageError) -> f64| errs.iter().map(f).collect::<Vec<_>>();
-    let (mut h, mut t, mut hd) = (
-        col(|e| e.horiz_m),
-        col(|e| e.tilt_deg),
-        col(|e| e.heading_deg),
-    );
+    let col = |f: fn(&OutageError) -> f64| median_p95(errs.iter().map(f).collect());
+    let [horiz_median_m, horiz_p95_m] = col(|e| e.horiz_m);
+    let [tilt_median_deg, _] = col(|e| e.tilt_deg);
+    let [heading_median_deg, _] = col(|e| e.heading_deg);
     BudgetRow {
         case: case.into(),
         outages: errs.len(),
-        horiz_median_m: percentile(&mut h, 50.0),
-        horiz_p95_m: percentile(&mut h, 95.0),
-        tilt_median_deg: percentile(&mut t, 50.0),
-        heading_median_deg: percentile(&mut hd, 50.0),
+        horiz_median_m,
+        horiz_p95_m,
+        tilt_median_deg,
+        heading_median_deg,
     }
 }
 

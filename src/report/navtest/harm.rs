@@ -6,7 +6,7 @@
 
 use serde::Serialize;
 
-use super::outages::{LENGTHS, OutageError, percentile};
+use super::outages::{LENGTHS, OutageError, median_p95};
 use super::setup::BodyImu;
 use crate::sample::{Sample, flags};
 
@@ -79,15 +79,15 @@ pub fn harm_check(
             v.iter().filter(|e| e.length_s == l).copied().collect()
         };
         let (ea, eb) = (pick(a), pick(b));
-        let h = |v: &[OutageError]| v.iter().map(|e| e.horiz_m).collect::<Vec<_>>();
-        let (mut ha, mut hb) = (h(&ea), h(&eb));
+        let h = |v: &[OutageError]| median_p95(v.iter().map(|e| e.horiz_m).collect());
+        let ([a_median_m, a_p95_m], [b_median_m, b_p95_m]) = (h(&ea), h(&eb));
         let cell = HarmCell {
             length_s: l,
             outages: ea.len().min(eb.len()),
-            a_median_m: percentile(&mut ha, 50.0),
-            b_median_m: percentile(&mut hb, 50.0),
-            a_p95_m: percentile(&mut ha, 95.0),
-            b_p95_m: percentile(&mut hb, 95.0),
+            a_median_m,
+            b_median_m,
+            a_p95_m,
+            b_p95_m,
         };
         if !(cell.median_ok() && cell.p95_ok()) {
             let mut worse: Vec<(&OutageError, &OutageError)> = ea

@@ -333,6 +333,11 @@ pub fn percentile(v: &mut [f64], p: f64) -> f64 {
     v[lo] + (v[hi] - v[lo]) * (x - lo as f64)
 }
 
+/// `[median, 95th percentile]` of `v` ([`percentile`]).
+pub fn median_p95(mut v: Vec<f64>) -> [f64; 2] {
+    [percentile(&mut v, 50.0), percentile(&mut v, 95.0)]
+}
+
 /// Median and 95th percentile of one error over a variant's outages of one length.
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {
@@ -354,25 +359,23 @@ pub fn rows(record: &str, variant: &str, errs: &[OutageError]) -> Vec<Row> {
         .iter()
         .map(|&l| {
             let e: Vec<&OutageError> = errs.iter().filter(|e| e.length_s == l).collect();
-            let col = |f: fn(&OutageError) -> f64| e.iter().map(|x| f(x)).collect::<Vec<_>>();
-            let (mut h, mut v, mut hd, mut t) = (
-                col(|x| x.horiz_m),
-                col(|x| x.vert_m),
-                col(|x| x.heading_deg),
-                col(|x| x.tilt_deg),
-            );
+            let col = |f: fn(&OutageError) -> f64| median_p95(e.iter().map(|x| f(x)).collect());
+            let [horiz_median_m, horiz_p95_m] = col(|x| x.horiz_m);
+            let [vert_median_m, vert_p95_m] = col(|x| x.vert_m);
+            let [heading_median_deg, heading_p95_deg] = col(|x| x.heading_deg);
+            let [tilt_median_deg, _] = col(|x| x.tilt_deg);
             Row {
                 record: record.into(),
                 variant: variant.into(),
                 length_s: l,
                 outages: e.len(),
-                horiz_median_m: percentile(&mut h, 50.0),
-                horiz_p95_m: percentile(&mut h, 95.0),
-                vert_median_m: percentile(&mut v, 50.0),
-                vert_p95_m: percentile(&mut v, 95.0),
-                heading_median_deg: percentile(&mut hd, 50.0),
-                heading_p95_deg: percentile(&mut hd, 95.0),
-                tilt_median_deg: percentile(&mut t, 50.0),
+                horiz_median_m,
+                horiz_p95_m,
+                vert_median_m,
+                vert_p95_m,
+                heading_median_deg,
+                heading_p95_deg,
+                tilt_median_deg,
             }
         })
         .collect()

@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 use serde::Serialize;
 
 use super::clean;
-use super::outages::percentile;
+use super::outages::median_p95;
 use crate::config::Config;
 use crate::nav::earth::{self, euler_to_ctm};
 use crate::nav::eskf::{NavState, level};
@@ -113,17 +113,18 @@ pub fn run_bench(
     ] {
         for w in [60.0, 300.0] {
             let r = static_drift(data, rate, w, w, skip_s, cal);
-            let mut p: Vec<f64> = r.iter().map(|x| x.0).collect();
-            let mut v: Vec<f64> = r.iter().map(|x| x.1).collect();
+            let [horiz_pos_median_m, horiz_pos_p95_m] = median_p95(r.iter().map(|x| x.0).collect());
+            let [horiz_vel_median_m_s, horiz_vel_p95_m_s] =
+                median_p95(r.iter().map(|x| x.1).collect());
             out.push(DriftRow {
                 bench: name.into(),
                 variant: variant.into(),
                 window_s: w,
                 windows: r.len(),
-                horiz_pos_median_m: percentile(&mut p, 50.0),
-                horiz_pos_p95_m: percentile(&mut p, 95.0),
-                horiz_vel_median_m_s: percentile(&mut v, 50.0),
-                horiz_vel_p95_m_s: percentile(&mut v, 95.0),
+                horiz_pos_median_m,
+                horiz_pos_p95_m,
+                horiz_vel_median_m_s,
+                horiz_vel_p95_m_s,
             });
         }
     }
