@@ -341,3 +341,28 @@ fn sweep_wander_size_and_tau() {
         }
     }
 }
+
+/// The monitor's time to flag a wander of the size `diagnose` finds (`tests/wander_ladder.rs`:
+/// kept on every 20-min log from 1× the 1-s white σ, on most from 0.5×), on the same bench,
+/// onset and seeds as the sweep (`--ignored`: 8 runs of 40 min).
+#[test]
+#[ignore]
+fn wander_of_the_size_diagnose_finds() {
+    let scn = clean_bench(2400.0);
+    let w1 = 0.005_f64.to_radians();
+    for k in [0.5, 1.0] {
+        let mut times = Vec::new();
+        for seed in 0..4u64 {
+            let (mut samples, _) = simulate_decoded(&scn, 100 + seed).unwrap();
+            add_wander(&mut samples, 2, 1800.0, 20.0, k * w1, 500 + seed);
+            let a = alarms(&monitor_over(&samples, 100.0, true));
+            assert!(a.iter().all(|x| x.channel == 2), "{k}×: {a:?}");
+            times.push(
+                a.iter()
+                    .find(|x| matches!(x.finding, Finding::Wander(_)))
+                    .map(|x| (x.t_ns as f64 * 1e-9 + 120.0 - 1800.0).round()),
+            );
+        }
+        eprintln!("τ 8 s, σ {k}× the 1-s white σ: flagged after {times:?} s (None: not in 600 s)");
+    }
+}
