@@ -36,6 +36,21 @@ pub struct MonitorSettings {
     pub wander_tau_s: f64,
     /// False-alarm probability of one wander test (sets the F-quantile bar).
     pub wander_p: f64,
+    /// The wander test's statistic (see [`WanderStatistic`]).
+    pub wander_statistic: WanderStatistic,
+}
+
+/// What the wander test compares with the channel's own no-effect value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WanderStatistic {
+    /// `m·A(m·b)/A(b)`: the Allan variance's slope between the block and `wander_tau_s` (scale
+    /// free: the window's own `A(b)` is the reference).
+    AllanRatio,
+    /// The variance of the window's `wander_tau_s` means about their mean, against the
+    /// channel's learned value (the reference is the channel's own level: ~7× more power on a
+    /// Gauss–Markov wander of the size `diagnose` finds, docs/model-health.md).
+    BlockVariance,
 }
 
 impl Default for MonitorSettings {
@@ -54,6 +69,7 @@ impl Default for MonitorSettings {
             wander_window_s: 120.0,
             wander_tau_s: 8.0,
             wander_p: 1e-5,
+            wander_statistic: WanderStatistic::AllanRatio,
         }
     }
 }
