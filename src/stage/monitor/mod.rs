@@ -10,8 +10,9 @@
 //! - a **spectral line** — a vibration or an electrical line appearing ([`line::LineDetector`]:
 //!   a moving Welch average, each bin against its neighbours), and
 //! - a **wander** — the output losing its whiteness at tens of seconds, a bias instability the
-//!   model lacks ([`wander::WanderDetector`]: the Allan variance's slope between two τ against
-//!   the channel's own, with an F-quantile bar from the estimates' degrees of freedom),
+//!   model lacks ([`wander::WanderDetector`]: the Allan variance's slope between two τ, or the
+//!   variance of τ-means, against the channel's own, with an F-quantile bar from the estimates'
+//!   degrees of freedom),
 //!
 //! and publishes a status — `model fits`, `learning`, or `effect suspected: …` with the channel,
 //! the size and the time — in the health data, so the user learns that `imuprep diagnose` should
