@@ -10,8 +10,9 @@
 //! - a **spectral line** — a vibration or an electrical line appearing ([`line::LineDetector`]:
 //!   a moving Welch average, each bin against its neighbours), and
 //! - a **wander** — the output losing its whiteness at tens of seconds, a bias instability the
-//!   model lacks ([`wander::WanderDetector`]: the Allan variance's slope between two τ against
-//!   the channel's own, with an F-quantile bar from the estimates' degrees of freedom),
+//!   model lacks ([`wander::WanderDetector`]: the Allan variance's slope between two τ, or the
+//!   variance of τ-means, against the channel's own, with an F-quantile bar from the estimates'
+//!   degrees of freedom),
 //!
 //! and publishes a status — `model fits`, `learning`, or `effect suspected: …` with the channel,
 //! the size and the time — in the health data, so the user learns that `imuprep diagnose` should
@@ -29,7 +30,7 @@ use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use crate::stage::Stage;
 use crate::stage::health::StageHealth;
 use line::{LineDetector, LineEvent};
-pub use settings::MonitorSettings;
+pub use settings::{MonitorSettings, WanderStatistic};
 use std::collections::VecDeque;
 use step::LevelDetector;
 use wander::WanderDetector;
@@ -46,7 +47,8 @@ pub enum Finding {
     Offset(f64),
     /// A line at this frequency, Hz (and its index among the channel's lines).
     Line(f64, usize),
-    /// More Allan variance at this τ (s) than the channel's own (the ratio is the score).
+    /// More variance at this τ (s) than the channel's own (the ratio is the score; Allan
+    /// variance or the τ-means' variance, [`WanderStatistic`]).
     Wander(f64),
 }
 
@@ -58,7 +60,7 @@ pub struct Alarm {
     pub t_ns: u64,
     pub finding: Finding,
     /// Its size against the channel's own scale (σ for an offset, power ratio for a line,
-    /// Allan-variance ratio for a wander).
+    /// variance ratio for a wander).
     pub score: f64,
 }
 
@@ -85,7 +87,7 @@ impl std::fmt::Display for Alarm {
             ),
             Finding::Wander(tau) => write!(
                 f,
-                "{name} wander since {t:.1} s (Allan variance at {tau:.0} s {:.1}× its own)",
+                "{name} wander since {t:.1} s (variance at {tau:.0} s {:.1}× its own)",
                 self.score
             ),
         }
@@ -251,7 +253,8 @@ impl MonitorStage {
             .map(|_| Channel {
                 level: LevelDetector::new(block_n, window_blocks, st.offset_k, learn_blocks),
                 line: LineDetector::new(seg_n, st.line_averages, st.line_k, fs),
-                wander: WanderDetector::new(wb_n, wb_s, w_blocks, w_m, st.wander_p, w_learn),
+                wander: WanderDetector::new(wb_n, wb_s, w_blocks, w_m, st.wander_p, w_learn)
+                    .with_statistic(st.wander_statistic),
             })
             .collect();
         self.fs = Some(fs);
