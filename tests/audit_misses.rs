@@ -166,6 +166,7 @@ fn why_missed(verdicts: &[&EventVerdict], k: u64, k_th: &Thresholds) -> String {
 }
 
 #[test]
+#[allow(clippy::needless_range_loop)] // c indexes the label rows' channel and the samples alike
 fn missed_injections_are_explained_by_the_verdict_that_let_them_pass() {
     let Some(dir) = common::real_data("") else {
         return;
@@ -232,7 +233,7 @@ fn missed_injections_are_explained_by_the_verdict_that_let_them_pass() {
         }
     }
     let mut rows: Vec<_> = total.into_iter().collect();
-    rows.sort_by(|a, b| b.1.cmp(&a.1));
+    rows.sort_by_key(|r| std::cmp::Reverse(r.1));
     eprintln!("all four:");
     for (why, n) in rows {
         eprintln!("  {n:4}  {why}");
