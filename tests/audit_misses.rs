@@ -12,14 +12,23 @@
 //! The assertion: the breakdown's own count of hits, misses and false replacements gives the
 //! audit's F1 for the same recording and seed (so the breakdown describes what the audit scores).
 //! Skipped (visibly, on stderr) when `../shared/data/real` is absent.
+//!
+//! A second test, `missed_injections_are_explained_by_the_verdict_that_let_them_pass`, runs the
+//! gross-error stage alone with its verdicts recorded (`GrossErrorStage::record_verdicts`) and
+//! files every missed labelled sample under the verdict of the event that held it: no event
+//! (the gate let it pass), handed back by the trim of a confirmed event, or the first test that
+//! rejected its event (`confirm::Rejection`, shock, motion, not judged), marked "after a trim"
+//! when the event's judged part was shorter than the event.
 
 mod common;
 
 use imuprep::config::Config;
 use imuprep::report::audit::{audit_recording, inject_spikes, load_recording, run_config};
 use imuprep::sample::{N_CHANNELS, flags};
-use imuprep::stage::gross_error::confirm::roughness;
+use imuprep::stage::gross_error::confirm::{Thresholds, roughness};
+use imuprep::stage::gross_error::{EventVerdict, GrossErrorStage};
 use imuprep::stats::robust::robust_sigma;
+use std::collections::BTreeMap;
 
 const RECORDINGS: &[&str] = &[
     "rtklibexplorer_drive_walk/drive_0708_imu.csv",
@@ -116,4 +125,117 @@ fn missed_injections_are_broken_down_and_agree_with_the_audit() {
         qs(0.5),
         qs(1.0)
     );
+}
+
+/// Why one missed labelled sample (stage index `k`, channel `c`) was not replaced, from the
+/// recorded verdicts of channel `c` (sorted by start).
+fn why_missed(verdicts: &[&EventVerdict], k: u64, k_th: &Thresholds) -> String {
+    let Some(v) = verdicts
+        .iter()
+        .find(|v| (v.start..v.start + v.len as u64).contains(&k))
+    else {
+        return "no event (the gate let it pass)".into();
+    };
+    let j = (k - v.start) as usize;
+    let trimmed = v.lead > 0 || v.keep < v.len;
+    if v.gross {
+        return if (v.lead..v.keep).contains(&j) {
+            "replaced, then overwritten (cannot happen)".into()
+        } else {
+            "handed back by the trim of a confirmed event".into()
+        };
+    }
+    let why = if v.shock {
+        "shock on other axes".to_string()
+    } else if v.motion_break {
+        "break inside a gate-called motion".to_string()
+    } else {
+        match v.evidence {
+            None => "not judged".to_string(),
+            Some(e) => match e.rejection(v.keep - v.lead, k_th) {
+                Some(r) => format!("{r:?}"),
+                None => "confirmed but not replaced (cannot happen)".to_string(),
+            },
+        }
+    };
+    if trimmed {
+        format!("{why} (after a trim)")
+    } else {
+        why
+    }
+}
+
+#[test]
+#[allow(clippy::needless_range_loop)] // c indexes the label rows' channel and the samples alike
+fn missed_injections_are_explained_by_the_verdict_that_let_them_pass() {
+    let Some(dir) = common::real_data("") else {
+        return;
+    };
+    let cfg = Config::default_embedded().unwrap();
+    let ge = cfg.stages.gross_error.as_ref().expect("enabled by default");
+    let th = Thresholds {
+        confirm_k: ge.settings.confirm_k,
+        edge_k: ge.settings.edge_k,
+        stand_out: ge.settings.stand_out,
+        edge_stand_out: ge.settings.edge_stand_out,
+    };
+    let mut total: BTreeMap<String, usize> = BTreeMap::new();
+    for rec in RECORDINGS
+        .iter()
+        .chain(&["ximu3_fusion_example/sensor_data.csv"])
+    {
+        let (desc, raw) = load_recording(&dir.join(rec)).unwrap();
+        let mut x = raw.clone();
+        let labels = inject_spikes(&mut x, SEED);
+        let piped = run_config(&cfg, &desc, &x).unwrap();
+        let mut stage = GrossErrorStage::new(&ge.settings, ge.model.as_ref()).unwrap();
+        stage.record_verdicts();
+        let out = imuprep::stage::run_through(&mut stage, &x);
+        let verdicts = stage.take_verdicts();
+        // The stage alone replaces exactly what the pipeline's output says was replaced, so the
+        // verdicts explain the audit's score.
+        assert_eq!(out.len(), piped.len());
+        for (a, b) in out.iter().zip(&piped) {
+            assert_eq!(a.flags & flags::REPLACED_ANY, b.flags & flags::REPLACED_ANY);
+        }
+        // Stage index of each sample: a stale repeat shares its original's.
+        let mut idx = Vec::with_capacity(out.len());
+        let mut next = 0u64;
+        for s in &out {
+            if s.flags & flags::REPEATED != 0 {
+                idx.push(next.saturating_sub(1));
+            } else {
+                idx.push(next);
+                next += 1;
+            }
+        }
+        let mut mine: BTreeMap<String, usize> = BTreeMap::new();
+        let mut missed = 0;
+        for c in 0..N_CHANNELS {
+            let of_c: Vec<&EventVerdict> = verdicts.iter().filter(|v| v.channel == c).collect();
+            for k in SCORE_FROM..out.len() {
+                if labels[k][c] && out[k].flags & flags::replaced_ch(c) == 0 {
+                    missed += 1;
+                    *mine.entry(why_missed(&of_c, idx[k], &th)).or_default() += 1;
+                }
+            }
+        }
+        // Every missed sample is filed once, and none under a case that cannot happen.
+        assert_eq!(mine.values().sum::<usize>(), missed);
+        assert!(
+            mine.keys().all(|k| !k.contains("cannot happen")),
+            "{mine:?}"
+        );
+        eprintln!("{rec}: {missed} labelled samples missed");
+        for (why, n) in &mine {
+            eprintln!("  {n:4}  {why}");
+            *total.entry(why.clone()).or_default() += n;
+        }
+    }
+    let mut rows: Vec<_> = total.into_iter().collect();
+    rows.sort_by_key(|r| std::cmp::Reverse(r.1));
+    eprintln!("all four:");
+    for (why, n) in rows {
+        eprintln!("  {n:4}  {why}");
+    }
 }

@@ -404,15 +404,47 @@ fn extrapolate<'a>(side: impl Iterator<Item = &'a f64>) -> f64 {
     f64::NAN
 }
 
+/// The first test of [`Evidence::gross`] an event fails, in the order the module docs list them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Rejection {
+    /// median |z| < `confirm_k`: not off the interpolation by enough σ̂.
+    Interpolation,
+    /// median |z| ≥ `confirm_k` but < ρ z_ctx: not standing out from the sharpest ordinary sample.
+    StandOut,
+    /// The smaller edge break < `edge_k`.
+    Edge,
+    /// The smaller edge break ≥ `edge_k` but < ρ_e z_ctx / 2.
+    EdgeStandOut,
+    /// Four samples or more and smooth (jaggedness < 0.45): motion.
+    Smooth,
+}
+
 impl Evidence {
     /// The event is a gross error at these thresholds (module docs): `len` samples long;
     /// `stand_out` ρ and `edge_stand_out` ρ_e as heights over the sharpest ordinary sample.
     pub fn gross(&self, len: usize, k: &Thresholds) -> bool {
-        let off = self.z_median >= k.confirm_k.max(k.stand_out * self.z_context);
+        self.rejection(len, k).is_none()
+    }
+
+    /// The first test this `len`-sample event fails at these thresholds; `None` if it is a
+    /// gross error ([`Evidence::gross`]).
+    pub fn rejection(&self, len: usize, k: &Thresholds) -> Option<Rejection> {
         // An edge's z is half a centred second difference's for the same height (module docs).
-        let edge_bar = k.edge_k.max(0.5 * k.edge_stand_out * self.z_context);
-        // Four samples or more: a smooth excursion is motion, whatever its size.
-        off && self.z_in.min(self.z_out) >= edge_bar && (len < 4 || self.jaggedness >= JAGGED)
+        let edge = self.z_in.min(self.z_out);
+        if self.z_median < k.confirm_k {
+            Some(Rejection::Interpolation)
+        } else if self.z_median < k.stand_out * self.z_context {
+            Some(Rejection::StandOut)
+        } else if edge < k.edge_k {
+            Some(Rejection::Edge)
+        } else if edge < 0.5 * k.edge_stand_out * self.z_context {
+            Some(Rejection::EdgeStandOut)
+        } else if len >= 4 && self.jaggedness < JAGGED {
+            // Four samples or more: a smooth excursion is motion, whatever its size.
+            Some(Rejection::Smooth)
+        } else {
+            None
+        }
     }
 }
 
@@ -480,6 +512,42 @@ mod tests {
         assert!(e.gross(1, &k(2.0)));
         assert!(e.gross(1, &k(4.0)));
         assert!(!e.gross(1, &k(5.0)));
+        assert_eq!(e.rejection(1, &k(5.0)), Some(Rejection::EdgeStandOut));
+    }
+
+    #[test]
+    fn the_rejection_names_the_first_test_failed() {
+        let k = Thresholds {
+            confirm_k: 6.0,
+            edge_k: 2.5,
+            stand_out: 2.0,
+            edge_stand_out: 4.0,
+        };
+        // Passes every test: z 8 ≥ max(6, 2·1.5), edges 3.5 ≥ max(2.5, 4·1.5/2), jagged.
+        let e = Evidence {
+            z_median: 8.0,
+            z_in: 3.5,
+            z_out: 3.5,
+            z_context: 1.5,
+            jaggedness: 1.0,
+            sigma: 1.0,
+        };
+        assert_eq!(e.rejection(4, &k), None);
+        let with = |f: fn(&mut Evidence)| {
+            let mut x = e;
+            f(&mut x);
+            x.rejection(4, &k)
+        };
+        assert_eq!(with(|x| x.z_median = 5.0), Some(Rejection::Interpolation));
+        // z 8 < 2 · 4.5: the event does not stand out (nor do its edges; the first failure counts).
+        assert_eq!(with(|x| x.z_context = 4.5), Some(Rejection::StandOut));
+        assert_eq!(with(|x| x.z_out = 2.0), Some(Rejection::Edge));
+        assert_eq!(with(|x| x.z_in = 2.8), Some(Rejection::EdgeStandOut));
+        assert_eq!(with(|x| x.jaggedness = 0.3), Some(Rejection::Smooth));
+        // A smooth event of three samples is not judged by its smoothness.
+        let mut smooth = e;
+        smooth.jaggedness = 0.3;
+        assert_eq!(smooth.rejection(3, &k), None);
     }
 
     #[test]

@@ -116,6 +116,31 @@ struct Channel {
     gross_rate: f64,
 }
 
+/// One event's verdict, as recorded by [`GrossErrorStage::record_verdicts`]: what the
+/// confirmation saw and decided, for explaining a miss or a false replacement offline.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EventVerdict {
+    /// Channel index (`CHANNEL_NAMES`).
+    pub channel: usize,
+    /// Index of the event's first sample among the stage's measurements (stale repeats share
+    /// their original's index; see `flags::REPEATED`).
+    pub start: u64,
+    /// The event's samples.
+    pub len: usize,
+    /// The judged part, `lead..keep` (`confirm::trim`); the rest was handed back to the signal.
+    pub lead: usize,
+    pub keep: usize,
+    /// The two-sided evidence on the judged part (`None`: not judged — too long, too little
+    /// context after it, or no roughness to measure).
+    pub evidence: Option<confirm::Evidence>,
+    /// The several-axes test called it a shock.
+    pub shock: bool,
+    /// The gate called it motion and the break covers under a third of it.
+    pub motion_break: bool,
+    /// Confirmed gross (the judged part replaced).
+    pub gross: bool,
+}
+
 /// One sample held while an event that touches it is judged.
 #[derive(Debug, Clone, Copy)]
 struct Held {
@@ -144,6 +169,8 @@ pub struct GrossErrorStage {
     /// Samples that waited in `held`, and the longest wait (samples).
     delayed: u64,
     max_delay: u64,
+    /// Every event's verdict, oldest first, once `record_verdicts` asked for them.
+    verdicts: Option<Vec<EventVerdict>>,
 }
 
 impl GrossErrorStage {
@@ -195,6 +222,7 @@ impl GrossErrorStage {
             repeats: 0,
             delayed: 0,
             max_delay: 0,
+            verdicts: None,
         })
     }
 
@@ -227,6 +255,20 @@ impl GrossErrorStage {
     /// Tracked jump σ_Δ of channel `c` (None unless active).
     pub fn jump_sigma(&self, c: usize) -> Option<f64> {
         self.ch[c].gate.jump_sigma()
+    }
+
+    /// Keep every event's verdict from now on (off by default: a diagnostic, it allocates as
+    /// events are judged); [`GrossErrorStage::take_verdicts`] hands them over.
+    pub fn record_verdicts(&mut self) {
+        self.verdicts.get_or_insert_with(Vec::new);
+    }
+
+    /// The verdicts recorded since the last call (empty unless `record_verdicts` was called).
+    pub fn take_verdicts(&mut self) -> Vec<EventVerdict> {
+        self.verdicts
+            .as_mut()
+            .map(std::mem::take)
+            .unwrap_or_default()
     }
 
     /// Samples that were held for an event's verdict, and the longest hold (samples).

@@ -123,6 +123,19 @@ impl GrossErrorStage {
                     },
                 )
             });
+        if let Some(log) = self.verdicts.as_mut() {
+            log.push(super::EventVerdict {
+                channel: c,
+                start: ev.start,
+                len: m,
+                lead,
+                keep,
+                evidence,
+                shock,
+                motion_break,
+                gross,
+            });
+        }
         let use_interp = evidence.is_some() && self.s.replacement == Replacement::Interpolation;
         // Write the verdict into the held samples.
         let bit = flags::replaced_ch(c);
