@@ -392,7 +392,7 @@ fn identifiable(
             p + 2
         )));
     }
-    if !(cond <= s.max_condition) {
+    if cond.is_nan() || cond > s.max_condition {
         return Err(fail(format!(
             "the stretch directions leave the parameters ill-conditioned (condition number {cond:.3e} > {})",
             s.max_condition
@@ -542,8 +542,8 @@ pub fn calibrate_accel(
     } else if stretches.is_empty() {
         "not identifiable: no still stretch found".into()
     } else if candidates.is_empty() {
-        let why = not_identifiable.first().map_or("", |n| n.reason.as_str());
-        format!("not identifiable: even one group needs more ({why})")
+        let why = not_identifiable.last().map_or("", |n| n.reason.as_str());
+        format!("not identifiable: not even one group ({why})")
     } else {
         "nothing kept: no identifiable group lowers the held-out error by more than its noise"
             .into()
