@@ -200,6 +200,42 @@ fn a_clean_tumbled_log_keeps_nothing_and_writes_no_config() {
 }
 
 #[test]
+fn the_simulators_static_bench_and_drive_are_not_identifiable_with_or_without_scale_errors() {
+    // The simulator's scale factor and misalignment, on its two motion profiles: a static bench
+    // rests at one attitude and a car's stops tilt it by a few degrees, so neither may be
+    // calibrated, whatever the errors.
+    let dir = tempfile::tempdir().unwrap();
+    for scenario in ["replay/static_bench.toml", "replay/drive.toml"] {
+        for sets in [
+            vec![],
+            vec![
+                "errors.scale_factor.accel_ppm=[15000.0, -8000.0, 5000.0]",
+                "errors.misalignment.accel_mrad=[[0.0, 3.0, -2.0], [4.0, 0.0, 1.0], [-5.0, 2.0, 0.0]]",
+            ],
+        ] {
+            let log = dir.path().join("sim.log");
+            let mut args = vec!["simulate", scenario, "-o", log.to_str().unwrap()];
+            for s in &sets {
+                args.extend(["--set", s]);
+            }
+            run_cli(&args);
+            let out = dir.path().join("cal");
+            let text = run_cli(&[
+                "calibrate",
+                log.to_str().unwrap(),
+                "--out-dir",
+                out.to_str().unwrap(),
+            ]);
+            assert!(
+                text.contains("result: not identifiable"),
+                "{scenario} {sets:?}: {text}"
+            );
+            assert!(!out.join("calibration.toml").exists());
+        }
+    }
+}
+
+#[test]
 fn every_real_recording_is_not_identifiable() {
     // Measured (docs/calibrate.md): every real recording rests at one attitude (within 3.3°),
     // so no calibration may be claimed from it.
