@@ -180,23 +180,27 @@ fn sse(r: &[f64]) -> f64 {
     r.iter().map(|v| v * v).sum()
 }
 
-/// Levenberg–Marquardt (Marquardt's diagonal scaling) from the nominal calibration.
-fn fit(f: &[Vector3<f64>], active: &[bool; NP], g: f64) -> Result<Fit, AnalysisError> {
+/// Levenberg–Marquardt (Marquardt's diagonal scaling) over the `active` entries of θ from
+/// `theta`: `resid(θ)` the residuals (non-finite where θ is not admissible), `jac(θ, idx)`
+/// their Jacobian w.r.t. the `idx` entries. Returns θ and the 1-σ of each entry from (JᵀJ)⁻¹
+/// and the residual variance (0 for inactive ones; NaN with no spare degrees of freedom).
+pub(crate) fn levenberg_marquardt(
+    mut th: [f64; NP],
+    active: &[bool; NP],
+    resid: impl Fn(&[f64; NP]) -> Vec<f64>,
+    jac: impl Fn(&[f64; NP], &[usize]) -> DMatrix<f64>,
+) -> Result<([f64; NP], [f64; NP]), AnalysisError> {
     let idx: Vec<usize> = (0..NP).filter(|&i| active[i]).collect();
-    let mut th = nominal();
-    let mut r = residuals(&th, f, g);
+    let mut r = resid(&th);
     if idx.is_empty() {
-        return Ok(Fit {
-            theta: th,
-            sd: [0.0; NP],
-        });
+        return Ok((th, [0.0; NP]));
     }
-    if f.len() < idx.len() {
-        return Err(AnalysisError::bad("fewer still stretches than parameters"));
+    if r.len() < idx.len() {
+        return Err(AnalysisError::bad("fewer residuals than parameters"));
     }
     let mut lambda = 1e-3;
     for _ in 0..200 {
-        let j = jacobian(&th, f, &idx);
+        let j = jac(&th, &idx);
         let jtj = j.transpose() * &j;
         let jtr = j.transpose() * DVector::from_column_slice(&r);
         let s0 = sse(&r);
@@ -215,7 +219,7 @@ fn fit(f: &[Vector3<f64>], active: &[bool; NP], g: f64) -> Result<Fit, AnalysisE
             for (d, &p) in idx.iter().enumerate() {
                 trial[p] += step[d];
             }
-            let rt = residuals(&trial, f, g);
+            let rt = resid(&trial);
             let s1 = sse(&rt);
             if s1.is_finite() && s1 < s0 {
                 th = trial;
@@ -230,8 +234,8 @@ fn fit(f: &[Vector3<f64>], active: &[bool; NP], g: f64) -> Result<Fit, AnalysisE
             break;
         }
     }
-    let j = jacobian(&th, f, &idx);
-    let dof = f.len() as f64 - idx.len() as f64;
+    let j = jac(&th, &idx);
+    let dof = r.len() as f64 - idx.len() as f64;
     let s2 = if dof > 0.0 { sse(&r) / dof } else { f64::NAN };
     let cov = (j.transpose() * &j)
         .try_inverse()
@@ -240,7 +244,45 @@ fn fit(f: &[Vector3<f64>], active: &[bool; NP], g: f64) -> Result<Fit, AnalysisE
     for (d, &p) in idx.iter().enumerate() {
         sd[p] = (s2 * cov[(d, d)]).sqrt();
     }
-    Ok(Fit { theta: th, sd })
+    Ok((th, sd))
+}
+
+/// The accelerometer fit of the `active` parameters from the nominal calibration.
+fn fit(f: &[Vector3<f64>], active: &[bool; NP], g: f64) -> Result<Fit, AnalysisError> {
+    let (theta, sd) = levenberg_marquardt(
+        nominal(),
+        active,
+        |th| residuals(th, f, g),
+        |th, idx| jacobian(th, f, idx),
+    )?;
+    Ok(Fit { theta, sd })
+}
+
+/// Backward elimination over parameter groups (module docs, test 2): `model` the groups in
+/// the model (left holding those kept); `test(model, k, round, level)` tests group `k` of it.
+/// Each round the weakest group that fails is removed, until every group left passes.
+pub(crate) fn eliminate(
+    model: &mut Vec<usize>,
+    alpha: f64,
+    mut test: impl FnMut(&[usize], usize, usize, f64) -> Result<Candidate, AnalysisError>,
+) -> Result<Vec<Candidate>, AnalysisError> {
+    let mut out: Vec<Candidate> = Vec::new();
+    let mut round = 0;
+    while !model.is_empty() {
+        round += 1;
+        let level = alpha / model.len() as f64;
+        let first = out.len();
+        for &k in model.iter() {
+            out.push(test(model, k, round, level)?);
+        }
+        let weakest = (first..out.len())
+            .filter(|&i| !out[i].passed)
+            .max_by(|&a, &b| out[a].test.p_value.total_cmp(&out[b].test.p_value));
+        let Some(w) = weakest else { break };
+        out[w].removed = true;
+        model.remove(w - first);
+    }
+    Ok(out)
 }
 
 /// Mean held-out residual of each attitude group: the model fitted on the other groups.
@@ -443,6 +485,11 @@ fn test_group(
     Ok(c)
 }
 
+/// The θ mask of the groups `m`.
+fn mask_of(m: &[usize]) -> [bool; NP] {
+    std::array::from_fn(|i| m.contains(&(i / 3)))
+}
+
 fn names(active: &[bool; NP]) -> Vec<&'static str> {
     (0..3)
         .filter(|&g| active[3 * g])
@@ -478,38 +525,14 @@ pub fn calibrate_accel(
             Err(why) => not_identifiable.push(why),
         }
     }
-    // Backward elimination: each round tests every group of the model against the model
-    // without it; the weakest that fails is removed, until every group left passes.
-    let mut candidates = Vec::new();
-    for round in 1..=3 {
-        let in_model: Vec<usize> = (0..3).filter(|&k| current[3 * k]).collect();
-        if in_model.is_empty() {
-            break;
-        }
-        let level = s.alpha / in_model.len() as f64;
-        let e1 = held_out_by_group(&f, &groups, n_groups, &current, g)?;
-        let first = candidates.len();
-        for &k in &in_model {
-            candidates.push(test_group(
-                &f, &groups, n_groups, &current, &e1, k, round, level, lsb, g,
-            )?);
-        }
-        let weakest = (first..candidates.len())
-            .filter(|&i| !candidates[i].passed)
-            .max_by(|&a, &b| {
-                candidates[a]
-                    .test
-                    .p_value
-                    .total_cmp(&candidates[b].test.p_value)
-            });
-        let Some(w) = weakest else { break };
-        candidates[w].removed = true;
-        let k = GROUPS
-            .iter()
-            .position(|n| *n == candidates[w].group)
-            .unwrap_or(0);
-        current = std::array::from_fn(|i| current[i] && !group_mask(k)[i]);
-    }
+    // Backward elimination from there.
+    let mut model: Vec<usize> = (0..3).filter(|&k| current[3 * k]).collect();
+    let candidates = eliminate(&mut model, s.alpha, |m, k, round, level| {
+        let active = mask_of(m);
+        let e1 = held_out_by_group(&f, &groups, n_groups, &active, g)?;
+        test_group(&f, &groups, n_groups, &active, &e1, k, round, level, lsb, g)
+    })?;
+    let mut current = mask_of(&model);
     let e_after = held_out_by_group(&f, &groups, n_groups, &current, g)?;
     let e_none = held_out_by_group(&f, &groups, n_groups, &[false; NP], g)?;
     let mut full = fit(&f, &current, g)?;
