@@ -26,15 +26,24 @@ struct Stop {
     f: Vector3<f64>,
 }
 
+/// The sensor's errors: raw = A·true + b for each triad.
+struct Errors {
+    accel_a: Matrix3<f64>,
+    accel_b: Vector3<f64>,
+    gyro_a: Matrix3<f64>,
+    gyro_b: Vector3<f64>,
+}
+
+const NO_ERRORS: Errors = Errors {
+    accel_a: Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+    accel_b: Vector3::new(0.0, 0.0, 0.0),
+    gyro_a: Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+    gyro_b: Vector3::new(0.0, 0.0, 0.0),
+};
+
 /// `stops` still stops of `still_s` each, joined by 70° rotations about a random body axis over
-/// 1.5 s; the accelerometer reads `a`·f + `b` + noise.
-fn tumbling(
-    stops: usize,
-    still_s: f64,
-    seed: u64,
-    a: &Matrix3<f64>,
-    b: &Vector3<f64>,
-) -> (Vec<Sample>, Vec<Stop>) {
+/// 1.5 s, measured with errors `e` and white noise.
+fn tumbling(stops: usize, still_s: f64, seed: u64, e: &Errors) -> (Vec<Sample>, Vec<Stop>) {
     let dt = 1.0 / RATE;
     let mut rng = Rng::new(seed);
     let mut c_bn = Rotation3::identity();
@@ -42,8 +51,8 @@ fn tumbling(
     let (mut out, mut truth) = (Vec::new(), Vec::new());
     let push = |w: Vector3<f64>, c: &Rotation3<f64>, rng: &mut Rng, out: &mut Vec<Sample>| {
         let mut noise = |sd: f64| Vector3::from_fn(|_, _| sd * rng.normal());
-        let gyro = w + noise(GYRO_SD);
-        let accel = a * (c * g_n) + b + noise(ACCEL_SD);
+        let gyro = e.gyro_a * w + e.gyro_b + noise(GYRO_SD);
+        let accel = e.accel_a * (c * g_n) + e.accel_b + noise(ACCEL_SD);
         out.push(Sample {
             seq: out.len() as u32,
             t_ns: (out.len() as f64 * dt * 1e9).round() as u64,
@@ -84,7 +93,7 @@ fn write(dir: &Path, samples: &[Sample]) -> String {
 
 #[test]
 fn the_finder_returns_one_stretch_per_stop_with_its_mean() {
-    let (samples, truth) = tumbling(12, 10.0, 21, &Matrix3::identity(), &Vector3::zeros());
+    let (samples, truth) = tumbling(12, 10.0, 21, &NO_ERRORS);
     let st = still_stretches(&samples, RATE, &StillSettings::default());
     assert_eq!(st.len(), truth.len(), "{st:#?}");
     for (s, stop) in st.iter().zip(&truth) {
@@ -109,7 +118,18 @@ fn a_tumbled_log_is_calibrated_and_the_daemon_applies_the_config() {
     // 30 stops of 10 s: 1.2 % / −0.8 % / 0.5 % scale, 4–6 mrad cross-axis, 0.05–0.15 m/s² bias.
     let a = Matrix3::new(1.012, 0.0, 0.0, 0.004, 0.992, 0.0, -0.006, 0.005, 1.005);
     let b = Vector3::new(0.15, -0.05, 0.1);
-    let (samples, truth) = tumbling(30, 10.0, 5, &a, &b);
+    // The gyro: 1.5 % / −1 % / 0.8 % scale, 3–8 mrad cross-axis (either side of the diagonal:
+    // relative to the accelerometer frame all nine are identifiable), 0.02 rad/s bias.
+    let ga = Matrix3::new(
+        1.015, 0.004, -0.003, 0.006, 0.99, 0.008, -0.005, 0.003, 1.008,
+    );
+    let e = Errors {
+        accel_a: a,
+        accel_b: b,
+        gyro_a: ga,
+        gyro_b: Vector3::new(0.02, -0.01, 0.015),
+    };
+    let (samples, truth) = tumbling(30, 10.0, 5, &e);
     let dir = tempfile::tempdir().unwrap();
     let log = write(dir.path(), &samples);
     let out = dir.path().join("cal");
@@ -123,9 +143,31 @@ fn a_tumbled_log_is_calibrated_and_the_daemon_applies_the_config() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     let fitted = &json["accel"]["fitted"];
+    assert!(
+        text.contains("result (gyro): gyro calibration kept: scale + misalignment"),
+        "{text}"
+    );
+    let gyro = &json["gyro"]["fitted"];
+    let k_sd = |i: usize| gyro["k_sd"][i].as_f64().unwrap();
     // The config file is a user config: laid over the defaults, it sets [bias.settings.accel].
     let cfg = Config::from_file_source_replaced(&out.join("calibration.toml")).unwrap();
     let cal = cfg.stages.bias.as_ref().unwrap().settings.accel;
+    let gcal = cfg.stages.bias.as_ref().unwrap().settings.gyro;
+    for i in 0..3 {
+        for j in 0..3 {
+            // N = diag(scale)⁻¹ A; K = A⁻¹ ≈ 2I − A, so K's sd is that of scale and N to first
+            // order; 4.5 σ over 9 entries.
+            let (got, want) = if i == j {
+                (gcal.scale[i], ga[(i, i)])
+            } else {
+                (gcal.misalignment[i][j], ga[(i, j)] / ga[(i, i)])
+            };
+            assert!(
+                (got - want).abs() < 4.5 * k_sd(3 * i + j),
+                "gyro ({i},{j}): {got} vs {want}"
+            );
+        }
+    }
     for i in 0..3 {
         // The truth is lower triangular, so it is its own identifiable form; 4.5 σ of the
         // fit's own sd (9 parameters).
@@ -190,12 +232,13 @@ fn a_tumbled_log_is_calibrated_and_the_daemon_applies_the_config() {
 
 #[test]
 fn a_clean_tumbled_log_keeps_nothing_and_writes_no_config() {
-    let (samples, _) = tumbling(30, 10.0, 8, &Matrix3::identity(), &Vector3::zeros());
+    let (samples, _) = tumbling(30, 10.0, 8, &NO_ERRORS);
     let dir = tempfile::tempdir().unwrap();
     let log = write(dir.path(), &samples);
     let out = dir.path().join("cal");
     let text = run_cli(&["calibrate", &log, "--out-dir", out.to_str().unwrap()]);
     assert!(text.contains("result: nothing kept"), "{text}");
+    assert!(text.contains("result (gyro): nothing kept"), "{text}");
     assert!(!out.join("calibration.toml").exists());
 }
 

@@ -9,6 +9,7 @@ pub mod allan_report;
 pub mod allan_terms;
 pub mod bias_compare;
 pub mod calib_fit;
+pub mod calib_gyro;
 pub mod calib_still;
 #[cfg(test)]
 mod calib_tests;

@@ -12,7 +12,10 @@ use anyhow::{Context, Result, ensure};
 use serde::Serialize;
 
 use super::{load_span_to, present_channels};
-use crate::analysis::calib_fit::{AccelCalibration, CalibSettings, calibrate_accel};
+use crate::analysis::calib_fit::{
+    AccelCalibration, CalibSettings, Candidate, NotIdentifiable, calibrate_accel,
+};
+use crate::analysis::calib_gyro::{GyroCalibration, calibrate_gyro, gyro_intervals};
 use crate::analysis::calib_still::{StillSettings, still_stretches};
 use crate::analysis::quantisation::quantisation;
 use crate::sample::Sample;
@@ -41,11 +44,19 @@ pub struct CalibrateReport {
     pub method: &'static str,
     /// The accelerometer calibration.
     pub accel: AccelCalibration,
+    /// The gyroscope calibration (None: the log has no gyro, see `gyro_skipped`).
+    pub gyro: Option<GyroCalibration>,
+    pub gyro_skipped: Option<String>,
     /// The config file written (None when nothing was kept).
     pub config_file: Option<PathBuf>,
 }
 
 const METHOD: &str = "still stretches by the bias stage's stillness detector; |L^-1 (f - b)| = g fitted by Levenberg-Marquardt; the largest identifiable model (>= p + 2 attitude groups, scaled-Jacobian condition number <= 100) reduced by backward elimination, each group kept only if leave-one-attitude-group-out lowers the held-out | |f| - g | error by more than its noise (z-test at alpha = 0.001 / groups in the model) and changes the corrected specific force by at least 1 LSB";
+
+/// Longest motion between two still stretches that the gyro fit integrates, s: the gyro bias
+/// is taken from the flanking stretches, and its drift over a longer motion would be read as
+/// scale or misalignment.
+const MAX_INTERVAL_S: f64 = 30.0;
 
 /// The largest LSB of the three accelerometer axes over the still samples (None: none visibly
 /// quantised, or too few samples).
@@ -96,6 +107,24 @@ pub fn calibrate(log: &Path, o: &CalibrateOptions) -> Result<CalibrateReport> {
     };
     let accel = calibrate_accel(stretches, lsb, &settings)
         .with_context(|| format!("{}: calibration fit", log.display()))?;
+    let (gyro, gyro_skipped) = if samples.iter().any(|x| x.absent & 0b111 != 0) {
+        (
+            None,
+            Some("the log has no (or not every) gyro channel".to_string()),
+        )
+    } else {
+        let cal = accel.fitted.as_ref().and_then(|f| f.settings.build());
+        let ivs = gyro_intervals(
+            &samples,
+            &accel.stretches,
+            cal.as_ref(),
+            rate,
+            MAX_INTERVAL_S,
+        );
+        let g = calibrate_gyro(ivs, settings.alpha, settings.max_condition)
+            .with_context(|| format!("{}: gyro calibration fit", log.display()))?;
+        (Some(g), None)
+    };
     let source = format!(
         "{} [{} s .. +{:.1} s at {rate} Hz]",
         log.display(),
@@ -107,6 +136,8 @@ pub fn calibrate(log: &Path, o: &CalibrateOptions) -> Result<CalibrateReport> {
         rate_hz: rate,
         method: METHOD,
         accel,
+        gyro,
+        gyro_skipped,
         config_file: None,
     };
     std::fs::create_dir_all(&o.out_dir)
@@ -128,27 +159,52 @@ fn vec3(v: &[f64; 3]) -> String {
     format!("[{:.9}, {:.9}, {:.9}]", v[0], v[1], v[2])
 }
 
-/// The `[bias.settings.accel]` section of the kept calibration (None: nothing kept).
+/// The `[bias.settings.accel]` and `[bias.settings.gyro]` sections of what was kept (None:
+/// nothing kept).
 pub fn config_toml(r: &CalibrateReport) -> Option<String> {
-    let f = r.accel.fitted.as_ref()?;
-    let s = &f.settings;
     let a = &r.accel;
-    Some(format!(
-        "# imuprep calibrate {}\n# kept: {}; held-out RMS of |f| - g {:.4e} -> {:.4e} m/s² over {} attitude groups\n\
-         # (g = {} m/s²). Use as `--config` (it changes only this section) or copy it into your config.\n\
-         [bias.settings.accel]\nbias = {}\nscale = {}\nmisalignment = [{}, {}, {}]\n",
-        r.source,
-        f.groups.join(" + "),
-        a.held_out_rms_before_m_s2,
-        a.held_out_rms_after_m_s2,
-        a.spread.groups,
-        a.gravity_m_s2,
-        vec3(&s.bias),
-        vec3(&s.scale),
-        vec3(&s.misalignment[0]),
-        vec3(&s.misalignment[1]),
-        vec3(&s.misalignment[2]),
-    ))
+    let gyro = r
+        .gyro
+        .as_ref()
+        .and_then(|g| g.fitted.as_ref().map(|f| (g, f)));
+    if a.fitted.is_none() && gyro.is_none() {
+        return None;
+    }
+    let mut o = format!(
+        "# imuprep calibrate {}\n# Use as `--config` (it changes only these keys) or copy the sections into your config.\n",
+        r.source
+    );
+    let matrix = |m: &[[f64; 3]; 3]| format!("[{}, {}, {}]", vec3(&m[0]), vec3(&m[1]), vec3(&m[2]));
+    if let Some(f) = &a.fitted {
+        let s = &f.settings;
+        let _ = write!(
+            o,
+            "\n# accelerometer, kept: {}; held-out RMS of |f| - g {:.4e} -> {:.4e} m/s² over {} attitude groups (g = {} m/s²)\n\
+             [bias.settings.accel]\nbias = {}\nscale = {}\nmisalignment = {}\n",
+            f.groups.join(" + "),
+            a.held_out_rms_before_m_s2,
+            a.held_out_rms_after_m_s2,
+            a.spread.groups,
+            a.gravity_m_s2,
+            vec3(&s.bias),
+            vec3(&s.scale),
+            matrix(&s.misalignment),
+        );
+    }
+    if let Some((g, f)) = gyro {
+        let _ = write!(
+            o,
+            "\n# gyroscope, kept: {}; held-out RMS direction error {:.4e} -> {:.4e} rad over {} motions\n\
+             # (no bias: the bias stage estimates it online)\n[bias.settings.gyro]\nscale = {}\nmisalignment = {}\n",
+            f.groups.join(" + "),
+            g.held_out_rms_before_rad,
+            g.held_out_rms_after_rad,
+            g.intervals.len(),
+            vec3(&f.settings.scale),
+            matrix(&f.settings.misalignment),
+        );
+    }
+    Some(o)
 }
 
 impl CalibrateReport {
@@ -200,36 +256,7 @@ impl CalibrateReport {
                 a.residual_after_m_s2[k]
             );
         }
-        for n in &a.not_identifiable {
-            let _ = writeln!(
-                o,
-                "not identifiable: [{}] ({} parameters): {}",
-                n.model, n.parameters, n.reason
-            );
-        }
-        for c in &a.candidates {
-            let t = &c.test;
-            let _ = writeln!(
-                o,
-                "round {}: {:<12} held-out MSE {:.3e} -> {:.3e} (without -> with), z = {:.2}, p = {:.2e} (level {:.2e}), effect {:.3e} m/s²: {}{}",
-                c.round,
-                c.group,
-                t.mse_before,
-                t.mse_after,
-                t.z,
-                t.p_value,
-                t.level,
-                c.effect_m_s2,
-                if c.passed { "passes" } else { "fails" },
-                if c.removed {
-                    format!(" — removed ({})", c.reason)
-                } else if c.passed {
-                    String::new()
-                } else {
-                    format!(" ({})", c.reason)
-                }
-            );
-        }
+        tests_text(&mut o, &a.not_identifiable, &a.candidates);
         let _ = writeln!(o, "\nresult: {}", a.verdict);
         let _ = writeln!(
             o,
@@ -272,14 +299,115 @@ impl CalibrateReport {
                 );
             }
         }
+        match (&self.gyro, &self.gyro_skipped) {
+            (Some(g), _) => gyro_text(&mut o, g),
+            (None, Some(why)) => {
+                let _ = writeln!(o, "\ngyroscope: skipped ({why})");
+            }
+            _ => {}
+        }
         match &self.config_file {
             Some(p) => {
-                let _ = writeln!(o, "config: {} ([bias.settings.accel])", p.display());
+                let _ = writeln!(o, "config: {}", p.display());
             }
             None => {
                 let _ = writeln!(o, "config: none written (nothing kept)");
             }
         }
         o
+    }
+}
+
+/// The models refused as not identifiable and the elimination's tests.
+fn tests_text(o: &mut String, not_identifiable: &[NotIdentifiable], candidates: &[Candidate]) {
+    for n in not_identifiable {
+        let _ = writeln!(
+            o,
+            "not identifiable: [{}] ({} parameters): {}",
+            n.model, n.parameters, n.reason
+        );
+    }
+    for c in candidates {
+        let t = &c.test;
+        let effect = if c.effect_m_s2.is_finite() {
+            format!(", effect {:.3e} m/s²", c.effect_m_s2)
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            o,
+            "round {}: {:<12} held-out MSE {:.3e} -> {:.3e} (without -> with), z = {:.2}, p = {:.2e} (level {:.2e}){effect}: {}{}",
+            c.round,
+            c.group,
+            t.mse_before,
+            t.mse_after,
+            t.z,
+            t.p_value,
+            t.level,
+            if c.passed { "passes" } else { "fails" },
+            if c.removed {
+                format!(" — removed ({})", c.reason)
+            } else if c.passed {
+                String::new()
+            } else {
+                format!(" ({})", c.reason)
+            }
+        );
+    }
+}
+
+/// The gyroscope section of the text report.
+fn gyro_text(o: &mut String, g: &GyroCalibration) {
+    let mut tilts: Vec<f64> = g.intervals.iter().map(|i| i.tilt_change_deg).collect();
+    tilts.sort_by(f64::total_cmp);
+    let _ = writeln!(
+        o,
+        "\ngyroscope: {} motion(s) between consecutive still stretches (at most {MAX_INTERVAL_S} s, no gap){}",
+        g.intervals.len(),
+        if tilts.is_empty() {
+            String::new()
+        } else {
+            format!(
+                ", gravity direction change {:.1}° .. {:.1}° (median {:.1}°)",
+                tilts[0],
+                tilts[tilts.len() - 1],
+                tilts[tilts.len() / 2]
+            )
+        }
+    );
+    tests_text(o, &g.not_identifiable, &g.candidates);
+    let _ = writeln!(o, "result (gyro): {}", g.verdict);
+    let _ = writeln!(
+        o,
+        "held-out RMS direction error (leave-one-motion-out): {:.4e} -> {:.4e} rad",
+        g.held_out_rms_before_rad, g.held_out_rms_after_rad
+    );
+    if let Some(f) = &g.fitted {
+        let s = &f.settings;
+        let sd = f.k_sd;
+        let _ = writeln!(
+            o,
+            "  scale {:.6} / {:.6} / {:.6} (± {:.1e} / {:.1e} / {:.1e})",
+            s.scale[0], s.scale[1], s.scale[2], sd[0], sd[4], sd[8]
+        );
+        let n = s.misalignment;
+        let _ = writeln!(
+            o,
+            "  misalignment N (mrad, relative to the accelerometer frame): xy {:+.2} xz {:+.2} yx {:+.2} yz {:+.2} zx {:+.2} zy {:+.2} (± {:.2} .. {:.2})",
+            n[0][1] * 1e3,
+            n[0][2] * 1e3,
+            n[1][0] * 1e3,
+            n[1][2] * 1e3,
+            n[2][0] * 1e3,
+            n[2][1] * 1e3,
+            [sd[1], sd[2], sd[3], sd[5], sd[6], sd[7]]
+                .iter()
+                .fold(f64::INFINITY, |a, b| a.min(*b))
+                * 1e3,
+            [sd[1], sd[2], sd[3], sd[5], sd[6], sd[7]]
+                .iter()
+                .fold(0.0, |a: f64, b| a.max(*b))
+                * 1e3,
+        );
     }
 }
