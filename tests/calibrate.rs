@@ -5,6 +5,7 @@
 mod common;
 
 use common::{descriptor, real_data, run_cli, skipped};
+use imuprep::analysis::calib_gyro::{calibrate_gyro, gyro_intervals};
 use imuprep::analysis::calib_still::{StillSettings, still_stretches};
 use imuprep::config::Config;
 use imuprep::io::log::write_log;
@@ -240,6 +241,30 @@ fn a_clean_tumbled_log_keeps_nothing_and_writes_no_config() {
     assert!(text.contains("result: nothing kept"), "{text}");
     assert!(text.contains("result (gyro): nothing kept"), "{text}");
     assert!(!out.join("calibration.toml").exists());
+}
+
+#[test]
+fn no_gyro_calibration_is_added_on_twenty_clean_tumbles() {
+    // A gyro bias (taken from the still stretches) but no scale or misalignment: nothing may be
+    // kept. 12 stops (11 motions, enough for all nine entries of K) per seed; α = 0.001 per
+    // round, so a false keep over 20 seeds × 2 tests would be ≈ 4 % likely if the test is exact.
+    let e = Errors {
+        gyro_b: Vector3::new(0.02, -0.01, 0.015),
+        ..NO_ERRORS
+    };
+    for seed in 0..20 {
+        let (samples, _) = tumbling(12, 8.0, 300 + seed, &e);
+        let st = still_stretches(&samples, RATE, &StillSettings::default());
+        let ivs = gyro_intervals(&samples, &st, None, RATE, 30.0);
+        assert_eq!(ivs.len(), 11, "seed {seed}");
+        let g = calibrate_gyro(ivs, 0.001, 100.0).unwrap();
+        assert!(g.fitted.is_none(), "seed {seed}: {:#?}", g.candidates);
+        assert!(
+            g.verdict.starts_with("nothing kept"),
+            "seed {seed}: {}",
+            g.verdict
+        );
+    }
 }
 
 #[test]
