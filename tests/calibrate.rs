@@ -255,8 +255,10 @@ fn no_gyro_calibration_is_added_on_twenty_clean_tumbles() {
     for seed in 0..20 {
         let (samples, _) = tumbling(12, 8.0, 300 + seed, &e);
         let st = still_stretches(&samples, RATE, &StillSettings::default());
-        let ivs = gyro_intervals(&samples, &st, None, RATE, 30.0);
-        assert_eq!(ivs.len(), 11, "seed {seed}");
+        let ivs = gyro_intervals(&samples, &st, None, RATE, 30.0, 10.0);
+        // 70° about a random axis tilts gravity by less than 10° only when the axis is
+        // within ~8° of vertical: most of the 11 motions count.
+        assert!(ivs.len() >= 7, "seed {seed}: {}", ivs.len());
         let g = calibrate_gyro(ivs, 0.001, 100.0).unwrap();
         assert!(g.fitted.is_none(), "seed {seed}: {:#?}", g.candidates);
         assert!(
@@ -335,6 +337,7 @@ fn every_real_recording_is_not_identifiable() {
             out.to_str().unwrap(),
         ]);
         assert!(text.contains("result: not identifiable"), "{f}: {text}");
+        assert!(text.contains("result (gyro): not identifiable"), "{f}: {text}");
         assert!(!out.join("calibration.toml").exists());
     }
 }

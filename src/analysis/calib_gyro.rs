@@ -80,14 +80,17 @@ pub struct GyroInterval {
 }
 
 /// The motions between consecutive `stretches` of `samples` that last at most
-/// `max_interval_s` and have no gap (a step over 2.5 nominal intervals); `accel` the kept
-/// accelerometer calibration, if any.
+/// `max_interval_s`, have no gap (a step over 2.5 nominal intervals) and change the gravity
+/// direction by at least `min_tilt_deg` (the attitude-group angle: between two stretches of one
+/// attitude there is no rotation to check, only noise, whose random columns would pass any
+/// condition-number test); `accel` the kept accelerometer calibration, if any.
 pub fn gyro_intervals(
     samples: &[Sample],
     stretches: &[AccelStretch],
     accel: Option<&Calibration>,
     rate_hz: f64,
     max_interval_s: f64,
+    min_tilt_deg: f64,
 ) -> Vec<GyroInterval> {
     let mean_gyro = |s: &AccelStretch| {
         samples[s.start..s.start + s.len]
@@ -119,12 +122,16 @@ pub fn gyro_intervals(
                 rates.push((w, dt));
             }
             let (u0, u1) = (dir(a), dir(b));
+            let tilt_change_deg = u0.dot(&u1).clamp(-1.0, 1.0).acos().to_degrees();
+            if tilt_change_deg < min_tilt_deg {
+                return None;
+            }
             Some(GyroInterval {
                 from,
                 to,
                 duration_s: dur,
                 bias_rad_s: bias.into(),
-                tilt_change_deg: u0.dot(&u1).clamp(-1.0, 1.0).acos().to_degrees(),
+                tilt_change_deg,
                 u0: u0.into(),
                 u1: u1.into(),
                 rates,
@@ -260,7 +267,7 @@ pub fn calibrate_gyro(
     let n = ivs.len();
     let mut not_identifiable = Vec::new();
     let mut model = Vec::new();
-    for m in [vec![0, 1], vec![0], vec![1]] {
+    for m in [vec![0, 1], vec![1], vec![0]] {
         let active = mask_of(&m);
         let p = active.iter().filter(|a| **a).count();
         let cond = if n > 0 {

@@ -120,6 +120,7 @@ pub fn calibrate(log: &Path, o: &CalibrateOptions) -> Result<CalibrateReport> {
             cal.as_ref(),
             rate,
             MAX_INTERVAL_S,
+            still.group_deg,
         );
         let g = calibrate_gyro(ivs, settings.alpha, settings.max_condition)
             .with_context(|| format!("{}: gyro calibration fit", log.display()))?;
@@ -362,7 +363,7 @@ fn gyro_text(o: &mut String, g: &GyroCalibration) {
     tilts.sort_by(f64::total_cmp);
     let _ = writeln!(
         o,
-        "\ngyroscope: {} motion(s) between consecutive still stretches (at most {MAX_INTERVAL_S} s, no gap){}",
+        "\ngyroscope: {} motion(s) between consecutive still stretches at different attitudes (at most {MAX_INTERVAL_S} s, no gap){}",
         g.intervals.len(),
         if tilts.is_empty() {
             String::new()
