@@ -189,9 +189,10 @@ enum Cmd {
     /// Accelerometer bias, scale factor and misalignment from the still stretches of a moving
     /// recording (multi-position calibration without a turntable), each kept only if it
     /// lowers the held-out | |f| - g | error on attitudes it was not fitted on by more than its
-    /// noise; "not identifiable" when the attitudes do not span enough directions. Writes
-    /// DIR/report.txt, DIR/report.json and, when something is kept, DIR/calibration.toml
-    /// ([bias.settings.accel], usable as --config).
+    /// noise; then gyro scale and misalignment from the rotations between still stretches,
+    /// tested on held-out motions; "not identifiable" when the attitudes do not span enough
+    /// directions. Writes DIR/report.txt, DIR/report.json and, when something is kept,
+    /// DIR/calibration.toml ([bias.settings.accel], [bias.settings.gyro], usable as --config).
     Calibrate {
         /// Recorded log.
         log: PathBuf,
