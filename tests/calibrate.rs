@@ -337,7 +337,10 @@ fn every_real_recording_is_not_identifiable() {
             out.to_str().unwrap(),
         ]);
         assert!(text.contains("result: not identifiable"), "{f}: {text}");
-        assert!(text.contains("result (gyro): not identifiable"), "{f}: {text}");
+        assert!(
+            text.contains("result (gyro): not identifiable"),
+            "{f}: {text}"
+        );
         assert!(!out.join("calibration.toml").exists());
     }
 }

@@ -151,11 +151,16 @@ pub fn condition(f: &[Vector3<f64>], active: &[bool; NP]) -> f64 {
         return f64::INFINITY;
     }
     let j = jacobian(&nominal(), f, &idx);
-    let mut m = DMatrix::from_fn(
+    let m = DMatrix::from_fn(
         f.len(),
         cols,
         |k, c| if c < idx.len() { j[(k, c)] } else { 1.0 },
     );
+    scaled_condition(m)
+}
+
+/// Condition number of `m` with its columns scaled to unit norm (∞ when singular).
+pub(crate) fn scaled_condition(mut m: DMatrix<f64>) -> f64 {
     for mut col in m.column_iter_mut() {
         let n = col.norm();
         if n > 0.0 {
@@ -395,7 +400,8 @@ pub struct AccelCalibration {
     pub verdict: String,
 }
 
-fn rms(x: &[f64]) -> f64 {
+/// Root mean square (NaN when empty).
+pub(crate) fn rms(x: &[f64]) -> f64 {
     if x.is_empty() {
         return f64::NAN;
     }

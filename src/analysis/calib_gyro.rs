@@ -28,7 +28,9 @@ use nalgebra::{DMatrix, Matrix3, Rotation3, Vector3};
 use serde::Serialize;
 
 use super::AnalysisError;
-use super::calib_fit::{Candidate, NotIdentifiable, eliminate, levenberg_marquardt};
+use super::calib_fit::{
+    Candidate, NotIdentifiable, eliminate, levenberg_marquardt, rms, scaled_condition,
+};
 use super::calib_still::AccelStretch;
 use super::diagnose_blocks::held_out_test;
 use crate::sample::Sample;
@@ -204,16 +206,7 @@ fn fit(
 /// Condition number of the column-normalised Jacobian at K = I.
 fn condition(ivs: &[&GyroInterval], active: &[bool; NP]) -> f64 {
     let idx: Vec<usize> = (0..NP).filter(|&i| active[i]).collect();
-    let mut j = jacobian(&nominal(), ivs, &idx);
-    for mut col in j.column_iter_mut() {
-        let n = col.norm();
-        if n > 0.0 {
-            col /= n;
-        }
-    }
-    let sv = j.singular_values();
-    let (mx, mn) = (sv.max(), sv.min());
-    if mn > 0.0 { mx / mn } else { f64::INFINITY }
+    scaled_condition(jacobian(&nominal(), ivs, &idx))
 }
 
 /// Held-out residuals of each interval (3 components each): K fitted on the others (started
@@ -251,10 +244,6 @@ pub struct GyroCalibration {
     pub held_out_rms_before_rad: f64,
     pub held_out_rms_after_rad: f64,
     pub verdict: String,
-}
-
-fn rms(x: &[f64]) -> f64 {
-    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
 
 /// Calibrate the gyroscope triad from `intervals` (module docs) at significance `alpha`.
