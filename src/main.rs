@@ -186,6 +186,29 @@ enum Cmd {
         #[arg(long)]
         paper_split: bool,
     },
+    /// Accelerometer bias, scale factor and misalignment from the still stretches of a moving
+    /// recording (multi-position calibration without a turntable), each kept only if it
+    /// lowers the held-out | |f| - g | error on attitudes it was not fitted on by more than its
+    /// noise; then gyro scale and misalignment from the rotations between still stretches,
+    /// tested on held-out motions; "not identifiable" when the attitudes do not span enough
+    /// directions. Writes DIR/report.txt, DIR/report.json and, when something is kept,
+    /// DIR/calibration.toml ([bias.settings.accel], [bias.settings.gyro], usable as --config).
+    Calibrate {
+        /// Recorded log.
+        log: PathBuf,
+        /// Analyse only from this time, s from the start of the log...
+        #[arg(long, default_value_t = 0.0)]
+        from_s: f64,
+        /// ...to this time, s (default: the end).
+        #[arg(long)]
+        to_s: Option<f64>,
+        /// Local gravity, m/s² (the common scale of the three axes is relative to it).
+        #[arg(long, default_value_t = 9.80665)]
+        gravity: f64,
+        /// Output directory.
+        #[arg(long, default_value = "calibrate-out")]
+        out_dir: PathBuf,
+    },
     /// Compare methods on the same data. `--detectors --scenario S.toml`: gross-error detectors
     /// against the simulator's truth. `LOG --channel C`: the bias models of the FOS paper.
     Compare {
@@ -457,6 +480,23 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 paper_split,
                 &mut stdout,
             )?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Calibrate {
+            log,
+            from_s,
+            to_s,
+            gravity,
+            out_dir,
+        } => {
+            let o = report::calibrate::CalibrateOptions {
+                from_s,
+                to_s,
+                gravity_m_s2: gravity,
+                out_dir,
+            };
+            let r = report::calibrate::calibrate(&log, &o)?;
+            print!("{}", r.to_text());
             Ok(ExitCode::SUCCESS)
         }
         Cmd::Compare {

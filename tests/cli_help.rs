@@ -1,9 +1,19 @@
 //! Every command-line flag carries a help text (issue 13, small items).
 mod common;
 
-const COMMANDS: [&str; 11] = [
-    "run", "replay", "import", "export", "simulate", "fit", "evaluate", "diagnose", "compare",
-    "audit", "allan",
+const COMMANDS: [&str; 12] = [
+    "run",
+    "replay",
+    "import",
+    "export",
+    "simulate",
+    "fit",
+    "evaluate",
+    "diagnose",
+    "compare",
+    "audit",
+    "allan",
+    "calibrate",
 ];
 
 #[test]

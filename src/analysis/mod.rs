@@ -8,6 +8,11 @@ pub mod allan_plot;
 pub mod allan_report;
 pub mod allan_terms;
 pub mod bias_compare;
+pub mod calib_fit;
+pub mod calib_gyro;
+pub mod calib_still;
+#[cfg(test)]
+mod calib_tests;
 pub mod changepoint;
 pub mod detectors;
 pub mod diagnose;

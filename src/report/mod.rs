@@ -5,6 +5,7 @@
 
 pub mod allan;
 pub mod audit;
+pub mod calibrate;
 pub mod compare;
 pub mod convert;
 pub mod daemon;

@@ -1,0 +1,351 @@
+//! Gyroscope scale factor and misalignment from the rotations between still stretches (the
+//! gyroscope half of Tedaldi, Pretto & Menegatti, ICRA 2014): integrate the corrected gyro over
+//! the motion between two consecutive still stretches and compare where that rotation carries
+//! the first stretch's gravity direction with where the second one measured it.
+//!
+//! ```text
+//!   ω_i = K (ω_raw,i − b),        K = A⁻¹, A = diag(scale)·N        (the bias stage's model)
+//!   ΔR  = Π_i exp([ω_i Δt_i]×)    over the samples from the end of stretch k to the start of k+1
+//!   r_k = u_{k+1} − ΔRᵀ u_k       (3 components; ≈ the direction error, rad)
+//! ```
+//!
+//! u_k is stretch k's mean specific force through the accelerometer calibration (if one was
+//! kept), normalised, so the gyro's misalignment is relative to the accelerometer's frame. b is
+//! the gyro's mean over the two flanking still stretches (at rest it reads its bias; the daemon's
+//! bias stage estimates it online, so no gyro bias is written). A rotation about gravity leaves u
+//! unchanged: each interval sees only its rotation's horizontal part, and intervals whose
+//! rotations differ make K identifiable.
+//!
+//! Groups: scale (K's diagonal) and misalignment (the six entries off it), with the tests of
+//! `calib_fit`: identifiable (2(n − 1) ≥ p + 2 for n intervals, so a fit without one interval is
+//! over-determined, and the column-normalised Jacobian's condition number ≤ `max_condition`),
+//! then backward elimination by leave-one-interval-out with `diagnose`'s paired z-test on the
+//! three components of each left-out interval, and the bias stage's validation of the result.
+//! No LSB floor here: an interval integrates hundreds of samples, which dithers the gyro's
+//! quantisation into noise that the held-out test already sees.
+
+use nalgebra::{DMatrix, Matrix3, Rotation3, Vector3};
+use serde::Serialize;
+
+use super::AnalysisError;
+use super::calib_fit::{
+    Candidate, NotIdentifiable, eliminate, levenberg_marquardt, rms, scaled_condition,
+};
+use super::calib_still::AccelStretch;
+use super::diagnose_blocks::held_out_test;
+use crate::sample::Sample;
+use crate::stage::bias::settings::{Calibration, CalibrationSettings};
+
+/// Parameters: K row-major.
+const NP: usize = 9;
+/// Groups: 0 scale, 1 misalignment.
+const GROUPS: [&str; 2] = ["scale", "misalignment"];
+
+fn in_group(i: usize, g: usize) -> bool {
+    i.is_multiple_of(4) == (g == 0)
+}
+
+fn mask_of(m: &[usize]) -> [bool; NP] {
+    std::array::from_fn(|i| m.iter().any(|&g| in_group(i, g)))
+}
+
+fn names(m: &[usize]) -> String {
+    m.iter().map(|&g| GROUPS[g]).collect::<Vec<_>>().join(" + ")
+}
+
+fn nominal() -> [f64; NP] {
+    [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+}
+
+fn k_of(th: &[f64; NP]) -> Matrix3<f64> {
+    Matrix3::from_row_slice(th)
+}
+
+/// One motion between two consecutive still stretches.
+#[derive(Clone, Debug, Serialize)]
+pub struct GyroInterval {
+    /// Its samples: [from, to).
+    pub from: usize,
+    pub to: usize,
+    /// Duration, s.
+    pub duration_s: f64,
+    /// Gyro bias taken for it (mean of the flanking still stretches), rad/s.
+    pub bias_rad_s: [f64; 3],
+    /// Angle between the two stretches' gravity directions, degrees.
+    pub tilt_change_deg: f64,
+    /// The two gravity directions (unit).
+    pub u0: [f64; 3],
+    pub u1: [f64; 3],
+    /// Bias-free raw rate and time step of each sample (not serialised).
+    #[serde(skip)]
+    pub rates: Vec<(Vector3<f64>, f64)>,
+}
+
+/// The motions between consecutive `stretches` of `samples` that last at most
+/// `max_interval_s`, have no gap (a step over 2.5 nominal intervals) and change the gravity
+/// direction by at least `min_tilt_deg` (the attitude-group angle: between two stretches of one
+/// attitude there is no rotation to check, only noise, whose random columns would pass any
+/// condition-number test); `accel` the kept accelerometer calibration, if any.
+pub fn gyro_intervals(
+    samples: &[Sample],
+    stretches: &[AccelStretch],
+    accel: Option<&Calibration>,
+    rate_hz: f64,
+    max_interval_s: f64,
+    min_tilt_deg: f64,
+) -> Vec<GyroInterval> {
+    let mean_gyro = |s: &AccelStretch| {
+        samples[s.start..s.start + s.len]
+            .iter()
+            .map(|x| x.gyro)
+            .sum::<Vector3<f64>>()
+    };
+    let dir = |s: &AccelStretch| {
+        let f = accel.map_or(s.mean(), |c| c.apply(&s.mean()));
+        f.normalize()
+    };
+    stretches
+        .windows(2)
+        .filter_map(|w| {
+            let (a, b) = (&w[0], &w[1]);
+            let (from, to) = (a.start + a.len, b.start);
+            let dur = (to - from) as f64 / rate_hz;
+            if to <= from || dur > max_interval_s {
+                return None;
+            }
+            let bias = (mean_gyro(a) + mean_gyro(b)) / (a.len + b.len) as f64;
+            let mut rates = Vec::with_capacity(to - from);
+            for i in from..to {
+                let dt = (samples[i].t_ns.saturating_sub(samples[i - 1].t_ns)) as f64 * 1e-9;
+                let w = samples[i].gyro - bias;
+                if !(dt > 0.0 && dt < 2.5 / rate_hz && w.iter().all(|v| v.is_finite())) {
+                    return None;
+                }
+                rates.push((w, dt));
+            }
+            let (u0, u1) = (dir(a), dir(b));
+            let tilt_change_deg = u0.dot(&u1).clamp(-1.0, 1.0).acos().to_degrees();
+            if tilt_change_deg < min_tilt_deg {
+                return None;
+            }
+            Some(GyroInterval {
+                from,
+                to,
+                duration_s: dur,
+                bias_rad_s: bias.into(),
+                tilt_change_deg,
+                u0: u0.into(),
+                u1: u1.into(),
+                rates,
+            })
+        })
+        .collect()
+}
+
+/// r = u1 − ΔRᵀ u0 with the rates through K.
+fn residual(th: &[f64; NP], iv: &GyroInterval) -> Vector3<f64> {
+    let k = k_of(th);
+    let mut r = Rotation3::identity();
+    for (w, dt) in &iv.rates {
+        r *= Rotation3::new(k * w * *dt);
+    }
+    Vector3::from(iv.u1) - r.inverse() * Vector3::from(iv.u0)
+}
+
+fn residuals(th: &[f64; NP], ivs: &[&GyroInterval]) -> Vec<f64> {
+    ivs.iter()
+        .flat_map(|iv| {
+            let r = residual(th, iv);
+            [r.x, r.y, r.z]
+        })
+        .collect()
+}
+
+/// The Jacobian w.r.t. the `idx` entries, in one pass per interval. With R_i the rotation up
+/// to and including sample i and δφ_i = δK w_i Δt_i, first order in the per-sample angle
+/// (≤ 0.01 rad at 1 rad/s and 100 Hz; only the step direction and the σ use it, never the
+/// residual):  δ(ΔRᵀu0) = ΔRᵀ [u0]× Σ_i R_i δφ_i,  so  ∂r/∂K_ab = −ΔRᵀ [u0]× (M_b)_{:,a},
+/// M_b = Σ_i R_i w_i[b] Δt_i.
+fn jacobian(th: &[f64; NP], ivs: &[&GyroInterval], idx: &[usize]) -> DMatrix<f64> {
+    let k = k_of(th);
+    let mut j = DMatrix::zeros(3 * ivs.len(), idx.len());
+    for (n, iv) in ivs.iter().enumerate() {
+        let mut r = Rotation3::identity();
+        let mut m = [Matrix3::zeros(); 3];
+        for (w, dt) in &iv.rates {
+            r *= Rotation3::new(k * w * *dt);
+            for (b, mb) in m.iter_mut().enumerate() {
+                *mb += r.matrix() * (w[b] * dt);
+            }
+        }
+        let lead = -(r.inverse().matrix() * Vector3::from(iv.u0).cross_matrix());
+        for (c, &p) in idx.iter().enumerate() {
+            let col = lead * m[p % 3].column(p / 3);
+            for row in 0..3 {
+                j[(3 * n + row, c)] = col[row];
+            }
+        }
+    }
+    j
+}
+
+/// The fit of the `active` entries of K from `start` (inactive entries stay as there).
+fn fit(
+    ivs: &[&GyroInterval],
+    active: &[bool; NP],
+    start: [f64; NP],
+) -> Result<([f64; NP], [f64; NP]), AnalysisError> {
+    levenberg_marquardt(
+        start,
+        active,
+        |th| residuals(th, ivs),
+        |th, idx| jacobian(th, ivs, idx),
+    )
+}
+
+/// Condition number of the column-normalised Jacobian at K = I.
+fn condition(ivs: &[&GyroInterval], active: &[bool; NP]) -> f64 {
+    let idx: Vec<usize> = (0..NP).filter(|&i| active[i]).collect();
+    scaled_condition(jacobian(&nominal(), ivs, &idx))
+}
+
+/// Held-out residuals of each interval (3 components each): K fitted on the others (started
+/// from the fit on all of them, which only saves iterations: the training optimum is the same).
+fn held_out(ivs: &[&GyroInterval], active: &[bool; NP]) -> Result<Vec<f64>, AnalysisError> {
+    let mut out = Vec::with_capacity(3 * ivs.len());
+    let (all, _) = fit(ivs, active, nominal())?;
+    for h in 0..ivs.len() {
+        let train: Vec<&GyroInterval> =
+            (0..ivs.len()).filter(|&i| i != h).map(|i| ivs[i]).collect();
+        let (th, _) = fit(&train, active, all)?;
+        out.extend(residual(&th, ivs[h]).iter());
+    }
+    Ok(out)
+}
+
+/// The kept gyroscope calibration in the bias stage's form (bias 0: estimated online).
+#[derive(Clone, Debug, Serialize)]
+pub struct FittedGyro {
+    pub groups: Vec<String>,
+    pub settings: CalibrationSettings,
+    /// 1-σ of K's entries (row-major; ≈ of scale − 1 on the diagonal, of the misalignment in
+    /// rad off it).
+    pub k_sd: [f64; NP],
+}
+
+/// The result of [`calibrate_gyro`].
+#[derive(Clone, Debug, Serialize)]
+pub struct GyroCalibration {
+    pub intervals: Vec<GyroInterval>,
+    pub not_identifiable: Vec<NotIdentifiable>,
+    pub candidates: Vec<Candidate>,
+    pub fitted: Option<FittedGyro>,
+    /// RMS of the held-out direction errors (rad) without and with the kept calibration.
+    pub held_out_rms_before_rad: f64,
+    pub held_out_rms_after_rad: f64,
+    pub verdict: String,
+}
+
+/// Calibrate the gyroscope triad from `intervals` (module docs) at significance `alpha`.
+pub fn calibrate_gyro(
+    intervals: Vec<GyroInterval>,
+    alpha: f64,
+    max_condition: f64,
+) -> Result<GyroCalibration, AnalysisError> {
+    let ivs: Vec<&GyroInterval> = intervals.iter().collect();
+    let n = ivs.len();
+    let mut not_identifiable = Vec::new();
+    let mut model = Vec::new();
+    for m in [vec![0, 1], vec![1], vec![0]] {
+        let active = mask_of(&m);
+        let p = active.iter().filter(|a| **a).count();
+        let cond = if n > 0 {
+            condition(&ivs, &active)
+        } else {
+            f64::INFINITY
+        };
+        let reason = if 2 * n < p + 4 {
+            format!(
+                "{n} interval(s) between still stretches, {} needed for {p} parameters",
+                p.div_ceil(2) + 2
+            )
+        } else if cond.is_nan() || cond > max_condition {
+            format!(
+                "the rotations between still stretches leave the parameters ill-conditioned (condition number {cond:.3e} > {max_condition})"
+            )
+        } else {
+            model = m;
+            break;
+        };
+        not_identifiable.push(NotIdentifiable {
+            model: names(&m),
+            parameters: p,
+            condition: cond,
+            reason,
+        });
+    }
+    let candidates = eliminate(&mut model, alpha, |m, k, round, level| {
+        let with = mask_of(m);
+        let rest: Vec<usize> = m.iter().copied().filter(|&g| g != k).collect();
+        let e1 = held_out(&ivs, &with)?;
+        let e0 = held_out(&ivs, &mask_of(&rest))?;
+        let desc = format!("gyro {} in [{}]", GROUPS[k], names(m));
+        let test = held_out_test("gyro calibration", desc, &e0, &e1, |_| true, level);
+        Ok(Candidate {
+            round,
+            group: GROUPS[k].into(),
+            effect_m_s2: f64::NAN,
+            passed: test.kept,
+            removed: false,
+            reason: test.reason.clone(),
+            test,
+        })
+    })?;
+    let active = mask_of(&model);
+    let (th, sd) = fit(&ivs, &active, nominal())?;
+    let mut settings = CalibrationSettings::default();
+    let mut implausible = Vec::new();
+    if let Some(a) = k_of(&th).try_inverse() {
+        settings.scale = [a[(0, 0)], a[(1, 1)], a[(2, 2)]];
+        settings.misalignment =
+            std::array::from_fn(|i| std::array::from_fn(|j| a[(i, j)] / a[(i, i)]));
+        settings.validate_into("bias.settings.gyro", &mut implausible);
+    } else {
+        implausible.push("bias.settings.gyro: K is singular".into());
+    }
+    let kept = !model.is_empty() && implausible.is_empty();
+    let e_none = if n > 0 {
+        held_out(&ivs, &[false; NP])?
+    } else {
+        vec![]
+    };
+    let e_after = if kept {
+        held_out(&ivs, &active)?
+    } else {
+        e_none.clone()
+    };
+    let verdict = if !implausible.is_empty() && !model.is_empty() {
+        format!("implausible, not written: {}", implausible.join("; "))
+    } else if kept {
+        format!("gyro calibration kept: {}", names(&model))
+    } else if candidates.is_empty() {
+        let why = not_identifiable.last().map_or("", |x| x.reason.as_str());
+        format!("not identifiable: not even one group ({why})")
+    } else {
+        "nothing kept: no identifiable group lowers the held-out error by more than its noise"
+            .into()
+    };
+    Ok(GyroCalibration {
+        held_out_rms_before_rad: rms(&e_none),
+        held_out_rms_after_rad: rms(&e_after),
+        intervals,
+        not_identifiable,
+        candidates,
+        fitted: kept.then(|| FittedGyro {
+            groups: model.iter().map(|&g| GROUPS[g].to_string()).collect(),
+            settings,
+            k_sd: sd,
+        }),
+        verdict,
+    })
+}
