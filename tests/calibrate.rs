@@ -300,6 +300,8 @@ fn the_simulators_static_bench_and_drive_are_not_identifiable_with_or_without_sc
                 text.contains("result: not identifiable"),
                 "{scenario} {sets:?}: {text}"
             );
+            // Nothing fitted prints a reason, never an undefined number.
+            assert!(!text.contains("NaN"), "{scenario} {sets:?}: {text}");
             assert!(!out.join("calibration.toml").exists());
         }
     }

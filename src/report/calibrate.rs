@@ -378,11 +378,18 @@ fn gyro_text(o: &mut String, g: &GyroCalibration) {
     );
     tests_text(o, &g.not_identifiable, &g.candidates);
     let _ = writeln!(o, "result (gyro): {}", g.verdict);
-    let _ = writeln!(
-        o,
-        "held-out RMS direction error (leave-one-motion-out): {:.4e} -> {:.4e} rad",
-        g.held_out_rms_before_rad, g.held_out_rms_after_rad
-    );
+    if g.intervals.is_empty() {
+        let _ = writeln!(
+            o,
+            "held-out RMS direction error: not computed (no motion between attitudes)"
+        );
+    } else {
+        let _ = writeln!(
+            o,
+            "held-out RMS direction error (leave-one-motion-out): {:.4e} -> {:.4e} rad",
+            g.held_out_rms_before_rad, g.held_out_rms_after_rad
+        );
+    }
     if let Some(f) = &g.fitted {
         let s = &f.settings;
         let sd = f.k_sd;
