@@ -105,7 +105,7 @@ impl GrossErrorStage {
         // partner suffices when it is at least half as sharp as the event (see `shock`).
         let partner_k = evidence.map_or(SHOCK_K, |e| SHOCK_K.max(0.25 * e.z_in));
         let strong_k = evidence.map_or(SHOCK_K, |e| SHOCK_K.max(0.5 * e.z_in));
-        let shock = self.shock(c, ev.start, m, upto, partner_k, strong_k, self.s.confirm_k);
+        let shock = self.shock(c, ev.start, m, upto, partner_k, strong_k);
         // The gate called the event motion (a level change or the release rule) and the part
         // that breaks the signal is under a third of it: that break is the sharp part of the
         // manoeuvre, not a gross error riding on it.
@@ -209,8 +209,8 @@ impl GrossErrorStage {
     /// Model-free, so it holds during warm-up too. Not for a one-sample event whose partners were
     /// sharp on that sample only: that is what a corrupted whole frame looks like — unless the
     /// only partner is on the event's own triad (gyro with gyro, accelerometer with
-    /// accelerometer) and sharp there by less than `frame_k` (`confirm_k`: less than a gross
-    /// error of its own). One triad measures one vector, and a real jolt about an oblique axis
+    /// accelerometer) and sharp there by less than `confirm_k` (less than a gross error of
+    /// its own). One triad measures one vector, and a real jolt about an oblique axis
     /// shows on two of its axes on the same sample (the rtklibexplorer drive's vibration at
     /// 72.67 s: gy 6.4 σ̂, gx 4.84 times its RMS there and 3.71 on the sample before), while a
     /// corrupted frame has no reason to stay under the confirmation bar on its other channel.
@@ -223,7 +223,6 @@ impl GrossErrorStage {
         upto: u64,
         partner_k: f64,
         strong_k: f64,
-        frame_k: f64,
     ) -> bool {
         let ctx = self.s.context_samples as u64;
         if start < ctx + 2 || start + 3 > upto {
@@ -251,7 +250,7 @@ impl GrossErrorStage {
             let ms = (sum / f64::from(n)).max(f64::MIN_POSITIVE);
             let (lim2, strong2) = (partner_k * partner_k * ms, strong_k * strong_k * ms);
             // Off on that sample by as much as a gross error of its own would be.
-            let gross_itself = d(start).powi(2) > frame_k * frame_k * ms;
+            let gross_itself = d(start).powi(2) > self.s.confirm_k.powi(2) * ms;
             let (mut mask, mut smask) = (0u8, 0u8);
             for (bit, i) in [start - 1, start, start + 1].into_iter().enumerate() {
                 let v = d(i);
