@@ -12,7 +12,9 @@
 //!    not part of a shock seen on other axes (their raw values: ≥ 2 other channels beyond 4σ
 //!    within one sample of its start, or one beyond 4σ and half the event's own break, unless
 //!    that channel's own gross errors are frequent enough to coincide by chance; a one-sample
-//!    event whose partners were off on that sample only is a corrupted frame, not a shock), and
+//!    event whose partners were off on that sample only is a corrupted frame, not a shock —
+//!    unless its one partner is on its own triad and under `confirm_k` there: one vector
+//!    moving), and
 //!    not a break covering under a third of an event the gate itself called motion (a level
 //!    change, the release rule). Around a one-sample event, a later isolated candidate is left
 //!    out of the context (`verdict.rs`).
