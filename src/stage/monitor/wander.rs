@@ -258,16 +258,18 @@ impl WanderDetector {
         let m = self.m;
         let groups = self.blocks.len() / m;
         let skip = self.blocks.len() - groups * m;
-        let mean_of = |g: usize| {
-            let s: f64 = self
-                .blocks
-                .range(skip + g * m..skip + (g + 1) * m)
-                .map(|b| b.0)
-                .sum();
-            s / m as f64
-        };
-        let mu = (0..groups).map(mean_of).sum::<f64>() / groups as f64;
-        let ss: f64 = (0..groups).map(|g| (mean_of(g) - mu).powi(2)).sum();
+        let means: Vec<f64> = (0..groups)
+            .map(|g| {
+                let s: f64 = self
+                    .blocks
+                    .range(skip + g * m..skip + (g + 1) * m)
+                    .map(|b| b.0)
+                    .sum();
+                s / m as f64
+            })
+            .collect();
+        let mu = means.iter().sum::<f64>() / groups as f64;
+        let ss: f64 = means.iter().map(|x| (x - mu).powi(2)).sum();
         let v = m as f64 * ss / (groups - 1) as f64;
         (v > 0.0 && v.is_finite()).then_some(v)
     }
