@@ -18,9 +18,9 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use imuprep::analysis::allan_edf::{NoiseType, ONE_SIGMA_CONFIDENCE, chi2_interval, edf_oadev};
 use imuprep::io::log::read_log;
 use imuprep::model::bias_model::{ArOf, BiasModelFile, Effect};
+use imuprep::stats::allan_edf::{NoiseType, ONE_SIGMA_CONFIDENCE, chi2_interval, edf_oadev};
 
 fn imuprep(args: &[&str]) {
     let out = Command::new(env!("CARGO_BIN_EXE_imuprep"))

@@ -15,6 +15,7 @@
 
 use super::AnalysisError;
 use super::allan::oadev_octaves;
+use crate::stats::allan_edf::edf_white;
 use crate::stats::check_series;
 use crate::stats::special::chi2_sf;
 use serde::Serialize;
@@ -61,14 +62,6 @@ pub struct AllanFinding {
     pub excess_slope: Option<f64>,
     /// K² (units²/s) if classified as rate random walk.
     pub rrw_q_per_s: Option<f64>,
-}
-
-/// Equivalent degrees of freedom of an overlapping Allan variance of white noise.
-pub fn edf_white(n: usize, m: usize) -> f64 {
-    let (nf, mf) = (n as f64, m as f64);
-    ((3.0 * (nf - 1.0) / (2.0 * mf) - 2.0 * (nf - 2.0) / nf) * 4.0 * mf * mf
-        / (4.0 * mf * mf + 5.0))
-        .max(1.0)
 }
 
 /// Compare the Allan deviation of `residual` with the white prediction at family-wise level `alpha`.

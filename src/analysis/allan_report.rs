@@ -1,5 +1,5 @@
 //! `imuprep allan`: per channel, the overlapping Allan deviation at octave τ with Greenhall–Riley
-//! confidence bands ([`super::allan`], [`super::allan_edf`]) and the IEEE-952 terms fitted to it
+//! confidence bands ([`super::allan`], [`crate::stats::allan_edf`]) and the IEEE-952 terms fitted to it
 //! ([`super::allan_terms`]); the report a person reads and the JSON a tool reads. The exports
 //! (Kalibr `imu.yaml`, GNSS_IMU config values, bias model TOML) are in [`super::allan_export`],
 //! the plot in [`super::allan_plot`].

@@ -21,7 +21,7 @@
 //! unknowns it is solved exactly by trying every support set and keeping the best feasible one —
 //! the NNLS optimum is the unconstrained optimum on its own support). Each point is weighted by
 //! the inverse of its standard deviation, `sd(σ̂²ᵢ) = σ²ᵢ sqrt(2/νᵢ + ε²)`, with `νᵢ` the
-//! Greenhall–Riley EDF ([`super::allan_edf`]) of the noise type that dominates at τᵢ and ε a
+//! Greenhall–Riley EDF ([`crate::stats::allan_edf`]) of the noise type that dominates at τᵢ and ε a
 //! model-error floor. Weights and noise types depend on the fit, so it is iterated: pass 0 uses
 //! σ̂²ᵢ, white-FM EDFs and ε = 0; pass k ≥ 1 uses the previous model's σ²ᵢ, the noise type of
 //! its largest term at each τᵢ and the previous ε, until every coefficient and ε change by less
@@ -51,8 +51,8 @@
 
 use super::AnalysisError;
 use super::allan::AllanResult;
-use super::allan_edf::{NoiseType, chi2_interval, edf_oadev};
 use crate::stats::NumError;
+use crate::stats::allan_edf::{NoiseType, chi2_interval, edf_oadev};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use statrs::function::gamma::digamma;
@@ -148,7 +148,7 @@ pub struct FitSettings {
 impl Default for FitSettings {
     fn default() -> Self {
         FitSettings {
-            confidence: super::allan_edf::ONE_SIGMA_CONFIDENCE,
+            confidence: crate::stats::allan_edf::ONE_SIGMA_CONFIDENCE,
             max_passes: 50,
             tol: 1e-6,
             min_z: 2.0,

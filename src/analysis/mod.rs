@@ -2,7 +2,6 @@
 
 pub mod allan;
 pub mod allan_check;
-pub mod allan_edf;
 pub mod allan_export;
 pub mod allan_plot;
 pub mod allan_report;

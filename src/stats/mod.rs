@@ -15,6 +15,7 @@
 
 pub mod acf;
 pub mod adf;
+pub mod allan_edf;
 pub mod ar_poly;
 pub mod robust;
 pub mod special;

@@ -64,7 +64,7 @@ def edf(alpha, m, n_phase):
     j = min(big_m, 3 * m)
     if alpha <= 0 and j <= 100 and not STOCK_EDF:
         # edf_greenhall takes F = m here when 3m <= 100; for rate samples (phase = their running
-        # sum) F = inf is right (src/analysis/allan_edf.rs: Monte Carlo, white FM at m = 1:
+        # sum) F = inf is right (src/stats/allan_edf.rs: Monte Carlo, white FM at m = 1:
         # F = m is 18 % high). allantools' own sum and sz with F = inf:
         inf = float("inf")
         return 1.0 / (atci.greenhall_BasicSum(j, big_m, m, inf, alpha, 2)

@@ -11,7 +11,7 @@
 //! a bench's own bias instability is the reference, not white noise.
 //!
 //! **The bar.** `ν·A/σ² ~ χ²(ν)` with `ν` the Greenhall–Riley EDF of the overlapping estimate
-//! ([`crate::analysis::allan_edf::edf_oadev`]). `A(b)` has ν₁ ≈ 80 over 120 s and is treated as
+//! ([`crate::stats::allan_edf::edf_oadev`]). `A(b)` has ν₁ ≈ 80 over 120 s and is treated as
 //! exact; `R/ρ̂₀` is then `F(ν₂, ν₀)` with ν₂ the EDF of `A(m·b)` in one window (12.5 at the
 //! defaults, m = 8 over 120 blocks) and ν₀ that of the pooled learned ratio (ν₂ per independent
 //! window learned, capped at 1000): the bar falls from ≈ 6 when just armed to ≈ 3.1. The
@@ -36,7 +36,7 @@
 
 use super::settings::WanderStatistic;
 use super::step::BlockMean;
-use crate::analysis::allan_edf::{NoiseType, edf_oadev};
+use crate::stats::allan_edf::{NoiseType, edf_oadev};
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 use std::collections::VecDeque;
 
