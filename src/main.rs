@@ -208,6 +208,10 @@ enum Cmd {
         /// Output directory.
         #[arg(long, default_value = "calibrate-out")]
         out_dir: PathBuf,
+        /// RTKLIB .pos solution with velocities, on the log's clock: also fit the gyro's scale
+        /// about the vertical from the turns of a drive.
+        #[arg(long)]
+        gnss: Option<PathBuf>,
     },
     /// Compare methods on the same data. `--detectors --scenario S.toml`: gross-error detectors
     /// against the simulator's truth. `LOG --channel C`: the bias models of the FOS paper.
@@ -488,12 +492,14 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             to_s,
             gravity,
             out_dir,
+            gnss,
         } => {
             let o = report::calibrate::CalibrateOptions {
                 from_s,
                 to_s,
                 gravity_m_s2: gravity,
                 out_dir,
+                gnss,
             };
             let r = report::calibrate::calibrate(&log, &o)?;
             print!("{}", r.to_text());

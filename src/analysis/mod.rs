@@ -7,6 +7,7 @@ pub mod allan_plot;
 pub mod allan_report;
 pub mod allan_terms;
 pub mod bias_compare;
+pub mod calib_course;
 pub mod calib_fit;
 pub mod calib_gyro;
 pub mod calib_still;

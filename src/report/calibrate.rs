@@ -12,6 +12,7 @@ use anyhow::{Context, Result, ensure};
 use serde::Serialize;
 
 use super::{load_span_to, present_channels};
+use crate::analysis::calib_course::{CourseEpoch, CourseScale, CourseSettings, course_scale};
 use crate::analysis::calib_fit::{
     AccelCalibration, CalibSettings, Candidate, NotIdentifiable, calibrate_accel,
 };
@@ -31,6 +32,9 @@ pub struct CalibrateOptions {
     pub gravity_m_s2: f64,
     /// Output directory.
     pub out_dir: PathBuf,
+    /// An RTKLIB `.pos` solution with velocities on the log's clock (GPST): also fit the gyro's
+    /// scale about the vertical from the turns of a drive (`analysis::calib_course`).
+    pub gnss: Option<PathBuf>,
 }
 
 /// The report of one run.
@@ -47,6 +51,10 @@ pub struct CalibrateReport {
     /// The gyroscope calibration (None: the log has no gyro, see `gyro_skipped`).
     pub gyro: Option<GyroCalibration>,
     pub gyro_skipped: Option<String>,
+    /// The gyro's scale error about the vertical against the GNSS course (with `--gnss`), or
+    /// why there is none.
+    pub course: Option<CourseScale>,
+    pub course_skipped: Option<String>,
     /// The config file written (None when nothing was kept).
     pub config_file: Option<PathBuf>,
 }
@@ -126,6 +134,13 @@ pub fn calibrate(log: &Path, o: &CalibrateOptions) -> Result<CalibrateReport> {
             .with_context(|| format!("{}: gyro calibration fit", log.display()))?;
         (Some(g), None)
     };
+    let (course, course_skipped) = match &o.gnss {
+        None => (None, None),
+        Some(p) => match course_from(&samples, p) {
+            Ok(c) => (Some(c), None),
+            Err(why) => (None, Some(why)),
+        },
+    };
     let source = format!(
         "{} [{} s .. +{:.1} s at {rate} Hz]",
         log.display(),
@@ -139,6 +154,8 @@ pub fn calibrate(log: &Path, o: &CalibrateOptions) -> Result<CalibrateReport> {
         accel,
         gyro,
         gyro_skipped,
+        course,
+        course_skipped,
         config_file: None,
     };
     std::fs::create_dir_all(&o.out_dir)
@@ -154,6 +171,23 @@ pub fn calibrate(log: &Path, o: &CalibrateOptions) -> Result<CalibrateReport> {
         serde_json::to_string_pretty(&report)?,
     )?;
     Ok(report)
+}
+
+/// The course fit of `samples` against the `.pos` file at `path` (Err: why there is none).
+fn course_from(samples: &[Sample], path: &Path) -> std::result::Result<CourseScale, String> {
+    let epochs = crate::nav::pos::read(path).map_err(|e| e.to_string())?;
+    let gnss: Vec<CourseEpoch> = epochs
+        .iter()
+        .map(|e| CourseEpoch {
+            t: e.t,
+            v_ne: e.sdv.map(|_| [e.v_neu[0], e.v_neu[1]]),
+        })
+        .collect();
+    let t: Vec<f64> = samples.iter().map(|x| x.t_ns as f64 * 1e-9).collect();
+    let gyro: Vec<[f64; 3]> = samples.iter().map(|x| x.gyro.into()).collect();
+    let accel: Vec<[f64; 3]> = samples.iter().map(|x| x.accel.into()).collect();
+    course_scale(&t, &gyro, &accel, &gnss, &CourseSettings::default())
+        .map_err(|e| format!("{}: {e}", path.display()))
 }
 
 fn vec3(v: &[f64; 3]) -> String {
@@ -307,6 +341,7 @@ impl CalibrateReport {
             }
             _ => {}
         }
+        course_text(&mut o, self.course.as_ref(), self.course_skipped.as_deref());
         match &self.config_file {
             Some(p) => {
                 let _ = writeln!(o, "config: {}", p.display());
@@ -317,6 +352,37 @@ impl CalibrateReport {
         }
         o
     }
+}
+
+/// The `--gnss` section: the gyro's scale about the vertical from the turns.
+fn course_text(o: &mut String, c: Option<&CourseScale>, skipped: Option<&str>) {
+    if let Some(why) = skipped {
+        let _ = writeln!(o, "\ngyro scale about the vertical from GNSS course: {why}");
+    }
+    let Some(c) = c else { return };
+    let u = c.up_body;
+    let _ = writeln!(
+        o,
+        "\ngyro scale about the vertical from GNSS course: {} segments between straight moments ({} turning > 20°, largest {:.0}°), vertical in body axes [{:.4}, {:.4}, {:.4}]\n  scale error {:+.4} % ± {:.4} % (z = {:.2}, p = {:.2e}): {}\n  bias about the vertical {:+.4} ± {:.4} °/s; residual sd of a segment's course change {:.3}°\n  (a finding, not written: a scale about the vertical mixes the axes' scale and misalignment)",
+        c.segments,
+        c.turns,
+        c.largest_turn_deg,
+        u[0],
+        u[1],
+        u[2],
+        100.0 * c.scale_error,
+        100.0 * c.scale_error_sd,
+        c.z,
+        c.p_value,
+        if c.significant {
+            format!("significant at α = {}", c.alpha)
+        } else {
+            format!("not significant at α = {} — no scale error seen", c.alpha)
+        },
+        c.bias_rad_s.to_degrees(),
+        c.bias_sd_rad_s.to_degrees(),
+        c.residual_sd_rad.to_degrees()
+    );
 }
 
 /// The models refused as not identifiable and the elimination's tests.
