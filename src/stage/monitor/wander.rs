@@ -34,6 +34,7 @@
 //! 1-s white σ is flagged by one test at p = 1e-5 with probability 0.79, against 0.11 for `R`
 //! and a Neyman–Pearson bound of 0.94 (`tests/reference/wander_power_bound.py`).
 
+use super::learn::Delayed;
 use super::settings::WanderStatistic;
 use super::step::BlockMean;
 use crate::analysis::allan_edf::{NoiseType, edf_oadev};
@@ -67,7 +68,7 @@ pub struct WanderDetector {
     blocks: VecDeque<(f64, u64)>,
     since_test: usize,
     /// Ratios not yet learned from (see the module doc).
-    pending: VecDeque<f64>,
+    pending: Delayed<f64>,
     ratio_sum: f64,
     ratio_n: u64,
     /// Σ ln R and Σ (ln R)² of the learned ratios (their scatter, see [`WanderDetector::edf`]).
@@ -114,7 +115,7 @@ impl WanderDetector {
             block: BlockMean::new(block_n),
             blocks: VecDeque::with_capacity(window_blocks + 1),
             since_test: 0,
-            pending: VecDeque::new(),
+            pending: Delayed::new(2 * window_blocks.div_ceil(m)),
             ratio_sum: 0.0,
             ratio_n: 0,
             ln_sum: 0.0,
@@ -139,11 +140,6 @@ impl WanderDetector {
         }
         self.statistic = statistic;
         self
-    }
-
-    /// Windows a learned ratio waits before it is learned (two windows of tests).
-    fn delay(&self) -> usize {
-        2 * self.window_blocks.div_ceil(self.m)
     }
 
     /// Independent windows among the learned ratios.
@@ -301,9 +297,7 @@ impl WanderDetector {
             f64::INFINITY
         };
         if !self.active && z < bar {
-            self.pending.push_back(r);
-            if self.pending.len() > self.delay() {
-                let r0 = self.pending.pop_front().unwrap_or(1.0);
+            if let Some(r0) = self.pending.offer(r) {
                 self.ratio_sum += r0;
                 self.ln_sum += r0.ln();
                 self.ln_sq += r0.ln().powi(2);
@@ -325,7 +319,7 @@ impl WanderDetector {
         if z >= bar {
             self.active = true;
             self.events += 1;
-            self.pending.clear();
+            self.pending.drop_pending();
             return Some(WanderEvent {
                 t_ns: self.blocks[0].1,
                 ratio: z,

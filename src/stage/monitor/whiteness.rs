@@ -1,0 +1,532 @@
+//! The output at rest losing its whiteness at short lags: a coloured component the model lacks
+//! (a sensor filter or output rate changed, broadband vibration through a damped mount, a noise
+//! source with a correlation time of a few samples), told by the Ljung–Box statistic of the
+//! window's autocorrelations at lags `1..=h` against the channel's own.
+//!
+//! **Statistic.** Contiguous still samples, at the full rate (averaging would wash out a
+//! correlation of a few samples; the wander test covers the slow end), in windows of `W`
+//! seconds made of blocks of `B` (tested every block: 90 s of 15-s blocks by default). Per
+//! sample, per lag `k ≤ h`, the lagged product and the pair's sum are accumulated (O(h) per
+//! sample, no burst at the window's end), so the window's biased autocorrelations `r_k` —
+//! the same numbers as [`crate::stats::acf::acf`] over the window, with the window's own mean
+//! removed — are formed at each test in O(h·W/B). A skipped sample (stillness dropping out for a
+//! few samples) breaks only the pairs across it; more than a second of them breaks the run.
+//!
+//! **Against the channel's own.** A real sensor is not white even when the model is complete
+//! (its own DSP filter, quantisation, the bias estimate's small lag), so the no-effect
+//! autocorrelations `ρ̂_k` are learned from the channel's quiet windows (two windows late,
+//! dropped if an alarm follows: [`super::learn::Delayed`]), and the change is tested:
+//! `Q_Δ = ljung_box_statistic(r − ρ̂)` ([`crate::stats::acf::ljung_box_statistic`]). For a
+//! window of `N` samples whose correlation structure has not changed, `r_k − ρ̂_k` is
+//! approximately normal with variance `v·(1 + 1/n₀)/N` (`v = 1` for weak correlations,
+//! Bartlett; `n₀` the independent windows in `ρ̂`), so `Q_Δ/(1 + 1/n₀) ≈ v·χ²(h)`. The scale `v`
+//! is learned too, as the mean of the quiet windows' `Q_Δ/((1 + 1/n₀)·h)`, floored at 1 (the
+//! value for any weakly correlated noise); the score `S = Q_Δ/((1 + 1/n₀)·h·v̂)` is then
+//! `F(h, h·n_v)` with `n_v` the independent windows in `v̂`, and the alarm is raised at
+//! `S ≥ F⁻¹(1 − p)`, held until `S` falls below that `F`'s median.
+//!
+//! **What an unmodelled AR(1) does.** A component of variance ratio `a` to the white noise
+//! and pole `φ` per sample adds `ρ_k = φ^k·a/(1 + a)` to every lag, and the noncentrality of
+//! `Q_Δ` is `N·Σ_{k≤h} ρ_k²`. The size `diagnose` finds from a 20-min log (AR(1), φ = 0.8, sd
+//! 0.2× the white σ: `a = 0.04`, docs/model-health.md) gives `N·Σρ_k² = 0.0026·N` — 14 in a
+//! 90-s window at 100 Hz, where the bar at `p = 1e-5` lies ≈ 33 above `h = 10`'s mean: no test
+//! of one window flags it reliably (`tests/reference/whiteness_power.py`); twice that sd is
+//! flagged within 2 min.
+
+use super::learn::Delayed;
+use crate::stats::acf::ljung_box_statistic;
+use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+use std::collections::VecDeque;
+
+/// Cap on the EDF of the learned scale (beyond it the quantile no longer moves).
+const MAX_POOLED_EDF: f64 = 1000.0;
+
+/// One alarm of the whiteness detector.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WhitenessEvent {
+    /// Sensor time of the start of the window that raised the alarm, ns.
+    pub t_ns: u64,
+    /// The window's Ljung–Box `Q` over lags `1..=h` (against zero autocorrelation).
+    pub q: f64,
+    /// The channel's own `Q`: the mean over the quiet windows learned from.
+    pub q0: f64,
+    /// `S`: the change of the autocorrelations from the channel's own, in its own scatter.
+    pub score: f64,
+}
+
+/// Lagged sums of one block (or of its pairs reaching into the block before).
+#[derive(Debug, Clone)]
+struct Sums {
+    /// Samples, their sum and sum of squares (after the run's shift).
+    n: f64,
+    sum: f64,
+    sumsq: f64,
+    /// Per lag k (index k − 1): Σ yₜ·yₜ₋ₖ, Σ (yₜ + yₜ₋ₖ) and the pair count.
+    prod: Vec<f64>,
+    pair: Vec<f64>,
+    pairs: Vec<f64>,
+}
+
+impl Sums {
+    fn new(h: usize) -> Self {
+        Sums {
+            n: 0.0,
+            sum: 0.0,
+            sumsq: 0.0,
+            prod: vec![0.0; h],
+            pair: vec![0.0; h],
+            pairs: vec![0.0; h],
+        }
+    }
+
+    fn clear(&mut self) {
+        self.n = 0.0;
+        self.sum = 0.0;
+        self.sumsq = 0.0;
+        for v in [&mut self.prod, &mut self.pair, &mut self.pairs] {
+            v.fill(0.0);
+        }
+    }
+
+    fn add(&mut self, o: &Sums) {
+        self.n += o.n;
+        self.sum += o.sum;
+        self.sumsq += o.sumsq;
+        for (a, b) in [
+            (&mut self.prod, &o.prod),
+            (&mut self.pair, &o.pair),
+            (&mut self.pairs, &o.pairs),
+        ] {
+            a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+        }
+    }
+
+    fn add_pair(&mut self, i: usize, y: f64, y_lag: f64) {
+        self.prod[i] += y * y_lag;
+        self.pair[i] += y + y_lag;
+        self.pairs[i] += 1.0;
+    }
+
+    /// Biased autocorrelations `r_1..=r_h` with the sums' own mean removed (divisor N, as
+    /// [`crate::stats::acf::acf`]); `None` for a constant window.
+    fn acf(&self, out: &mut Vec<f64>) -> Option<()> {
+        let mean = self.sum / self.n;
+        let c0 = self.sumsq - self.n * mean * mean;
+        if !(c0 > 0.0 && c0.is_finite()) {
+            return None;
+        }
+        out.clear();
+        for k in 0..self.prod.len() {
+            let ck = self.prod[k] - mean * self.pair[k] + self.pairs[k] * mean * mean;
+            out.push(ck / c0);
+        }
+        Some(())
+    }
+}
+
+/// One block: its samples' sums, the pairs reaching into the block before, its start time.
+#[derive(Debug, Clone)]
+struct Block {
+    inner: Sums,
+    cross: Sums,
+    start_ns: u64,
+}
+
+/// Whiteness detector of one channel.
+#[derive(Debug, Clone)]
+pub struct WhitenessDetector {
+    h: usize,
+    block_n: usize,
+    window_blocks: usize,
+    p: f64,
+    learn_n: u64,
+    bridge_n: usize,
+    /// The last `h` values of the run (shifted), newest last; cleared where a sample is skipped.
+    ring: VecDeque<f64>,
+    /// Subtracted from every value of the run (its first value): keeps the sums' cancellation
+    /// small on a channel far from zero.
+    shift: Option<f64>,
+    cur: Block,
+    blocks: VecDeque<Block>,
+    /// Scratch: the window's sums and autocorrelations.
+    win: Sums,
+    r: Vec<f64>,
+    d: Vec<f64>,
+    pending: Delayed<(Vec<f64>, f64, f64)>,
+    rho_sum: Vec<f64>,
+    learned: u64,
+    q_sum: f64,
+    scale_sum: f64,
+    scale_n: u64,
+    still: u64,
+    skipped: usize,
+    active: bool,
+    pub events: u64,
+    /// Still runs broken (more than the bridge skipped, motion, a gap).
+    pub breaks: u64,
+    /// Tests run.
+    pub tests: u64,
+    /// Largest `S` over the armed tests that raised no alarm, and the bar at that test.
+    pub max_quiet: (f64, f64),
+}
+
+impl WhitenessDetector {
+    /// `block_n` samples per block, `window_blocks` blocks per window (tested every block),
+    /// lags `1..=lags`, false-alarm probability `p` per test, armed after `learn_n` still
+    /// samples; up to `bridge_n` skipped samples in a row are bridged.
+    pub fn new(
+        block_n: usize,
+        window_blocks: usize,
+        lags: usize,
+        p: f64,
+        learn_n: u64,
+        bridge_n: usize,
+    ) -> Self {
+        let h = lags.max(1);
+        let window_blocks = window_blocks.max(1);
+        let block = || Block {
+            inner: Sums::new(h),
+            cross: Sums::new(h),
+            start_ns: 0,
+        };
+        WhitenessDetector {
+            h,
+            block_n: block_n.max(h + 1),
+            window_blocks,
+            p,
+            learn_n,
+            bridge_n,
+            ring: VecDeque::with_capacity(h + 1),
+            shift: None,
+            cur: block(),
+            blocks: VecDeque::with_capacity(window_blocks + 1),
+            win: Sums::new(h),
+            r: Vec::with_capacity(h),
+            d: Vec::with_capacity(h),
+            pending: Delayed::new(2 * window_blocks),
+            rho_sum: vec![0.0; h],
+            learned: 0,
+            q_sum: 0.0,
+            scale_sum: 0.0,
+            scale_n: 0,
+            still: 0,
+            skipped: 0,
+            active: false,
+            events: 0,
+            breaks: 0,
+            tests: 0,
+            max_quiet: (0.0, 0.0),
+        }
+    }
+
+    /// Independent windows among `n` learned (overlapping by all but one block).
+    fn independent(&self, n: u64) -> f64 {
+        if n == 0 {
+            return 0.0;
+        }
+        (n as f64 + self.window_blocks as f64 - 1.0) / self.window_blocks as f64
+    }
+
+    /// Whether the detector has learned enough to raise alarms: the still time, and the scale
+    /// from at least two independent windows.
+    pub fn armed(&self) -> bool {
+        self.still >= self.learn_n && self.independent(self.scale_n) >= 2.0
+    }
+
+    /// Whether an alarm is holding now.
+    pub fn active(&self) -> bool {
+        self.active
+    }
+
+    /// The channel's learned no-effect autocorrelations `ρ̂_1..=ρ̂_h`, once any.
+    pub fn baseline(&self) -> Option<Vec<f64>> {
+        (self.learned > 0).then(|| {
+            let n = self.learned as f64;
+            self.rho_sum.iter().map(|s| s / n).collect()
+        })
+    }
+
+    /// The learned scale `v̂` of `Q_Δ` (1 for weakly correlated noise; floored there).
+    pub fn scale(&self) -> f64 {
+        if self.scale_n == 0 {
+            return 1.0;
+        }
+        (self.scale_sum / self.scale_n as f64).max(1.0)
+    }
+
+    /// The channel's own Ljung–Box `Q`, once learned.
+    pub fn q0(&self) -> Option<f64> {
+        (self.learned > 0).then(|| self.q_sum / self.learned as f64)
+    }
+
+    /// The autocorrelations `r_1..=r_h` of the last window tested.
+    pub fn last_acf(&self) -> &[f64] {
+        &self.r
+    }
+
+    /// The `F(h, h·n_v)` quantile at `q`.
+    fn quantile(&self, q: f64) -> Option<f64> {
+        let nu0 = (self.h as f64 * self.independent(self.scale_n)).min(MAX_POOLED_EDF);
+        let f = FisherSnedecor::new(self.h as f64, nu0).ok()?;
+        Some(f.inverse_cdf(q))
+    }
+
+    /// The alarm bar on `S` now, once armed.
+    pub fn threshold(&self) -> Option<f64> {
+        if !self.armed() {
+            return None;
+        }
+        self.quantile(1.0 - self.p)
+    }
+
+    /// A sample that cannot be used: the pairs across it are not formed, and a run of more than
+    /// `bridge_n` of them breaks the still run.
+    pub fn skip(&mut self) {
+        self.skipped += 1;
+        self.ring.clear();
+        if self.skipped > self.bridge_n {
+            self.interrupt();
+        }
+    }
+
+    /// The contiguous run of still data was broken.
+    pub fn interrupt(&mut self) {
+        if !self.blocks.is_empty() || self.cur.inner.n > 0.0 {
+            self.breaks += 1;
+        }
+        self.skipped = 0;
+        self.ring.clear();
+        self.shift = None;
+        self.cur.inner.clear();
+        self.cur.cross.clear();
+        self.blocks.clear();
+        self.active = false;
+    }
+
+    /// One still value; returns an alarm when one is raised.
+    pub fn push(&mut self, t_ns: u64, v: f64) -> Option<WhitenessEvent> {
+        self.skipped = 0;
+        self.still += 1;
+        let y = v - *self.shift.get_or_insert(v);
+        let j = self.cur.inner.n as usize;
+        if j == 0 {
+            self.cur.start_ns = t_ns;
+        }
+        // Lag k = i + 1: a pair whose earlier sample lies in the block before goes to `cross`.
+        for (i, &yl) in self.ring.iter().rev().enumerate() {
+            let s = if i < j {
+                &mut self.cur.inner
+            } else {
+                &mut self.cur.cross
+            };
+            s.add_pair(i, y, yl);
+        }
+        if self.ring.len() == self.h {
+            self.ring.pop_front();
+        }
+        self.ring.push_back(y);
+        let b = &mut self.cur.inner;
+        b.n += 1.0;
+        b.sum += y;
+        b.sumsq += y * y;
+        if j + 1 < self.block_n {
+            return None;
+        }
+        // The oldest block's storage is reused once the window is full.
+        let fresh = if self.blocks.len() == self.window_blocks {
+            self.blocks.pop_front()
+        } else {
+            None
+        };
+        let fresh = fresh.unwrap_or_else(|| self.cur.clone());
+        let done = std::mem::replace(&mut self.cur, fresh);
+        self.cur.inner.clear();
+        self.cur.cross.clear();
+        self.blocks.push_back(done);
+        if self.blocks.len() < self.window_blocks {
+            return None;
+        }
+        self.test()
+    }
+
+    /// The test over the full window.
+    fn test(&mut self) -> Option<WhitenessEvent> {
+        self.win.clear();
+        for (i, b) in self.blocks.iter().enumerate() {
+            self.win.add(&b.inner);
+            if i > 0 {
+                self.win.add(&b.cross);
+            }
+        }
+        self.win.acf(&mut self.r)?;
+        let n = self.win.n as usize;
+        let q = ljung_box_statistic(&self.r, n);
+        self.tests += 1;
+        // Q_Δ / (1 + 1/n₀) / h against the learned ρ̂ (NaN until one is learned).
+        let per_lag = if self.learned > 0 {
+            let l = self.learned as f64;
+            self.d.clear();
+            self.d
+                .extend(self.r.iter().zip(&self.rho_sum).map(|(r, s)| r - s / l));
+            {
+                let n0 = self.independent(self.learned);
+                ljung_box_statistic(&self.d, n) / (1.0 + 1.0 / n0) / self.h as f64
+            }
+        } else {
+            f64::NAN
+        };
+        let bar = self.threshold();
+        let s = per_lag / self.scale();
+        let over = matches!(bar, Some(b) if s >= b);
+        if !self.active
+            && !over
+            && let Some((r0, pl, q0)) = self.pending.offer((self.r.clone(), per_lag, q))
+        {
+            self.rho_sum.iter_mut().zip(&r0).for_each(|(a, b)| *a += b);
+            self.learned += 1;
+            self.q_sum += q0;
+            if pl.is_finite() {
+                self.scale_sum += pl;
+                self.scale_n += 1;
+            }
+        }
+        let bar = bar?;
+        if self.active {
+            if s < self.quantile(0.5).unwrap_or(1.0) {
+                self.active = false;
+            }
+            return None;
+        }
+        if !over {
+            if s > self.max_quiet.0 {
+                self.max_quiet = (s, bar);
+            }
+            return None;
+        }
+        self.active = true;
+        self.events += 1;
+        self.pending.drop_pending();
+        Some(WhitenessEvent {
+            t_ns: self.blocks[0].start_ns,
+            q,
+            q0: self.q0().unwrap_or(f64::NAN),
+            score: s,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use crate::stats::acf::acf;
+
+    const FS: f64 = 100.0;
+
+    /// The defaults at 100 Hz: 15-s blocks, 90-s windows, lags 1–10, p = 1e-5, armed after
+    /// 300 s, skips of up to 1 s bridged.
+    fn detector() -> WhitenessDetector {
+        WhitenessDetector::new(1500, 6, 10, 1e-5, 30_000, 100)
+    }
+
+    fn run(det: &mut WhitenessDetector, xs: &[f64], t0: usize) -> Vec<WhitenessEvent> {
+        xs.iter()
+            .enumerate()
+            .filter_map(|(i, &x)| det.push(((t0 + i) as f64 / FS * 1e9) as u64, x))
+            .collect()
+    }
+
+    /// White noise plus an AR(1) component (pole `phi`, stationary sd `sd`).
+    fn coloured(r: &mut Rng, n: usize, phi: f64, sd: f64) -> Vec<f64> {
+        let mut a = sd * r.normal();
+        (0..n)
+            .map(|_| {
+                a = phi * a + sd * (1.0 - phi * phi).sqrt() * r.normal();
+                r.normal() + a
+            })
+            .collect()
+    }
+
+    #[test]
+    fn streamed_autocorrelations_are_the_batch_acf_of_the_window() {
+        // Blocks of 50, windows of 3 blocks: after 400 samples the last window is samples
+        // 250..400 (the pairs reaching into sample 249 excluded). Far from zero (9.81 + noise) to
+        // exercise the shift. Same sums in another order: agreement to 1e-9.
+        let mut det = WhitenessDetector::new(50, 3, 7, 1e-5, 0, 10);
+        let mut r = Rng::new(3);
+        let xs: Vec<f64> = coloured(&mut r, 400, 0.6, 0.5)
+            .iter()
+            .map(|x| 9.81 + 0.01 * x)
+            .collect();
+        run(&mut det, &xs, 0);
+        let want = acf(&xs[250..], 7).unwrap();
+        let got = det.last_acf();
+        assert_eq!(got.len(), 7);
+        for (k, (g, w)) in got.iter().zip(&want[1..]).enumerate() {
+            assert!((g - w).abs() < 1e-9, "lag {}: {g} vs {w}", k + 1);
+        }
+    }
+
+    #[test]
+    fn white_noise_raises_no_alarm_and_an_ar_component_one() {
+        // 4 h of white noise: 960 tests at p = 1e-5 each, P(any alarm) ≈ 1 %; the seed is fixed
+        // and the largest quiet score is checked to sit under the bar.
+        let mut det = detector();
+        let mut r = Rng::new(41);
+        let xs: Vec<f64> = (0..1_440_000).map(|_| r.normal()).collect();
+        assert!(run(&mut det, &xs, 0).is_empty());
+        assert!(det.armed());
+        // White: ρ̂ ≈ 0 (≈ 160 independent windows of 9000: sd 1/√1.44e6 = 8e-4 per lag; 5 sd).
+        let rho = det.baseline().unwrap();
+        assert!(rho.iter().all(|x| x.abs() < 4e-3), "{rho:?}");
+        // The scale of Q_Δ/h for white noise is 1 (floored there; the learned mean of χ²(10)/10
+        // over ~160 windows is within ±0.1 at 3 sd).
+        assert!(det.scale() < 1.1, "{}", det.scale());
+        let (s, bar) = det.max_quiet;
+        assert!(s < bar, "{s} vs {bar}");
+        // Then an AR(1) component, φ = 0.8, sd 0.4 of the white noise (a = 0.16): ρ₁ = 0.11,
+        // N·Σρ_k² = 0.021·9000 = 190 in one window against a bar of ≈ 4.5·10 = 45: flagged by the
+        // first window that holds a third of it, within 2 min.
+        let ys = coloured(&mut r, 24_000, 0.8, 0.4);
+        let ev = run(&mut det, &ys, xs.len());
+        assert_eq!(ev.len(), 1, "{ev:?}");
+        let raised = ev[0].t_ns as f64 * 1e-9 + 90.0 - 14_400.0;
+        assert!(raised > 0.0 && raised <= 120.0, "raised {raised} s after");
+        assert!(ev[0].q > 3.0 * ev[0].q0, "{:?}", ev[0]);
+        assert!(det.active());
+    }
+
+    #[test]
+    fn a_channels_own_colour_is_learned_not_flagged() {
+        // A channel that is coloured from the start (the AR(1) above, always there): its own
+        // ρ̂ is learned and 2 h raise no alarm; the learned Q is far above white's h = 10.
+        let mut det = detector();
+        let mut r = Rng::new(42);
+        let xs = coloured(&mut r, 720_000, 0.8, 0.4);
+        assert!(run(&mut det, &xs, 0).is_empty());
+        assert!(det.q0().unwrap() > 100.0, "{:?}", det.q0());
+        let rho1 = det.baseline().unwrap()[0];
+        // ρ₁ = 0.8·0.16/1.16 = 0.110; learned over ≈ 80 windows: within 0.01.
+        assert!((rho1 - 0.110).abs() < 0.01, "{rho1}");
+    }
+
+    #[test]
+    fn short_skips_bridge_and_long_ones_break_the_run() {
+        let mut det = detector();
+        let mut r = Rng::new(43);
+        for i in 0..40_000u64 {
+            if i % 3000 == 0 {
+                for _ in 0..9 {
+                    det.skip();
+                }
+            }
+            det.push(i * 10_000_000, r.normal());
+        }
+        assert_eq!(det.breaks, 0);
+        assert!(det.tests > 0);
+        for _ in 0..101 {
+            det.skip();
+        }
+        assert_eq!(det.breaks, 1);
+    }
+}
