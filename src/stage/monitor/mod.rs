@@ -288,6 +288,7 @@ impl MonitorStage {
                 wander: WanderDetector::new(wb_n, wb_s, w_blocks, w_m, st.wander_p, w_learn)
                     .with_statistic(st.wander_statistic),
                 whiteness: WhitenessDetector::new(
+                    (st.whiteness_segment_s * fs).round() as usize,
                     wh_n,
                     wh_blocks,
                     st.whiteness_lags,
