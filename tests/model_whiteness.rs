@@ -1,6 +1,6 @@
 //! Issue 17, online model health — the monitor's whiteness (Ljung–Box) test (off by default,
-//! turned on here): silent on clean simulated benches and on the MPU6050 bench, on the ADIS16405
-//! bench only on channels carrying a real line; an unmodelled AR(1) component appearing at rest
+//! turned on here): silent on clean simulated benches, on the ADIS16405 bench only on channels
+//! carrying a real line; an unmodelled AR(1) component appearing at rest
 //! flagged within 2 min. Real data skipped visibly when
 //! `../shared/data/real` is absent. Numbers and commands: docs/model-health.md.
 
@@ -8,6 +8,7 @@ mod monitor_common;
 
 use std::path::Path;
 
+use imuprep::analysis::spectrum::welch;
 use imuprep::report::detector_compare::simulate_decoded;
 use imuprep::sample::{CHANNEL_NAMES, Sample};
 use imuprep::stage::monitor::{Alarm, Finding, MonitorStage};
@@ -25,9 +26,10 @@ fn print_detectors(m: &MonitorStage) {
     for (c, name) in CHANNEL_NAMES.iter().enumerate() {
         let w = m.whiteness(c).unwrap();
         eprintln!(
-            "  {name}: own Q {:.1}, scale {:.2}, quiet max {:.2} (bar {:.2}), {} tests, {} runs broken, ρ̂₁…₃ {:.3?}",
+            "  {name}: own Q {:.1}, scale {:.2}, EDF {:.1}, quiet max {:.2} (bar {:.2}), {} tests, {} runs broken, ρ̂₁…₃ {:.3?}",
             w.q0().unwrap_or(f64::NAN),
             w.scale(),
+            w.edf(),
             w.max_quiet.0,
             w.max_quiet.1,
             w.tests,
@@ -112,8 +114,8 @@ fn an_ar_component_appearing_late_is_flagged_within_two_minutes() {
     // An AR(1), φ = 0.8 per sample (correlation time 45 ms), sd 0.3× the white σ (a = 0.09,
     // 1.5× the size `diagnose` finds on a 20-min log: docs/model-health.md) on gz from 1800 s
     // of a 40-min clean bench (30 min to learn, as a running daemon has). In a 90-s window
-    // N·Σρ_k² ≈ 108 against a bar ≈ 34 above h = 10 (tests/reference/whiteness_power.py:
-    // one full window flags it with probability ≈ 0.97); four seeds.
+    // N·Σρ_k² ≈ 108 against the χ²(10) bar 41.3 (tests/reference/whiteness_power.py: one full
+    // window flags it with probability ≈ 1); four seeds.
     let scn = clean_bench(2400.0);
     for seed in 0..4u64 {
         let (sim, _) = simulate_decoded(&scn, 100 + seed).unwrap();
@@ -170,32 +172,100 @@ fn real_static_benches_whiteness_alarms() {
         settings.whiteness = true;
         let m = watch(&out, settings, rate);
         let a = whiteness_alarms(&m);
-        let lines: Vec<usize> = alarms(&m)
-            .iter()
-            .filter(|x| matches!(x.finding, Finding::Line(..)))
-            .map(|x| x.channel)
-            .collect();
         eprintln!(
             "{rel}: {hours:.2} h, {} whiteness alarms ({:.2} per hour)",
             a.len(),
             a.len() as f64 / hours
         );
+        let line_hz: Vec<(usize, f64)> = alarms(&m)
+            .iter()
+            .filter_map(|x| match x.finding {
+                Finding::Line(hz, _) => Some((x.channel, hz)),
+                _ => None,
+            })
+            .collect();
+        // Each alarm's window against all the record's 90-s windows (rank 0–1): its variance,
+        // its 0.1–5 Hz power and its power near each line of that channel — an effect growing
+        // shows near the top.
         for x in &a {
             eprintln!("  {x}");
+            let t0 = x.t_ns as f64 * 1e-9;
+            eprintln!(
+                "    variance at rank {:.3}; 0.1–5 Hz band at rank {:.3}",
+                window_rank(&out, x.channel, t0, rate),
+                band_rank(&out, x.channel, t0, 2.55, 2.45, rate)
+            );
+            for &(c, hz) in line_hz.iter().filter(|l| l.0 == x.channel) {
+                let q = band_rank(&out, c, t0, hz, 0.3, rate);
+                eprintln!(
+                    "    line ≈ {hz:.2} Hz: band power at rank {q:.3} of the record's windows"
+                );
+            }
         }
         print_detectors(&m);
-        // Measured (docs/model-health.md): the MPU6050 raises none; the ADIS16405 2.5 per hour,
-        // above the target, which is why the test is off by default. Each of them is on a
-        // channel carrying a real line the line test raised in the same run (a line's amplitude
-        // changing changes the autocorrelations too); none on a line-free channel.
+        // Measured (docs/model-health.md): the ADIS16405 1.44 per hour (ax 3, az 1), above the
+        // target, which is why the test is off by default; two at its accelerometers'
+        // intermittent ≈ 0.5 Hz line's strongest windows, two unexplained. Each is on a channel
+        // carrying a real line the line test raised in the same run, none on a line-free
+        // channel nor on gz with its 22-Hz line (its own scatter lowers ν to 2.5). The MPU6050's
+        // 11 min, its still run broken 7 times, never arm the test: nothing there is tested.
         for x in &a {
+            assert!(x.channel >= 3, "{rel}: a whiteness alarm on a gyro: {x}");
             assert!(
-                lines.contains(&x.channel),
+                line_hz.iter().any(|l| l.0 == x.channel),
                 "{rel}: {x} on a channel without a line"
             );
         }
-        if rel.starts_with("mpu6050") {
-            assert!(a.is_empty(), "{rel}: {a:?}");
-        }
     }
+}
+
+/// The variance of channel `c` over the 90-s window from `t0_s` as the fraction of the record's
+/// 90-s windows (every 15 s) with less.
+fn window_rank(out: &[Sample], c: usize, t0_s: f64, rate: f64) -> f64 {
+    let n = (90.0 * rate) as usize;
+    let var = |from: usize| -> Option<f64> {
+        let x: Vec<f64> = out
+            .get(from..from + n)?
+            .iter()
+            .map(|s| s.channel(c))
+            .collect();
+        let m = x.iter().sum::<f64>() / n as f64;
+        let v = x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n as f64;
+        v.is_finite().then_some(v)
+    };
+    let at = var(out.partition_point(|s| s.t_s() < t0_s)).unwrap_or(f64::NAN);
+    let all: Vec<f64> = (0..out.len())
+        .step_by((15.0 * rate) as usize)
+        .filter_map(var)
+        .collect();
+    all.iter().filter(|v| **v < at).count() as f64 / all.len() as f64
+}
+
+/// Power of channel `c` within ±`half` Hz of `hz` (Welch, 10-s segments) over the 90-s window from
+/// `t0_s`, as the fraction of the record's 90-s windows (every 15 s) with less.
+fn band_rank(out: &[Sample], c: usize, t0_s: f64, hz: f64, half: f64, rate: f64) -> f64 {
+    let band = |from: usize| -> Option<f64> {
+        let n = (90.0 * rate) as usize;
+        let x: Vec<f64> = out
+            .get(from..from + n)?
+            .iter()
+            .map(|s| s.channel(c))
+            .collect();
+        if x.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let psd = welch(&x, rate, 1024).ok()?;
+        Some(
+            psd.freq_hz
+                .iter()
+                .zip(&psd.density)
+                .filter(|(f, _)| (**f - hz).abs() <= half)
+                .map(|(_, d)| *d)
+                .sum(),
+        )
+    };
+    let at = band(out.partition_point(|s| s.t_s() < t0_s)).unwrap_or(f64::NAN);
+    let step = (15.0 * rate) as usize;
+    let all: Vec<f64> = (0..out.len()).step_by(step).filter_map(band).collect();
+    all.iter().filter(|v| **v < at).count() as f64 / all.len() as f64
 }

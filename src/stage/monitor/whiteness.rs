@@ -26,18 +26,21 @@
 //! Bartlett; `n₀` the independent windows in `ρ̂`), so `Q_Δ/(1 + 1/n₀) ≈ v·χ²(h)`. The scale `v`
 //! is learned too, as the mean of the quiet windows' `Q_Δ/((1 + 1/n₀)·h)`, floored at 1 (the
 //! value for any weakly correlated noise); the score `S = Q_Δ/((1 + 1/n₀)·h·v̂)` is then
-//! `F(h, h·n_v)` with `n_v` the independent windows in `v̂`, and the alarm is raised at
-//! `S ≥ F⁻¹(1 − p)`, held until `S` falls below that `F`'s median.
+//! `F(ν, ν·n_v)` with `n_v` the independent windows in `v̂` and ν = h, lowered where the
+//! channel's own values scatter wider than `χ²_h/h` ([`WhitenessDetector::edf`], the rule the
+//! wander test uses), and the alarm is raised at `S ≥ F⁻¹(1 − p)`, held until `S` falls below
+//! that `F`'s median.
 //!
 //! **What an unmodelled AR(1) does.** A component of variance ratio `a` to the white noise
 //! and pole `φ` per sample adds `ρ_k = φ^k·a/(1 + a)` to every lag, and the noncentrality of
 //! `Q_Δ` is `N·Σ_{k≤h} ρ_k²`. The size `diagnose` finds from a 20-min log (AR(1), φ = 0.8, sd
-//! 0.2× the white σ: `a = 0.04`, docs/model-health.md) gives `N·Σρ_k² = 0.0026·N` — 14 in a
-//! 90-s window at 100 Hz, where the bar at `p = 1e-5` lies ≈ 33 above `h = 10`'s mean: no test
-//! of one window flags it reliably (`tests/reference/whiteness_power.py`); twice that sd is
-//! flagged within 2 min.
+//! 0.2× the white σ: `a = 0.04`, docs/model-health.md) gives `N·Σρ_k² = 0.0026·N` — 23 in a
+//! 90-s window at 100 Hz against a χ²(10) bar of 41.3 at `p = 1e-5`: one window flags it with
+//! probability 0.22, and even the Neyman–Pearson test of that exact alternative only with 0.73
+//! (`tests/reference/whiteness_power.py`); 1.5× that sd (N·Σρ_k² = 108) is flagged by one
+//! window with probability ≈ 1, within 2 min.
 
-use super::learn::Delayed;
+use super::learn::{Delayed, LogScatter};
 use crate::stats::acf::ljung_box_statistic;
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 use std::collections::VecDeque;
@@ -174,6 +177,8 @@ pub struct WhitenessDetector {
     q_sum: f64,
     scale_sum: f64,
     scale_n: u64,
+    /// The learned `Q_Δ/h` values' log scatter (see [`WhitenessDetector::edf`]).
+    scatter: LogScatter,
     still: u64,
     skipped: usize,
     active: bool,
@@ -225,6 +230,7 @@ impl WhitenessDetector {
             q_sum: 0.0,
             scale_sum: 0.0,
             scale_n: 0,
+            scatter: LogScatter::default(),
             still: 0,
             skipped: 0,
             active: false,
@@ -280,10 +286,23 @@ impl WhitenessDetector {
         &self.r
     }
 
-    /// The `F(h, h·n_v)` quantile at `q`.
+    /// EDF of one window's `Q_Δ/h`: `h`, or less where the channel's own values scatter more
+    /// than `χ²_h/h` (from four independent windows learned on, [`LogScatter`]). On a channel
+    /// carrying a line whose amplitude changes, one pattern of the autocorrelations (the line's)
+    /// carries most of the change: the values scatter like a χ² of fewer degrees of freedom.
+    pub fn edf(&self) -> f64 {
+        let h = self.h as f64;
+        if self.independent(self.scale_n) < 4.0 {
+            return h;
+        }
+        self.scatter.edf().unwrap_or(h).min(h)
+    }
+
+    /// The `F(ν, ν·n_v)` quantile at `q` (ν = [`WhitenessDetector::edf`]).
     fn quantile(&self, q: f64) -> Option<f64> {
-        let nu0 = (self.h as f64 * self.independent(self.scale_n)).min(MAX_POOLED_EDF);
-        let f = FisherSnedecor::new(self.h as f64, nu0).ok()?;
+        let nu = self.edf();
+        let nu0 = (nu * self.independent(self.scale_n)).min(MAX_POOLED_EDF);
+        let f = FisherSnedecor::new(nu, nu0).ok()?;
         Some(f.inverse_cdf(q))
     }
 
@@ -398,9 +417,10 @@ impl WhitenessDetector {
             self.rho_sum.iter_mut().zip(&r0).for_each(|(a, b)| *a += b);
             self.learned += 1;
             self.q_sum += q0;
-            if pl.is_finite() {
+            if pl.is_finite() && pl > 0.0 {
                 self.scale_sum += pl;
                 self.scale_n += 1;
+                self.scatter.add(pl);
             }
         }
         let bar = bar?;
