@@ -9,8 +9,7 @@
 
 mod monitor_common;
 
-use monitor_common::{alarms, clean_bench, cleaned, load_real, watch, white_bench};
-use std::path::Path;
+use monitor_common::{alarms, clean_bench, cleaned, real_static_benches, watch, white_bench};
 
 use imuprep::analysis::spectrum::welch;
 use imuprep::report::detector_compare::simulate_decoded;
@@ -160,18 +159,7 @@ fn line_strength(out: &[Sample], c: usize, t_s: f64, hz: f64, rate: f64) -> f64 
 
 #[test]
 fn real_static_benches_alarm_only_for_real_lines() {
-    let root = Path::new("../shared/data/real");
-    if !root.exists() {
-        eprintln!("SKIPPED: ../shared/data/real is absent");
-        return;
-    }
-    for rel in [
-        "adis16405_static/adis_16405_imu1.csv.gz",
-        "mpu6050_static_10min_temp",
-    ] {
-        let (desc, samples) = load_real(root, rel);
-        let rate = desc.sample_rate_hz;
-        let hours = samples.len() as f64 / rate / 3600.0;
+    for (rel, rate, hours, samples) in real_static_benches() {
         let (out, settings) = cleaned(&samples, rate, false);
         // The wander test (off by default), each statistic: measured, held to no alarm on the
         // gyros, and each alarm to a real excursion of the output.

@@ -6,13 +6,11 @@
 
 mod monitor_common;
 
-use std::path::Path;
-
 use imuprep::analysis::spectrum::welch;
 use imuprep::report::detector_compare::simulate_decoded;
 use imuprep::sample::{CHANNEL_NAMES, Sample};
 use imuprep::stage::monitor::{Alarm, Finding, MonitorStage};
-use monitor_common::{alarms, clean_bench, cleaned, load_real, watch};
+use monitor_common::{alarms, clean_bench, cleaned, real_static_benches, watch};
 
 fn whiteness_alarms(m: &MonitorStage) -> Vec<Alarm> {
     alarms(m)
@@ -156,18 +154,7 @@ fn sweep_ar_size_and_window() {
 
 #[test]
 fn real_static_benches_whiteness_alarms() {
-    let root = Path::new("../shared/data/real");
-    if !root.exists() {
-        eprintln!("SKIPPED: ../shared/data/real is absent");
-        return;
-    }
-    for rel in [
-        "adis16405_static/adis_16405_imu1.csv.gz",
-        "mpu6050_static_10min_temp",
-    ] {
-        let (desc, samples) = load_real(root, rel);
-        let rate = desc.sample_rate_hz;
-        let hours = samples.len() as f64 / rate / 3600.0;
+    for (rel, rate, hours, samples) in real_static_benches() {
         let (out, mut settings) = cleaned(&samples, rate, false);
         settings.whiteness = true;
         let m = watch(&out, settings, rate);

@@ -90,3 +90,25 @@ pub fn load_real(root: &Path, rel: &str) -> (Descriptor, Vec<Sample>) {
     };
     load_recording(&path).unwrap()
 }
+
+/// The real static benches (`../shared/data/real`): name, rate (Hz), hours and samples each; none,
+/// with a `SKIPPED:` line on stderr, when that directory is absent.
+pub fn real_static_benches() -> Vec<(&'static str, f64, f64, Vec<Sample>)> {
+    let root = Path::new("../shared/data/real");
+    if !root.exists() {
+        eprintln!("SKIPPED: ../shared/data/real is absent");
+        return Vec::new();
+    }
+    [
+        "adis16405_static/adis_16405_imu1.csv.gz",
+        "mpu6050_static_10min_temp",
+    ]
+    .into_iter()
+    .map(|rel| {
+        let (desc, samples) = load_real(root, rel);
+        let rate = desc.sample_rate_hz;
+        let hours = samples.len() as f64 / rate / 3600.0;
+        (rel, rate, hours, samples)
+    })
+    .collect()
+}

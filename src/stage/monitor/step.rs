@@ -165,12 +165,13 @@ impl LevelDetector {
         let z = if sd > 0.0 { m.abs() / sd } else { 0.0 };
         // Learn from windows that raised no alarm, two windows late (see `pending`), and not
         // while an alarm holds.
-        if !self.active && (!armed || z < self.k) {
-            if let Some((m2, b2)) = self.pending.offer((m * m, mean * mean)) {
-                self.m2_sum += m2;
-                self.b2_sum += b2;
-                self.m2_n += 1;
-            }
+        if !self.active
+            && (!armed || z < self.k)
+            && let Some((m2, b2)) = self.pending.offer((m * m, mean * mean))
+        {
+            self.m2_sum += m2;
+            self.b2_sum += b2;
+            self.m2_n += 1;
         }
         if !armed {
             return None;

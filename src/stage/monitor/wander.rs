@@ -291,12 +291,13 @@ impl WanderDetector {
         } else {
             f64::INFINITY
         };
-        if !self.active && z < bar {
-            if let Some(r0) = self.pending.offer(r) {
-                self.ratio_sum += r0;
-                self.scatter.add(r0);
-                self.ratio_n += 1;
-            }
+        if !self.active
+            && z < bar
+            && let Some(r0) = self.pending.offer(r)
+        {
+            self.ratio_sum += r0;
+            self.scatter.add(r0);
+            self.ratio_n += 1;
         }
         if !armed {
             return None;

@@ -560,20 +560,46 @@ mod tests {
     }
 
     #[test]
-    fn short_skips_bridge_and_long_ones_break_the_run() {
-        let mut det = detector();
-        let mut r = Rng::new(43);
-        for i in 0..40_000u64 {
-            if i % 3000 == 0 {
-                for _ in 0..9 {
-                    det.skip();
+    fn a_skip_drops_only_the_pairs_across_it_and_a_long_one_breaks_the_run() {
+        // Segments of 25, blocks of 50, windows of 3 blocks, lags 1–3; two samples skipped after
+        // sample 310 (inside the segment 300..325 of the last window 250..400). Reference by
+        // hand: each segment about its own mean, pairs within it, none across the skip.
+        let mut det = WhitenessDetector::new(25, 50, 3, 3, 1e-5, 0, 10);
+        let mut r = Rng::new(44);
+        let xs = coloured(&mut r, 400, 0.5, 0.5);
+        for (i, &x) in xs.iter().enumerate() {
+            det.push(i as u64 * 10_000_000, x);
+            if i == 310 {
+                det.skip();
+                det.skip();
+            }
+        }
+        assert_eq!(det.breaks, 0, "two skips are bridged");
+        let (mut ck, mut c0) = ([0.0; 3], 0.0);
+        for s0 in (250..400).step_by(25) {
+            let seg = &xs[s0..s0 + 25];
+            let m = seg.iter().sum::<f64>() / 25.0;
+            c0 += seg.iter().map(|x| (x - m).powi(2)).sum::<f64>();
+            for (k, c) in ck.iter_mut().enumerate() {
+                for i in s0..s0 + 25 - (k + 1) {
+                    let j = i + k + 1;
+                    if i <= 310 && j > 310 {
+                        continue;
+                    }
+                    *c += (xs[i] - m) * (xs[j] - m);
                 }
             }
-            det.push(i * 10_000_000, r.normal());
         }
-        assert_eq!(det.breaks, 0);
-        assert!(det.tests > 0);
-        for _ in 0..101 {
+        for (k, (g, c)) in det.last_acf().iter().zip(&ck).enumerate() {
+            assert!(
+                (g - c / c0).abs() < 1e-9,
+                "lag {}: {g} vs {}",
+                k + 1,
+                c / c0
+            );
+        }
+        // More than the bridge (10) skipped in a row: the run breaks.
+        for _ in 0..11 {
             det.skip();
         }
         assert_eq!(det.breaks, 1);
