@@ -24,10 +24,11 @@ fn print_detectors(m: &MonitorStage) {
     for (c, name) in CHANNEL_NAMES.iter().enumerate() {
         let w = m.whiteness(c).unwrap();
         eprintln!(
-            "  {name}: own Q {:.1}, scale {:.2}, EDF {:.1}, quiet max {:.2} (bar {:.2}), {} tests, {} runs broken, ρ̂₁…₃ {:.3?}",
+            "  {name}: own Q {:.1}, scale {:.2}, EDF {:.1}, bar now {:.2}, quiet max {:.2} (bar {:.2}), {} tests, {} runs broken, ρ̂₁…₃ {:.3?}",
             w.q0().unwrap_or(f64::NAN),
             w.scale(),
             w.edf(),
+            w.threshold().unwrap_or(f64::NAN),
             w.max_quiet.0,
             w.max_quiet.1,
             w.tests,
