@@ -7,66 +7,14 @@
 //! spectrum, and no offset alarm (those benches hold no step). Real data skipped visibly when
 //! `../shared/data/real` is absent.
 
-use std::path::Path;
+mod monitor_common;
+
+use monitor_common::{alarms, clean_bench, cleaned, real_static_benches, watch, white_bench};
 
 use imuprep::analysis::spectrum::welch;
-use imuprep::config::Config;
-use imuprep::report::audit::load_recording;
 use imuprep::report::detector_compare::simulate_decoded;
 use imuprep::sample::{CHANNEL_NAMES, Sample};
-use imuprep::sim::Scenario;
 use imuprep::stage::monitor::{Alarm, Finding, MonitorSettings, MonitorStage, WanderStatistic};
-use imuprep::stage::{Stage, run_through};
-
-/// The static bench scenario without any effect a bias model would lack: white noise, turn-on
-/// bias, Gauss–Markov and AR bias, random walk, quantisation — no temperature term, steps, lines,
-/// gross errors or saturation.
-fn clean_bench(duration_s: f64) -> Scenario {
-    let text = std::fs::read_to_string("replay/static_bench.toml").unwrap();
-    let mut t: toml::Table = text.parse().unwrap();
-    let errors = t.get_mut("errors").unwrap().as_table_mut().unwrap();
-    for k in [
-        "temperature",
-        "gross",
-        "saturation",
-        "steps",
-        "vibration_lines",
-    ] {
-        errors.remove(k);
-    }
-    let text = toml::to_string(&t).unwrap();
-    Scenario::from_toml_str_with(
-        &text,
-        &[("motion.duration_s".into(), duration_s.to_string())],
-    )
-    .unwrap()
-}
-
-/// The embedded default pipeline's cleaning stages over `samples` (their output) and its
-/// monitor settings, with the wander test on when `wander`.
-fn cleaned(samples: &[Sample], rate_hz: f64, wander: bool) -> (Vec<Sample>, MonitorSettings) {
-    let mut cfg = Config::default_embedded().unwrap();
-    let mut settings = cfg
-        .stages
-        .monitor
-        .take()
-        .expect("the default enables the monitor");
-    settings.wander = wander;
-    cfg.stages.set_sample_rate(rate_hz).unwrap();
-    let mut p = cfg.stages.build().unwrap();
-    (run_through(&mut p, samples), settings)
-}
-
-/// The monitor over the cleaned output.
-fn watch(out: &[Sample], settings: MonitorSettings, rate_hz: f64) -> MonitorStage {
-    let mut m = MonitorStage::new(settings, Some(rate_hz)).unwrap();
-    let mut sink = Vec::with_capacity(1);
-    for s in out {
-        m.push(*s, &mut sink);
-        sink.clear();
-    }
-    m
-}
 
 /// The embedded default pipeline's cleaning stages over `samples`, then the monitor (the last
 /// stage of that pipeline, kept apart here so its alarms can be read).
@@ -90,10 +38,6 @@ fn watch_wander(
     on.wander = true;
     on.wander_statistic = st;
     watch(out, on, rate)
-}
-
-fn alarms(m: &MonitorStage) -> Vec<Alarm> {
-    m.alarms().copied().collect()
 }
 
 #[test]
@@ -215,24 +159,7 @@ fn line_strength(out: &[Sample], c: usize, t_s: f64, hz: f64, rate: f64) -> f64 
 
 #[test]
 fn real_static_benches_alarm_only_for_real_lines() {
-    let root = Path::new("../shared/data/real");
-    if !root.exists() {
-        eprintln!("SKIPPED: ../shared/data/real is absent");
-        return;
-    }
-    for rel in [
-        "adis16405_static/adis_16405_imu1.csv.gz",
-        "mpu6050_static_10min_temp",
-    ] {
-        let path = root.join(rel);
-        let path = if path.is_dir() {
-            imuprep::report::audit::find_recordings(&path).unwrap()[0].clone()
-        } else {
-            path
-        };
-        let (desc, samples) = load_recording(&path).unwrap();
-        let rate = desc.sample_rate_hz;
-        let hours = samples.len() as f64 / rate / 3600.0;
+    for (rel, rate, hours, samples) in real_static_benches() {
         let (out, settings) = cleaned(&samples, rate, false);
         // The wander test (off by default), each statistic: measured, held to no alarm on the
         // gyros, and each alarm to a real excursion of the output.
@@ -449,19 +376,6 @@ fn sweep_wander_size_and_tau() {
             eprintln!("τ {tau} s, σ {k}× the 1-s white σ: flagged after {times:?} s");
         }
     }
-}
-
-/// The diagnose ladder's background (`tests/fixtures/wander_ladder.toml` with no wander: white
-/// noise and quantisation only) for `duration_s`.
-fn white_bench(duration_s: f64) -> Scenario {
-    let text = std::fs::read_to_string("tests/fixtures/wander_ladder.toml").unwrap();
-    let mut t: toml::Table = text.parse().unwrap();
-    t["errors"].as_table_mut().unwrap().remove("gauss_markov");
-    Scenario::from_toml_str_with(
-        &toml::to_string(&t).unwrap(),
-        &[("motion.duration_s".into(), duration_s.to_string())],
-    )
-    .unwrap()
 }
 
 /// The monitor's time to flag a wander of the size `diagnose` finds (`tests/wander_ladder.rs`:

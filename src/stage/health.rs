@@ -78,6 +78,7 @@ impl PipelineHealth {
                 ("offset_alarms", m.offset_alarms),
                 ("line_alarms", m.line_alarms),
                 ("wander_alarms", m.wander_alarms),
+                ("whiteness_alarms", m.whiteness_alarms),
                 ("armed_channels", m.armed_channels),
                 ("still_samples", m.still_samples),
             ] {
@@ -109,7 +110,7 @@ impl PipelineHealth {
             f.bias_rejected_updates = b.counters.rejected_updates;
         }
         if let Some(m) = &self.monitor {
-            f.model_alarms = m.offset_alarms + m.line_alarms + m.wander_alarms;
+            f.model_alarms = m.offset_alarms + m.line_alarms + m.wander_alarms + m.whiteness_alarms;
         }
         f
     }

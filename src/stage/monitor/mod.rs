@@ -12,19 +12,24 @@
 //! - a **wander** — the output losing its whiteness at tens of seconds, a bias instability the
 //!   model lacks ([`wander::WanderDetector`]: the Allan variance's slope between two τ, or the
 //!   variance of τ-means, against the channel's own, with an F-quantile bar from the estimates'
-//!   degrees of freedom),
+//!   degrees of freedom), and
+//! - a **colour** at short lags — the output losing its whiteness within a few samples
+//!   ([`whiteness::WhitenessDetector`]: the Ljung–Box statistic of the window's autocorrelations
+//!   against the channel's own, with an F-quantile bar),
 //!
 //! and publishes a status — `model fits`, `learning`, or `effect suspected: …` with the channel,
 //! the size and the time — in the health data, so the user learns that `imuprep diagnose` should
-//! be rerun before the error reaches the navigation solution. Both tests learn their scale from
+//! be rerun before the error reaches the navigation solution. Every test learns its scale from
 //! the channel itself (no absolute threshold), so they follow the sensor's own noise. Motion is
 //! not tested (the output then is motion, not innovation); a run of still data broken by motion,
 //! a gap, a replaced, saturated or non-finite value starts again.
 
+pub mod learn;
 pub mod line;
 pub mod settings;
 pub mod step;
 pub mod wander;
+pub mod whiteness;
 
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use crate::stage::Stage;
@@ -34,6 +39,7 @@ pub use settings::{MonitorSettings, WanderStatistic};
 use std::collections::VecDeque;
 use step::LevelDetector;
 use wander::WanderDetector;
+use whiteness::WhitenessDetector;
 
 /// Positive sample intervals used to learn the rate.
 const RATE_INTERVALS: usize = 64;
@@ -50,6 +56,9 @@ pub enum Finding {
     /// More variance at this τ (s) than the channel's own (the ratio is the score; Allan
     /// variance or the τ-means' variance, [`WanderStatistic`]).
     Wander(f64),
+    /// Autocorrelations at short lags changed: the window's Ljung–Box `Q` and the channel's
+    /// own (the score is the change in the channel's own scatter, an F variate).
+    Whiteness(f64, f64),
 }
 
 /// One alarm of the monitor.
@@ -60,7 +69,7 @@ pub struct Alarm {
     pub t_ns: u64,
     pub finding: Finding,
     /// Its size against the channel's own scale (σ for an offset, power ratio for a line,
-    /// variance ratio for a wander).
+    /// variance ratio for a wander, the F score of the autocorrelations' change for whiteness).
     pub score: f64,
 }
 
@@ -90,6 +99,12 @@ impl std::fmt::Display for Alarm {
                 "{name} wander since {t:.1} s (variance at {tau:.0} s {:.1}× its own)",
                 self.score
             ),
+            Finding::Whiteness(q, q0) => write!(
+                f,
+                "{name} output no longer white since {t:.1} s (Ljung–Box Q {q:.0} vs its own \
+                 {q0:.0}; change {:.1}× its own scatter)",
+                self.score
+            ),
         }
     }
 }
@@ -98,6 +113,7 @@ struct Channel {
     level: LevelDetector,
     line: LineDetector,
     wander: WanderDetector,
+    whiteness: WhitenessDetector,
 }
 
 /// The monitor's health: its counters since the start and its status now.
@@ -109,6 +125,8 @@ pub struct MonitorHealth {
     pub line_alarms: u64,
     /// Wanders (Allan-slope changes) raised so far.
     pub wander_alarms: u64,
+    /// Losses of whiteness (Ljung–Box changes) raised so far.
+    pub whiteness_alarms: u64,
     /// Channels whose offset test has learned enough to be armed now.
     pub armed_channels: u64,
     /// Still samples watched.
@@ -128,6 +146,7 @@ pub struct MonitorStage {
     offset_alarms: u64,
     line_alarms: u64,
     wander_alarms: u64,
+    whiteness_alarms: u64,
     still_samples: u64,
     line_events: Vec<LineEvent>,
 }
@@ -147,6 +166,7 @@ impl MonitorStage {
             offset_alarms: 0,
             line_alarms: 0,
             wander_alarms: 0,
+            whiteness_alarms: 0,
             still_samples: 0,
             line_events: Vec::new(),
         };
@@ -169,6 +189,11 @@ impl MonitorStage {
     /// The wander detector of channel `c` (its learned baseline and bar), once the rate is known.
     pub fn wander(&self, c: usize) -> Option<&WanderDetector> {
         self.ch.get(c).map(|ch| &ch.wander)
+    }
+
+    /// The whiteness detector of channel `c`, once the rate is known.
+    pub fn whiteness(&self, c: usize) -> Option<&WhitenessDetector> {
+        self.ch.get(c).map(|ch| &ch.whiteness)
     }
 
     /// Channels whose offset test is armed.
@@ -212,6 +237,7 @@ impl MonitorStage {
             Finding::Offset(_) => c.level.active(),
             Finding::Line(_, id) => c.line.is_active(id),
             Finding::Wander(_) => c.wander.active(),
+            Finding::Whiteness(..) => c.whiteness.active(),
         }
     }
 
@@ -249,12 +275,27 @@ impl MonitorStage {
         let w_blocks = (st.wander_window_s / wb_s).round() as usize;
         let w_m = (st.wander_tau_s / wb_s).round() as usize;
         let w_learn = (st.learn_s / wb_s).ceil() as usize;
+        let wh_n = (st.whiteness_block_s * fs).round().max(1.0) as usize;
+        let wh_blocks = (st.whiteness_window_s / st.whiteness_block_s).round() as usize;
+        let wh_learn = (st.learn_s * fs).ceil() as u64;
+        // Skipped samples bridged: up to a second (the bias stage's stillness drops out for
+        // 10–90 ms now and then at rest; only the pairs across the skip are lost).
+        let bridge = fs.round().max(1.0) as usize;
         self.ch = (0..N_CHANNELS)
             .map(|_| Channel {
                 level: LevelDetector::new(block_n, window_blocks, st.offset_k, learn_blocks),
                 line: LineDetector::new(seg_n, st.line_averages, st.line_k, fs),
                 wander: WanderDetector::new(wb_n, wb_s, w_blocks, w_m, st.wander_p, w_learn)
                     .with_statistic(st.wander_statistic),
+                whiteness: WhitenessDetector::new(
+                    (st.whiteness_segment_s * fs).round() as usize,
+                    wh_n,
+                    wh_blocks,
+                    st.whiteness_lags,
+                    st.whiteness_p,
+                    wh_learn,
+                    bridge,
+                ),
             })
             .collect();
         self.fs = Some(fs);
@@ -277,8 +318,10 @@ impl MonitorStage {
                 c.line.interrupt();
                 if s.has(flags::GAP) {
                     c.wander.interrupt();
+                    c.whiteness.interrupt();
                 } else {
                     c.wander.skip();
+                    c.whiteness.skip();
                 }
             }
             return;
@@ -292,6 +335,7 @@ impl MonitorStage {
                 c.level.interrupt();
                 c.line.interrupt();
                 c.wander.skip();
+                c.whiteness.skip();
                 continue;
             }
             if let Some(e) = c.level.push(s.t_ns, v) {
@@ -312,6 +356,16 @@ impl MonitorStage {
                     score: e.ratio,
                 });
             }
+            if self.settings.whiteness
+                && let Some(e) = c.whiteness.push(s.t_ns, v)
+            {
+                found.push(Alarm {
+                    channel: i,
+                    t_ns: e.t_ns,
+                    finding: Finding::Whiteness(e.q, e.q0),
+                    score: e.score,
+                });
+            }
             self.line_events.clear();
             c.line.push(s.t_ns, v, &mut self.line_events);
             for e in &self.line_events {
@@ -328,6 +382,7 @@ impl MonitorStage {
                 Finding::Offset(_) => self.offset_alarms += 1,
                 Finding::Line(..) => self.line_alarms += 1,
                 Finding::Wander(_) => self.wander_alarms += 1,
+                Finding::Whiteness(..) => self.whiteness_alarms += 1,
             }
             self.record(a);
         }
@@ -349,6 +404,7 @@ impl Stage for MonitorStage {
             offset_alarms: self.offset_alarms,
             line_alarms: self.line_alarms,
             wander_alarms: self.wander_alarms,
+            whiteness_alarms: self.whiteness_alarms,
             armed_channels: self.armed_channels() as u64,
             still_samples: self.still_samples,
             status: self.status(),

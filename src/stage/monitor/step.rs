@@ -14,6 +14,7 @@
 //! alarm holds (hysteresis: until `|m|` falls below half the threshold), so a step is one event
 //! and a ramp is one event with a duration.
 
+use super::learn::Delayed;
 use std::collections::VecDeque;
 
 /// One alarm of the level detector.
@@ -87,7 +88,7 @@ pub struct LevelDetector {
     blocks: VecDeque<(f64, u64)>,
     // Window means not yet learned from: each waits two windows, and is dropped if an alarm
     // comes meanwhile (the rise of a step must not teach the detector that steps are ordinary).
-    pending: VecDeque<(f64, f64)>,
+    pending: Delayed<(f64, f64)>,
     // Learned E[m²], and E[b²] of single block means (12× the independent samples: with
     // E[b²]/W it gives a floor for E[m²] — exact for white noise — while E[m²] itself, which
     // also holds the slower noise, is still uncertain).
@@ -109,7 +110,7 @@ impl LevelDetector {
             learn_blocks,
             block: BlockMean::new(block_n),
             blocks: VecDeque::with_capacity(window_blocks + 1),
-            pending: VecDeque::with_capacity(2 * window_blocks + 1),
+            pending: Delayed::new(2 * window_blocks.max(1)),
             b2_sum: 0.0,
             m2_sum: 0.0,
             m2_n: 0,
@@ -164,14 +165,13 @@ impl LevelDetector {
         let z = if sd > 0.0 { m.abs() / sd } else { 0.0 };
         // Learn from windows that raised no alarm, two windows late (see `pending`), and not
         // while an alarm holds.
-        if !self.active && (!armed || z < self.k) {
-            self.pending.push_back((m * m, mean * mean));
-            if self.pending.len() > 2 * w {
-                let (m2, b2) = self.pending.pop_front().unwrap_or_default();
-                self.m2_sum += m2;
-                self.b2_sum += b2;
-                self.m2_n += 1;
-            }
+        if !self.active
+            && (!armed || z < self.k)
+            && let Some((m2, b2)) = self.pending.offer((m * m, mean * mean))
+        {
+            self.m2_sum += m2;
+            self.b2_sum += b2;
+            self.m2_n += 1;
         }
         if !armed {
             return None;
@@ -185,7 +185,7 @@ impl LevelDetector {
         if z >= self.k {
             self.active = true;
             self.events += 1;
-            self.pending.clear();
+            self.pending.drop_pending();
             return Some(LevelEvent {
                 t_ns: self.blocks[0].1,
                 offset: m,

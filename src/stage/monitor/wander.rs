@@ -34,6 +34,7 @@
 //! 1-s white σ is flagged by one test at p = 1e-5 with probability 0.79, against 0.11 for `R`
 //! and a Neyman–Pearson bound of 0.94 (`tests/reference/wander_power_bound.py`).
 
+use super::learn::{Delayed, LogScatter};
 use super::settings::WanderStatistic;
 use super::step::BlockMean;
 use crate::stats::allan_edf::{NoiseType, edf_oadev};
@@ -67,12 +68,11 @@ pub struct WanderDetector {
     blocks: VecDeque<(f64, u64)>,
     since_test: usize,
     /// Ratios not yet learned from (see the module doc).
-    pending: VecDeque<f64>,
+    pending: Delayed<f64>,
     ratio_sum: f64,
     ratio_n: u64,
-    /// Σ ln R and Σ (ln R)² of the learned ratios (their scatter, see [`WanderDetector::edf`]).
-    ln_sum: f64,
-    ln_sq: f64,
+    /// The learned ratios' log scatter (see [`WanderDetector::edf`]).
+    scatter: LogScatter,
     still_blocks: u64,
     /// EDF of `A(m·b)` in one window.
     nu2: f64,
@@ -114,11 +114,10 @@ impl WanderDetector {
             block: BlockMean::new(block_n),
             blocks: VecDeque::with_capacity(window_blocks + 1),
             since_test: 0,
-            pending: VecDeque::new(),
+            pending: Delayed::new(2 * window_blocks.div_ceil(m)),
             ratio_sum: 0.0,
             ratio_n: 0,
-            ln_sum: 0.0,
-            ln_sq: 0.0,
+            scatter: LogScatter::default(),
             still_blocks: 0,
             nu2: edf_oadev(NoiseType::RandomWalkFm, m, window_blocks + 1),
             active: false,
@@ -141,11 +140,6 @@ impl WanderDetector {
         self
     }
 
-    /// Windows a learned ratio waits before it is learned (two windows of tests).
-    fn delay(&self) -> usize {
-        2 * self.window_blocks.div_ceil(self.m)
-    }
-
     /// Independent windows among the learned ratios.
     fn independent(&self) -> f64 {
         self.ratio_n as f64 * self.m as f64 / self.window_blocks as f64
@@ -159,10 +153,7 @@ impl WanderDetector {
         if self.independent() < 4.0 {
             return self.nu2;
         }
-        let n = self.ratio_n as f64;
-        let mean = self.ln_sum / n;
-        let v = (self.ln_sq / n - mean * mean).max(1e-9) * n / (n - 1.0);
-        let nu = (1.0 + (1.0 + 2.0 * v).sqrt()) / v;
+        let nu = self.scatter.edf().unwrap_or(self.nu2);
         nu.min(self.nu2)
     }
 
@@ -300,15 +291,13 @@ impl WanderDetector {
         } else {
             f64::INFINITY
         };
-        if !self.active && z < bar {
-            self.pending.push_back(r);
-            if self.pending.len() > self.delay() {
-                let r0 = self.pending.pop_front().unwrap_or(1.0);
-                self.ratio_sum += r0;
-                self.ln_sum += r0.ln();
-                self.ln_sq += r0.ln().powi(2);
-                self.ratio_n += 1;
-            }
+        if !self.active
+            && z < bar
+            && let Some(r0) = self.pending.offer(r)
+        {
+            self.ratio_sum += r0;
+            self.scatter.add(r0);
+            self.ratio_n += 1;
         }
         if !armed {
             return None;
@@ -325,7 +314,7 @@ impl WanderDetector {
         if z >= bar {
             self.active = true;
             self.events += 1;
-            self.pending.clear();
+            self.pending.drop_pending();
             return Some(WanderEvent {
                 t_ns: self.blocks[0].1,
                 ratio: z,
