@@ -48,7 +48,7 @@ use serde::Serialize;
 
 use super::AnalysisError;
 use super::calib_still::{AccelStretch, AttitudeSpread, attitude_groups, attitude_spread};
-use super::diagnose_blocks::{HeldOutTest, held_out_test};
+use super::diagnose_blocks::{GainNoise, HeldOutTest, held_out_test};
 use crate::stage::bias::settings::CalibrationSettings;
 
 /// Parameter groups, in θ order: 0..3 bias, 3..6 scale, 6..9 misalignment.
@@ -466,7 +466,15 @@ fn test_group(
     let without: [bool; NP] = std::array::from_fn(|i| current[i] && !group_mask(k)[i]);
     let e0 = held_out_by_group(f, groups, n_groups, &without, g)?;
     let desc = format!("{} in [{}]", GROUPS[k], names(current).join(", "));
-    let test = held_out_test("calibration", desc, &e0, e1, |_| true, level);
+    let test = held_out_test(
+        "calibration",
+        desc,
+        &e0,
+        e1,
+        |_| true,
+        level,
+        GainNoise::WHITE,
+    );
     let th_with = fit(f, current, g)?.theta;
     let th_without = fit(f, &without, g)?.theta;
     let effect = f

@@ -32,7 +32,7 @@ use super::calib_fit::{
     Candidate, NotIdentifiable, eliminate, levenberg_marquardt, rms, scaled_condition,
 };
 use super::calib_still::AccelStretch;
-use super::diagnose_blocks::held_out_test;
+use super::diagnose_blocks::{GainNoise, held_out_test};
 use crate::sample::Sample;
 use crate::stage::bias::settings::{Calibration, CalibrationSettings};
 
@@ -290,7 +290,15 @@ pub fn calibrate_gyro(
         let e1 = held_out(&ivs, &with)?;
         let e0 = held_out(&ivs, &mask_of(&rest))?;
         let desc = format!("gyro {} in [{}]", GROUPS[k], names(m));
-        let test = held_out_test("gyro calibration", desc, &e0, &e1, |_| true, level);
+        let test = held_out_test(
+            "gyro calibration",
+            desc,
+            &e0,
+            &e1,
+            |_| true,
+            level,
+            GainNoise::WHITE,
+        );
         Ok(Candidate {
             round,
             group: GROUPS[k].into(),

@@ -220,18 +220,9 @@ fn findings(
     }
 }
 
-/// Candidates generated from the train part of the current model's residuals.
-fn candidates(
-    ctx: &Ctx,
-    terms: &[Term],
-    f: &JointFit,
-    cols: &[Vec<f64>],
-    split: &Split,
-    s: &DiagnoseSettings,
-) -> Vec<Term> {
-    let r = f.residuals_to(ctx.y, cols, split.train.end);
-    let tr = split.train.clone();
-    let d = &r.open_loop[tr.clone()];
+/// Candidates generated from `d`, the current model's open-loop residual over the train part
+/// (which starts at sample `t0` of the log).
+fn candidates(ctx: &Ctx, terms: &[Term], d: &[f64], t0: usize, s: &DiagnoseSettings) -> Vec<Term> {
     let mut out = Vec::new();
     // Vibration lines.
     if let Ok(p) = periodogram(d, ctx.rate_hz) {
@@ -256,14 +247,14 @@ fn candidates(
             {
                 continue;
             }
-            if let Ok(l) = refine_line(d, ctx.rate_hz, tr.start, pk.freq_hz, 1.5 * p.df_hz) {
+            if let Ok(l) = refine_line(d, ctx.rate_hz, t0, pk.freq_hz, 1.5 * p.df_hz) {
                 out.push(Term::Line { freq_hz: l.freq_hz });
                 n_lines += 1;
             }
         }
     }
     // Bias step: the most significant change point.
-    if let Ok(cps) = binary_segmentation(d, ctx.rate_hz, tr.start, &s.changepoints) {
+    if let Ok(cps) = binary_segmentation(d, ctx.rate_hz, t0, &s.changepoints) {
         let min_sep = (s.changepoints.min_segment_s * ctx.rate_hz) as i64;
         if let Some(cp) = cps
             .iter()
@@ -276,8 +267,7 @@ fn candidates(
     // Temperature.
     if let Some(t) = ctx.exo.temperature_c
         && !terms.iter().any(|x| matches!(x, Term::Temperature { .. }))
-        && let Ok(scan) =
-            lagged_polynomial_scan(d, t, tr.start, ctx.rate_hz, s.max_temp_lag_s, 1.0, 2)
+        && let Ok(scan) = lagged_polynomial_scan(d, t, t0, ctx.rate_hz, s.max_temp_lag_s, 1.0, 2)
     {
         out.push(Term::Temperature {
             lag: scan.lag_samples,
@@ -294,20 +284,12 @@ fn candidates(
 /// The rate-random-walk candidate, when the Allan deviation of the train innovations shows
 /// excess rising (+½) or flat (flicker) that the model cannot produce; with the kind seen, so the
 /// report names a flicker finding as such (the model file has no flicker term: a random-walk
-/// level is its approximation over the record's time scales).
-fn rrw_candidate(
-    ctx: &Ctx,
-    terms: &[Term],
-    f: &JointFit,
-    cols: &[Vec<f64>],
-    split: &Split,
-    s: &DiagnoseSettings,
-) -> Option<(Term, AllanKind)> {
+/// level is its approximation over the record's time scales). `e`: the train innovations.
+fn rrw_candidate(terms: &[Term], e: &[f64], rate_hz: f64, alpha: f64) -> Option<(Term, AllanKind)> {
     if terms.contains(&Term::RateRandomWalk) {
         return None;
     }
-    let r = f.residuals_to(ctx.y, cols, split.train.end);
-    let a = allan_check(&r.innovation[split.train.clone()], ctx.rate_hz, s.alpha).ok()?;
+    let a = allan_check(e, rate_hz, alpha).ok()?;
     matches!(a.kind, AllanKind::RateRandomWalk | AllanKind::Flicker)
         .then_some((Term::RateRandomWalk, a.kind))
 }
@@ -358,7 +340,14 @@ pub fn diagnose_channel(
                 .map(|v| v * v)
                 .sum::<f64>()
         };
-        let cands = candidates(&ctx, &terms, &f, &cols, &sp, s);
+        let train_r = f.residuals_to(y, &cols, sp.train.end);
+        let cands = candidates(
+            &ctx,
+            &terms,
+            &train_r.open_loop[sp.train.clone()],
+            sp.train.start,
+            s,
+        );
         let m = cands.len().max(1) as f64;
         let mut scores: Vec<(Term, CandidateScore)> = Vec::new();
         for c in cands {
@@ -395,7 +384,13 @@ pub fn diagnose_channel(
         // had been credited with the walk's drift.
         let best = match best {
             Some(b) => Some(b),
-            None => rrw_candidate(&ctx, &terms, &f, &cols, &sp, s).and_then(|(c, kind)| {
+            None => rrw_candidate(
+                &terms,
+                &train_r.innovation[sp.train.clone()],
+                ctx.rate_hz,
+                s.alpha,
+            )
+            .and_then(|(c, kind)| {
                 let mut t2 = terms.clone();
                 t2.push(c.clone());
                 let sse1 = ctx

@@ -150,8 +150,30 @@ pub struct HeldOutTest {
     pub reason: String,
 }
 
+/// How [`held_out_test`] estimates the noise of the gain G beyond white innovations.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GainNoise {
+    /// σ² at least this (a line's local noise level when the residual is coloured: the gain's
+    /// noise is set by the noise near the line's frequency).
+    pub min_var: f64,
+    /// With `hac_lags` > 0, the noise of G from the innovations' autocovariance up to that lag
+    /// (Bartlett weights, Newey & West 1987): var G = 4 Σ_h w_h γ̂(h) Σ_k δ_k δ_{k+h}, never
+    /// below the white value — for a stochastic model that leaves the innovations somewhat
+    /// coloured.
+    pub hac_lags: usize,
+}
+
+impl GainNoise {
+    /// White innovations, σ² as measured.
+    pub const WHITE: GainNoise = GainNoise {
+        min_var: 0.0,
+        hac_lags: 0,
+    };
+}
+
 /// Compare the held-out one-step errors `e0` (without) and `e1` (with the effect) over the points
-/// where `held[i]`; `level` is the per-candidate significance level.
+/// where `held[i]`; `level` is the per-candidate significance level, `noise` how the gain's
+/// noise is estimated.
 pub fn held_out_test(
     family: &str,
     description: String,
@@ -159,26 +181,9 @@ pub fn held_out_test(
     e1: &[f64],
     held: impl Fn(usize) -> bool,
     level: f64,
+    noise: GainNoise,
 ) -> HeldOutTest {
-    held_out_test_floor(family, description, e0, e1, held, level, 0.0, 0)
-}
-
-/// [`held_out_test`] with σ² at least `min_var` (a line's local noise level when the residual is
-/// coloured: the gain's noise is set by the noise near the line's frequency), and, with
-/// `hac_lags` > 0, the noise of G from the innovations' autocovariance up to that lag (Bartlett
-/// weights, Newey & West 1987): var G = 4 Σ_h w_h γ̂(h) Σ_k δ_k δ_{k+h}, never below the white
-/// value — for a stochastic model that leaves the innovations somewhat coloured.
-#[allow(clippy::too_many_arguments)]
-pub fn held_out_test_floor(
-    family: &str,
-    description: String,
-    e0: &[f64],
-    e1: &[f64],
-    held: impl Fn(usize) -> bool,
-    level: f64,
-    min_var: f64,
-    hac_lags: usize,
-) -> HeldOutTest {
+    let GainNoise { min_var, hac_lags } = noise;
     let (mut s0, mut s1, mut dd, mut k) = (0.0, 0.0, 0.0, 0usize);
     for (i, (a, b)) in e0.iter().zip(e1).enumerate() {
         if held(i) {
@@ -257,10 +262,26 @@ mod tests {
         let mut rng = Rng::new(3);
         let e: Vec<f64> = (0..20_000).map(|_| rng.normal()).collect();
         let real0: Vec<f64> = e.iter().map(|v| v + 0.05).collect();
-        let t = held_out_test("x", String::new(), &real0, &e, |_| true, 0.01);
+        let t = held_out_test(
+            "x",
+            String::new(),
+            &real0,
+            &e,
+            |_| true,
+            0.01,
+            GainNoise::WHITE,
+        );
         assert!(t.kept && t.z > 2.5, "{t:?}");
         let fake1: Vec<f64> = e.iter().map(|v| v - 0.05).collect();
-        let t = held_out_test("x", String::new(), &e, &fake1, |_| true, 0.01);
+        let t = held_out_test(
+            "x",
+            String::new(),
+            &e,
+            &fake1,
+            |_| true,
+            0.01,
+            GainNoise::WHITE,
+        );
         assert!(!t.kept && t.mse_after > t.mse_before, "{t:?}");
     }
 }

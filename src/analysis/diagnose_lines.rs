@@ -21,6 +21,7 @@
 //! inventing one.
 
 use super::diagnose_blocks::Blocks;
+use super::spectrum::PairSums;
 use crate::stats::special::chi2_sf;
 use rustfft::{FftPlanner, num_complex::Complex};
 use serde::Serialize;
@@ -190,31 +191,17 @@ fn dft_at(x: &[f64], mean: f64, w: f64, t0: usize) -> (f64, f64) {
 
 /// Least-squares (a, b) of a sin(ωi) + b cos(ωi) (i the log's sample index) on `x` − mean.
 fn pair_ls(x: &[f64], mean: f64, w: f64, t0: usize) -> (f64, f64) {
-    let (mut ss, mut cc, mut sc, mut s1, mut c1, mut sx, mut cx) =
-        (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     let (s0, c0) = (w * t0 as f64).sin_cos();
     let (ds, dc) = w.sin_cos();
     let (mut c, mut s) = (c0, s0);
+    let mut sums = PairSums::default();
     for v in x {
-        let d = v - mean;
-        ss += s * s;
-        cc += c * c;
-        sc += s * c;
-        s1 += s;
-        c1 += c;
-        sx += s * d;
-        cx += c * d;
+        sums.add(s, c, v - mean);
         let nc = c * dc - s * ds;
         s = s * dc + c * ds;
         c = nc;
     }
-    let nf = x.len() as f64;
-    let (ss, cc, sc) = (ss - s1 * s1 / nf, cc - c1 * c1 / nf, sc - s1 * c1 / nf);
-    let det = ss * cc - sc * sc;
-    if det.abs() < 1e-12 * nf * nf {
-        return (0.0, 0.0);
-    }
-    ((cc * sx - sc * cx) / det, (ss * cx - sc * sx) / det)
+    sums.solve(x.len()).unwrap_or((0.0, 0.0))
 }
 
 /// Frequencies tried per block (±1 bin at ¼ bin).

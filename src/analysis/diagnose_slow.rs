@@ -23,7 +23,7 @@
 //! range seen is smaller than one LSB (the quantisation floor).
 
 use super::changepoint::{ChangePointSettings, binary_segmentation};
-use super::diagnose_blocks::{HeldOutTest, held_out_test_floor};
+use super::diagnose_blocks::{GainNoise, HeldOutTest, held_out_test};
 use super::diagnose_wander::{WanderFit, WanderParams, fit as wander_fit, innovations};
 use nalgebra::{DMatrix, DVector};
 
@@ -394,15 +394,17 @@ fn test_term(
     let own = ctx.fit(&without, false)?;
     let e0_own = ctx.one_step(&without, &own, &own.wander.best);
     let e1 = ctx.one_step(terms, full, &full.wander.best);
-    let mut t = held_out_test_floor(
+    let mut t = held_out_test(
         terms[i].family(),
         describe(&terms[i], ctx.dt_s),
         &e0,
         &e1,
         |k| ctx.held[k],
         level,
-        0.0,
-        HAC_LAGS,
+        GainNoise {
+            min_var: 0.0,
+            hac_lags: HAC_LAGS,
+        },
     );
     if t.kept {
         let (mut g0, mut g1) = (0.0, 0.0);

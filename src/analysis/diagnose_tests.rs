@@ -54,6 +54,13 @@ fn run_and_check_power(log: &SynthLog, open_loop_too: bool) -> ChannelDiagnosis 
     d
 }
 
+/// The one effect the loop finds on `s`, checked to be of `family` and to remove its power.
+fn only_effect(s: &SynthSpec, family: &str) -> Effect {
+    let d = run_and_check_power(&generate(s), true);
+    assert_eq!(families(&d), [family]);
+    d.effects[0].clone()
+}
+
 /// Families of the final model, in the order they were added.
 fn families(d: &ChannelDiagnosis) -> Vec<&str> {
     d.effects
@@ -76,14 +83,11 @@ fn vibration_line_off_the_grid_is_found_named_and_removed() {
     // the phase sd ≈ 0.008/0.5 = 0.016 rad (±0.2 rad is 12 sd).
     let mut s = SynthSpec::clean(101);
     s.line = Some((12.3456, 0.5, 0.3));
-    let log = generate(&s);
-    let d = run_and_check_power(&log, true);
-    assert_eq!(families(&d), ["vibration_line"]);
     let Effect::VibrationLine {
         freq_hz,
         amplitude,
         phase_rad,
-    } = d.effects[0]
+    } = only_effect(&s, "vibration_line")
     else {
         panic!()
     };
@@ -107,15 +111,12 @@ fn temperature_bias_on_a_warm_up_is_found_with_its_coefficients() {
     // `temperature_coefficient_spread_over_seeds`.) ±5 % is > 4 sd here.
     let mut s = SynthSpec::clean(202);
     s.temperature = Some((30.0, 0.2, 0.02, 15.0));
-    let log = generate(&s);
-    let d = run_and_check_power(&log, true);
-    assert_eq!(families(&d), ["temperature"]);
     let Effect::Temperature {
         t0_c,
         c1_per_c,
         c2_per_c2,
         lag_s,
-    } = d.effects[0]
+    } = only_effect(&s, "temperature")
     else {
         panic!()
     };
@@ -134,10 +135,7 @@ fn bias_step_is_found_with_time_and_size() {
     // ≈ 0.022, so ±10 % is 4.5 sd.
     let mut s = SynthSpec::clean(303);
     s.step = Some((100.0, 1.0));
-    let log = generate(&s);
-    let d = run_and_check_power(&log, true);
-    assert_eq!(families(&d), ["bias_step"]);
-    let Effect::Step { t_s, size } = d.effects[0] else {
+    let Effect::Step { t_s, size } = only_effect(&s, "bias_step") else {
         panic!()
     };
     assert!((t_s - 100.0).abs() <= 1.0, "{t_s}");
@@ -150,10 +148,7 @@ fn gyro_g_sensitivity_during_a_drive_is_found() {
     // GLS sd of k_z ≈ √S(f)/(σ_fz √N) ≈ 1.3/(0.7·190) ≈ 0.01 (3 % of 0.3); ±10 % is > 3 sd.
     let mut s = SynthSpec::clean(404);
     s.gsens = Some([0.3, -0.3, 0.4]);
-    let log = generate(&s);
-    let d = run_and_check_power(&log, true);
-    assert_eq!(families(&d), ["g_sensitivity"]);
-    let Effect::GSensitivity { coeffs_per_m_s2: k } = d.effects[0] else {
+    let Effect::GSensitivity { coeffs_per_m_s2: k } = only_effect(&s, "g_sensitivity") else {
         panic!()
     };
     for (got, want) in k.iter().zip([0.3, -0.3, 0.4]) {

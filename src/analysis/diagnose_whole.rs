@@ -30,7 +30,7 @@
 
 use super::AnalysisError;
 use super::diagnose::ChannelInput;
-use super::diagnose_blocks::{Blocks, HeldOutTest, held_out_test_floor, step_means};
+use super::diagnose_blocks::{Blocks, GainNoise, HeldOutTest, held_out_test, step_means};
 use super::diagnose_lines::{
     BlockLine, contribution, contribution_in_sample, line_candidates, track,
 };
@@ -318,15 +318,17 @@ pub fn diagnose_whole(
         let pred = contribution(&tr, &blocks, fs);
         let e1: Vec<f64> = d_sel.iter().zip(&pred).map(|(a, b)| a - b).collect();
         let desc = format!("line near {:.4} Hz", c.freq_hz);
-        let t = held_out_test_floor(
+        let t = held_out_test(
             "vibration_line",
             desc,
             &d_sel,
             &e1,
             held_sample,
             level,
-            c.noise_var,
-            0,
+            GainNoise {
+                min_var: c.noise_var,
+                hac_lags: 0,
+            },
         );
         if !t.kept {
             rejected.push(t);
@@ -402,15 +404,17 @@ pub fn diagnose_whole(
         let e0 = innovations(&d, &WanderParams::none(wf.best.r), &|_| true).0;
         let e1 = innovations(&d, &wf.best, &|_| true).0;
         let kind = classify(&wf, t_rec);
-        let test = held_out_test_floor(
+        let test = held_out_test(
             "wander",
             format!("{kind:?}"),
             &e0,
             &e1,
             |k| held[k],
             s.alpha,
-            0.0,
-            super::diagnose_slow::HAC_LAGS,
+            GainNoise {
+                min_var: 0.0,
+                hac_lags: super::diagnose_slow::HAC_LAGS,
+            },
         );
         let gm = wf.gm;
         WanderReport {

@@ -228,33 +228,62 @@ pub struct RefinedLine {
     pub q: f64,
 }
 
+/// Running sums for the least-squares fit of a·sin + b·cos to a mean-removed segment, the
+/// raw columns' sums centred at the end (orthogonal to the constant).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct PairSums {
+    ss: f64,
+    cc: f64,
+    sc: f64,
+    s1: f64,
+    c1: f64,
+    /// Σ sin·x and Σ cos·x.
+    pub sx: f64,
+    pub cx: f64,
+}
+
+impl PairSums {
+    /// One sample: sin and cos of its phase, and its mean-removed value.
+    #[inline]
+    pub(crate) fn add(&mut self, s: f64, c: f64, x: f64) {
+        self.ss += s * s;
+        self.cc += c * c;
+        self.sc += s * c;
+        self.s1 += s;
+        self.c1 += c;
+        self.sx += s * x;
+        self.cx += c * x;
+    }
+
+    /// (a, b) over the `n` samples added; `None` where sin and cos are (nearly) collinear there.
+    pub(crate) fn solve(&self, n: usize) -> Option<(f64, f64)> {
+        let nf = n as f64;
+        let (s1, c1, sx, cx) = (self.s1, self.c1, self.sx, self.cx);
+        let (ss, cc, sc) = (
+            self.ss - s1 * s1 / nf,
+            self.cc - c1 * c1 / nf,
+            self.sc - s1 * c1 / nf,
+        );
+        let det = ss * cc - sc * sc;
+        if det.abs() < 1e-12 * nf * nf {
+            return None;
+        }
+        Some(((cc * sx - sc * cx) / det, (ss * cx - sc * sx) / det))
+    }
+}
+
 /// Least-squares fit of (sin, cos) at `f_hz` to the mean-removed segment: returns (a, b, Q).
 fn pair_fit(x: &[f64], mean: f64, rate_hz: f64, t0_index: usize, f_hz: f64) -> (f64, f64, f64) {
-    let n = x.len();
     let w = 2.0 * PI * f_hz / rate_hz;
-    // Accumulate sums of the raw columns, then centre them (orthogonal to the constant).
-    let (mut ss, mut cc, mut sc, mut s1, mut c1, mut sx, mut cx) =
-        (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    let mut sums = PairSums::default();
     for (i, v) in x.iter().enumerate() {
         let (s, c) = (w * (t0_index + i) as f64).sin_cos();
-        let xv = v - mean;
-        ss += s * s;
-        cc += c * c;
-        sc += s * c;
-        s1 += s;
-        c1 += c;
-        sx += s * xv;
-        cx += c * xv;
+        sums.add(s, c, v - mean);
     }
-    let nf = n as f64;
-    let (ss, cc, sc) = (ss - s1 * s1 / nf, cc - c1 * c1 / nf, sc - s1 * c1 / nf);
-    let det = ss * cc - sc * sc;
-    if det.abs() < 1e-12 * nf * nf {
+    let Some((a, b)) = sums.solve(x.len()) else {
         return (0.0, 0.0, 0.0);
-    }
-    let a = (cc * sx - sc * cx) / det;
-    let b = (ss * cx - sc * sx) / det;
-    (a, b, (a * sx + b * cx) / nf)
+    };
+    (a, b, (a * sums.sx + b * sums.cx) / x.len() as f64)
 }
 
 /// Refine a line near `f_guess_hz` in the segment `x` (whose first sample is sample

@@ -93,22 +93,21 @@ const ANGVEL_FROM_BLOCK: usize = (4 + 9) * 8;
 /// From `angular_velocity.x` to `linear_acceleration.x`.
 pub const LINACC_FROM_ANGVEL: usize = (3 + 9) * 8;
 
-fn f64_at(d: &[u8], o: usize, le: bool) -> f64 {
-    let b: [u8; 8] = d[o..o + 8].try_into().expect("8 bytes");
+/// The `N` bytes at `o` in big-endian order (reversed when the data are little-endian).
+fn be_bytes<const N: usize>(d: &[u8], o: usize, le: bool) -> [u8; N] {
+    let mut b: [u8; N] = d[o..o + N].try_into().expect("N bytes");
     if le {
-        f64::from_le_bytes(b)
-    } else {
-        f64::from_be_bytes(b)
+        b.reverse();
     }
+    b
+}
+
+fn f64_at(d: &[u8], o: usize, le: bool) -> f64 {
+    f64::from_be_bytes(be_bytes(d, o, le))
 }
 
 fn u32_at(d: &[u8], o: usize, le: bool) -> u32 {
-    let b: [u8; 4] = d[o..o + 4].try_into().expect("4 bytes");
-    if le {
-        u32::from_le_bytes(b)
-    } else {
-        u32::from_be_bytes(b)
-    }
+    u32::from_be_bytes(be_bytes(d, o, le))
 }
 
 /// Where the f64 block starts, and the byte order; checks every length.

@@ -127,6 +127,11 @@ where
     }
 }
 
+/// The validated settings, or `None` with each problem recorded in `errs` under `key`.
+fn validated<T>(r: Result<T, SettingsErrors>, errs: &mut Errors, key: &str) -> Option<T> {
+    r.map_err(|e| e.push_into(errs, key)).ok()
+}
+
 impl StagesConfig {
     /// Adopt the sensor's declared rate (from a log's descriptor) where the stages need one;
     /// the changed settings are validated again (a rate can make other values invalid).
@@ -152,12 +157,8 @@ impl StagesConfig {
         let ge: GrossErrorSection = stage_section(table, "gross_error", errs);
         // Settings written in a disabled section are still checked: a mistake must not wait
         // until the day the stage is switched on.
-        let ge_settings = ge
-            .settings
-            .validate()
-            .map_err(|e| e.push_into(errs, "gross_error.settings"))
-            .ok();
-        let model = ge.model.as_ref().and_then(|m| {
+        let ge_settings = validated(ge.settings.validate(), errs, "gross_error.settings");
+        let ge_model = ge.model.as_ref().and_then(|m| {
             load_model(
                 base,
                 m,
@@ -166,13 +167,8 @@ impl StagesConfig {
                 errs,
             )
         });
-        let ge_model = model;
         let bs: BiasSection = stage_section(table, "bias", errs);
-        let bias_settings = bs
-            .settings
-            .validate()
-            .map_err(|e| e.push_into(errs, "bias.settings"))
-            .ok();
+        let bias_settings = validated(bs.settings.validate(), errs, "bias.settings");
         let model = match &bs.model {
             Some(BiasModelSource::File(f)) => load_model(
                 base,
