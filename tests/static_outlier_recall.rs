@@ -42,11 +42,9 @@ fn recall(raw: &[Sample], rate_hz: f64) -> f64 {
     let out = run_config(&cfg, &desc, &x).unwrap();
     let (mut tp, mut all) = (0usize, 0usize);
     for (s, l) in out.iter().zip(&labels).skip(SCORE_FROM) {
-        for c in 0..3 {
-            if l[c] {
-                all += 1;
-                tp += usize::from(s.flags & flags::replaced_ch(c) != 0);
-            }
+        for (c, _) in l[..3].iter().enumerate().filter(|(_, l)| **l) {
+            all += 1;
+            tp += usize::from(s.flags & flags::replaced_ch(c) != 0);
         }
     }
     tp as f64 / all as f64
@@ -140,6 +138,9 @@ fn the_static_benches_outliers_are_missed_near_the_bar_of_their_own_roughness() 
         let mut why: BTreeMap<String, usize> = BTreeMap::new();
         // Per 2-robust-σ band of outlier size: (caught, missed).
         let mut band: BTreeMap<u32, (usize, usize)> = BTreeMap::new();
+        // Missed outliers of 10-14 robust σ: the verdict's σ̂ over robust σ, and how many had
+        // another outlier among the 32 samples before or the 4 after.
+        let (mut inflation, mut crowded) = (Vec::new(), 0usize);
         for c in 0..3 {
             let xr: Vec<f64> = raw.iter().map(|s| s.channel(c)).collect();
             let rs = robust_sigma(&xr);
@@ -184,6 +185,14 @@ fn the_static_benches_outliers_are_missed_near_the_bar_of_their_own_roughness() 
                 let v = verdicts.iter().find(|v| {
                     v.channel == c && (v.start..v.start + v.len as u64).contains(&(k as u64))
                 });
+                if let Some(e) = v
+                    .and_then(|v| v.evidence)
+                    .filter(|_| (10.0..14.0).contains(&a))
+                {
+                    inflation.push(e.sigma / rs);
+                    crowded +=
+                        usize::from((k - 32..(k + 5).min(n)).any(|j| j != k && labels[j][c]));
+                }
                 let r = match v {
                     None => "no event (the gate let it pass)".to_string(),
                     Some(v) if v.shock => "shock on other axes".into(),
@@ -206,6 +215,13 @@ fn the_static_benches_outliers_are_missed_near_the_bar_of_their_own_roughness() 
                 100.0 * *m as f64 / (h + m) as f64
             );
         }
+        inflation.sort_by(f64::total_cmp);
+        eprintln!(
+            "  missed 10-14 robust σ with a verdict: {}, σ̂ / robust σ median {:.2}, {crowded} \
+             with another outlier within 32 before or 4 after",
+            inflation.len(),
+            inflation[inflation.len() / 2]
+        );
         for (w, k) in &why {
             eprintln!("  {k:5}  {w}");
         }
