@@ -22,7 +22,7 @@ use imuprep::report::audit::{audit_recording, inject_outliers, load_recording, r
 use imuprep::rng::{Rng, ar_series};
 use imuprep::sample::{Sample, flags};
 use imuprep::stage::gross_error::GrossErrorStage;
-use imuprep::stage::gross_error::confirm::{Thresholds, roughness};
+use imuprep::stage::gross_error::confirm::roughness;
 use imuprep::stats::robust::robust_sigma;
 use std::collections::BTreeMap;
 
@@ -116,12 +116,7 @@ fn the_static_benches_outliers_are_missed_near_the_bar_of_their_own_roughness() 
     };
     let cfg = Config::default_embedded().unwrap();
     let ge = cfg.stages.gross_error.as_ref().expect("enabled by default");
-    let th = Thresholds {
-        confirm_k: ge.settings.confirm_k,
-        edge_k: ge.settings.edge_k,
-        stand_out: ge.settings.stand_out,
-        edge_stand_out: ge.settings.edge_stand_out,
-    };
+    let th = common::thresholds(&ge.settings);
     let mut scale = Vec::new();
     for rec in [
         "mpu6050_static_10min_temp/mpu6050_static.csv",
