@@ -13,7 +13,7 @@
 use imuprep::config::Config;
 use imuprep::report::audit::load_recording;
 use imuprep::sample::{CHANNEL_NAMES, flags};
-use imuprep::stage::gross_error::GrossErrorStage;
+use imuprep::stage::gross_error::{GrossErrorStage, confirm};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -67,6 +67,51 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let ctx = ge.settings.context_samples;
             if s < ctx + 2 || s + 2 >= first.len() {
                 continue;
+            }
+            // The same-triad test measured in `docs/gross_error_results.md` (not in the stage):
+            // each other axis of the event's triad over the judged samples — its departure from
+            // the interpolation across them (median |x − p| / √(1 + v), as `z_median · σ̂`), over
+            // the event's own, and over its roughness σ̂ on the `context_samples` before.
+            if let Some(e) = v.evidence {
+                let (a, len) = (s + v.lead, v.keep - v.lead);
+                let post = ge.settings.post_samples;
+                if a >= ctx && a + len + post <= first.len() {
+                    let dev = e.z_median * e.sigma;
+                    for o in (0..CHANNEL_NAMES.len())
+                        .filter(|&o| o != v.channel && o / 3 == v.channel / 3)
+                    {
+                        let x = |i: usize| raw[first[i]].channel(o);
+                        let pre: Vec<f64> = (a - ctx..a).map(x).collect();
+                        let ev: Vec<f64> = (a..a + len).map(x).collect();
+                        let after: Vec<f64> = (a + len..a + len + post).map(x).collect();
+                        let mut interp = vec![0.0; len];
+                        let floor = if o < 3 {
+                            ge.settings.min_sigma_gyro_rad_s
+                        } else {
+                            ge.settings.min_sigma_accel_m_s2
+                        };
+                        let (Some(p), Some(r)) = (
+                            confirm::confirm_with(
+                                &pre,
+                                &ev,
+                                &after,
+                                floor,
+                                ge.settings.run_fit_side,
+                                &mut interp,
+                            ),
+                            confirm::roughness(&pre),
+                        ) else {
+                            continue;
+                        };
+                        let moved = p.z_median * p.sigma;
+                        println!(
+                            "  same triad {}: departure {moved:.3e} = {:.2} × the event's {dev:.3e}, {:.2} × its σ̂ before",
+                            CHANNEL_NAMES[o],
+                            moved / dev,
+                            moved / r.max(floor)
+                        );
+                    }
+                }
             }
             for c in (0..CHANNEL_NAMES.len()).filter(|&c| c != v.channel) {
                 let x = |i: usize| raw[first[i]].channel(c);

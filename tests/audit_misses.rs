@@ -173,12 +173,7 @@ fn missed_injections_are_explained_by_the_verdict_that_let_them_pass() {
     };
     let cfg = Config::default_embedded().unwrap();
     let ge = cfg.stages.gross_error.as_ref().expect("enabled by default");
-    let th = Thresholds {
-        confirm_k: ge.settings.confirm_k,
-        edge_k: ge.settings.edge_k,
-        stand_out: ge.settings.stand_out,
-        edge_stand_out: ge.settings.edge_stand_out,
-    };
+    let th = common::thresholds(&ge.settings);
     let mut total: BTreeMap<String, usize> = BTreeMap::new();
     for rec in RECORDINGS
         .iter()
