@@ -84,10 +84,7 @@ impl Scenario {
                 );
             }
         }
-        let (vib, is_static) = match &self.motion {
-            MotionConfig::Static { vibration, .. } => (vibration, true),
-            MotionConfig::Drive { vibration, .. } => (vibration, false),
-        };
+        let (vib, is_static) = self.motion.vibration();
         for (i, m) in vib.iter().enumerate() {
             check_vibration_mode(
                 &mut ck,
