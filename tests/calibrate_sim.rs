@@ -183,25 +183,9 @@ fn the_daemon_with_the_written_config_brings_every_stop_to_g() {
         .path()
         .join(format!("cal{seed}"))
         .join("calibration.toml");
-    let csv = dir.path().join("out.csv");
-    run_cli(&[
-        "replay",
-        &log,
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        &format!("csv:{}", csv.display()),
-    ]);
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let header: Vec<&str> = text
-        .lines()
-        .find(|l| !l.starts_with('#'))
-        .unwrap()
-        .split(',')
-        .collect();
-    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let (header, rows) = common::replay_csv(&log, &cfg, &dir.path().join("out.csv"));
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
     let (tc, ax) = (col("t"), col("ax"));
-    let rows = common::csv_rows(&text);
     // The stops from the scenario's own plan (the simulator's truth), not from the detector.
     let sim = Simulator::new(&scn, seed).unwrap();
     let Trajectory::Tumble { plan, .. } = sim.trajectory() else {
