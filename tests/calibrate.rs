@@ -188,24 +188,12 @@ fn a_tumbled_log_is_calibrated_and_the_daemon_applies_the_config() {
     // The daemon with that config: every stop's mean |f| is g within 5 σ of a stop mean's
     // noise plus the fit's error (the fitted in-sample RMS bounds the latter), where raw it was
     // off by up to a scale error times g.
-    let csv = dir.path().join("out.csv");
-    run_cli(&[
-        "replay",
+    let (header, rows) = common::replay_csv(
         &log,
-        "--config",
-        out.join("calibration.toml").to_str().unwrap(),
-        "--out",
-        &format!("csv:{}", csv.display()),
-    ]);
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let header: Vec<&str> = text
-        .lines()
-        .find(|l| !l.starts_with('#'))
-        .unwrap()
-        .split(',')
-        .collect();
-    let rows = common::csv_rows(&text);
-    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+        &out.join("calibration.toml"),
+        &dir.path().join("out.csv"),
+    );
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
     let (t, ax) = (col("t"), col("ax"));
     let fit_rms = json["accel"]["fit_rms_after_m_s2"].as_f64().unwrap();
     let mut worst_raw: f64 = 0.0;

@@ -29,6 +29,7 @@ pub mod processes;
 pub mod scenario;
 pub mod temperature;
 pub mod truth;
+pub mod tumble;
 mod validate;
 pub mod vibration;
 
@@ -42,7 +43,7 @@ use crate::stats::ar_poly::ar_is_stationary;
 use gross::Gross6;
 use nalgebra::{Matrix3, Vector3};
 use processes::{ArBias6, GaussMarkov6, MAX_AR_ORDER, RandomWalk6};
-use scenario::{Checker, MotionConfig, TemperatureProfile, VibrationMode};
+use scenario::{Checker, TemperatureProfile, VibrationMode};
 use std::path::Path;
 use temperature::{TemperatureBias6, TemperatureModel};
 use validate::gross_channels;
@@ -189,11 +190,7 @@ impl Simulator {
         let mut enabled = 0u32;
         let fork = |s: u64| Rng::fork(seed, s);
 
-        let vib = match &scn.motion {
-            MotionConfig::Static { vibration, .. } | MotionConfig::Drive { vibration, .. } => {
-                vibration
-            }
-        };
+        let (vib, _) = scn.motion.vibration();
         let road: Vec<VibrationModeState> = vib
             .iter()
             .enumerate()

@@ -16,6 +16,8 @@
 //! Technology*, 2nd ed., ch. 3; Groves, *Principles of GNSS, Inertial, and Multisensor
 //! Integrated Navigation Systems*, 2nd ed., §2.3 and §5.1).
 //!
+//! **Tumble** (still stops joined by rotations about body-fixed axes): see `super::tumble`.
+//!
 //! Transitions are jerk-limited: a rate that goes from 0 to its plateau R does so along
 //! w(t) = (1 − cos(π t/τ))/2 over the edge time τ (and back down symmetrically), so
 //! acceleration and yaw rate are continuous with bounded derivative (max jerk = π R / (2τ)).
@@ -25,6 +27,7 @@
 //! raised cosine, continuous with its derivative), holds Θ, and comes back the same way.
 
 use super::scenario::{Checker, EARTH_RATE_RAD_S, MotionConfig, STANDARD_GRAVITY_M_S2, Segment};
+use super::tumble::{TumblePlan, scheme_attitudes_deg};
 use nalgebra::{Rotation3, Vector3};
 use std::f64::consts::PI;
 
@@ -48,7 +51,7 @@ pub struct TrueMotion {
 }
 
 /// Jerk-limited plateau shape on [0, T] with edge time τ ≤ T/2: returns (w, ∫₀ᵗ w).
-fn plateau(t: f64, total_s: f64, edge_s: f64) -> (f64, f64) {
+pub(super) fn plateau(t: f64, total_s: f64, edge_s: f64) -> (f64, f64) {
     let t = t.clamp(0.0, total_s);
     let rise = |u: f64| {
         (
@@ -112,6 +115,12 @@ pub enum Trajectory {
     },
     Drive {
         plan: DrivePlan,
+        /// Earth rate in NED, rad/s (zero when off).
+        earth_n_rad_s: Vector3<f64>,
+    },
+    /// Still stops joined by rotations (`super::tumble`).
+    Tumble {
+        plan: TumblePlan,
         /// Earth rate in NED, rad/s (zero when off).
         earth_n_rad_s: Vector3<f64>,
     },
@@ -186,6 +195,33 @@ impl Trajectory {
                     earth_n_rad_s: earth_rate_n(*earth_rate, *latitude_deg),
                 })
             }
+            MotionConfig::Tumble {
+                scheme,
+                attitudes_deg,
+                dwell_s,
+                rate_deg_s,
+                edge_s,
+                gravity_m_s2,
+                earth_rate,
+                latitude_deg,
+                vibration: _,
+            } => {
+                check_latitude(ck, *latitude_deg);
+                let att = match (scheme, attitudes_deg.is_empty()) {
+                    (Some(s), true) => scheme_attitudes_deg(*s),
+                    (None, false) => attitudes_deg.clone(),
+                    _ => {
+                        ck.push("motion", "give exactly one of scheme, attitudes_deg");
+                        return None;
+                    }
+                };
+                let plan =
+                    TumblePlan::build(&att, *dwell_s, *rate_deg_s, *edge_s, *gravity_m_s2, ck)?;
+                Some(Trajectory::Tumble {
+                    plan,
+                    earth_n_rad_s: earth_rate_n(*earth_rate, *latitude_deg),
+                })
+            }
         }
     }
 
@@ -194,6 +230,7 @@ impl Trajectory {
         match self {
             Trajectory::Static { duration_s, .. } => *duration_s,
             Trajectory::Drive { plan, .. } => plan.duration_s,
+            Trajectory::Tumble { plan, .. } => plan.duration_s(),
         }
     }
 
@@ -223,6 +260,20 @@ impl Trajectory {
                     m.gyro_rad_s += c_nb.inverse() * earth_n_rad_s;
                 }
                 m
+            }
+            Trajectory::Tumble {
+                plan,
+                earth_n_rad_s,
+            } => {
+                let (c_nb, w) = plan.at(t_s);
+                let (_, pitch, yaw) = c_nb.euler_angles();
+                TrueMotion {
+                    gyro_rad_s: w + c_nb.inverse() * earth_n_rad_s,
+                    accel_m_s2: plan.specific_force(&c_nb),
+                    speed_m_s: 0.0,
+                    heading_rad: yaw,
+                    pitch_rad: pitch,
+                }
             }
         }
     }

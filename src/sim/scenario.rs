@@ -132,6 +132,57 @@ pub enum MotionConfig {
         #[serde(default)]
         vibration: Vec<VibrationMode>,
     },
+    /// Multi-position calibration (a hand or a fixture tumbling the IMU): still stops at a
+    /// sequence of attitudes, each reached from the last by a jerk-limited rotation about one
+    /// body-fixed axis, the IMU at the centre of rotation (no lever arm). Give either `scheme`
+    /// or `attitudes_deg`.
+    Tumble {
+        /// Generated attitudes, visited nearest-neighbour first from level (yaw 0).
+        #[serde(default)]
+        scheme: Option<TumbleScheme>,
+        /// Explicit attitudes, `[roll, pitch, yaw]` ZYX Euler angles in NED, deg.
+        #[serde(default)]
+        attitudes_deg: Vec<[f64; 3]>,
+        /// Still time at each attitude, s.
+        dwell_s: f64,
+        /// Plateau rate of each rotation, deg/s.
+        rate_deg_s: f64,
+        /// Time over which the rate builds up (and dies down), s.
+        #[serde(default = "default_jerk_time")]
+        edge_s: f64,
+        #[serde(default = "default_gravity")]
+        gravity_m_s2: f64,
+        #[serde(default)]
+        earth_rate: bool,
+        #[serde(default)]
+        latitude_deg: f64,
+        /// Mechanical vibration modes: real motion, see [`VibrationMode`].
+        #[serde(default)]
+        vibration: Vec<VibrationMode>,
+    },
+}
+
+impl MotionConfig {
+    /// The vibration modes of any motion kind, and whether the motion has no speed (static or
+    /// tumble: `speed_ref_m_s` is meaningless there).
+    pub fn vibration(&self) -> (&[VibrationMode], bool) {
+        match self {
+            MotionConfig::Static { vibration, .. } | MotionConfig::Tumble { vibration, .. } => {
+                (vibration, true)
+            }
+            MotionConfig::Drive { vibration, .. } => (vibration, false),
+        }
+    }
+}
+
+/// Which attitudes a generated tumble visits (`motion.scheme`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum TumbleScheme {
+    /// Gravity along ± each body axis (the classic six-position test).
+    Faces6,
+    /// The 26 directions from the centre of a cube to its faces, edges and corners.
+    Cube26,
 }
 
 /// One piece of a drive. Every segment starts where the previous one ended (speed, heading);

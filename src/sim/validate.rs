@@ -84,10 +84,7 @@ impl Scenario {
                 );
             }
         }
-        let (vib, is_static) = match &self.motion {
-            MotionConfig::Static { vibration, .. } => (vibration, true),
-            MotionConfig::Drive { vibration, .. } => (vibration, false),
-        };
+        let (vib, is_static) = self.motion.vibration();
         for (i, m) in vib.iter().enumerate() {
             check_vibration_mode(
                 &mut ck,
@@ -336,7 +333,7 @@ impl Scenario {
     }
 
     /// White-noise σ per sample and channel (rad/s, m/s²); zero where off.
-    pub(super) fn white_sigma(&self) -> [f64; N_CHANNELS] {
+    pub fn white_sigma(&self) -> [f64; N_CHANNELS] {
         let mut s = [0.0; N_CHANNELS];
         if let Some(w) = self.errors.white_noise.as_ref().filter(|w| w.enabled) {
             let root_rate = self.sensor.sample_rate_hz.sqrt();

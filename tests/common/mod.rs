@@ -264,3 +264,28 @@ pub fn thresholds(
         edge_stand_out: s.edge_stand_out,
     }
 }
+
+/// `imuprep replay LOG --config CONFIG --out csv:OUT`: the CSV's header columns and its rows.
+pub fn replay_csv(
+    log: &str,
+    config: &std::path::Path,
+    out: &std::path::Path,
+) -> (Vec<String>, Vec<Vec<String>>) {
+    run_cli(&[
+        "replay",
+        log,
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        &format!("csv:{}", out.display()),
+    ]);
+    let text = std::fs::read_to_string(out).unwrap();
+    let header = text
+        .lines()
+        .find(|l| !l.starts_with('#'))
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    (header, csv_rows(&text))
+}
