@@ -28,6 +28,8 @@ pub mod learn;
 pub mod line;
 pub mod settings;
 pub mod step;
+#[cfg(test)]
+mod test_signals;
 pub mod wander;
 pub mod whiteness;
 
