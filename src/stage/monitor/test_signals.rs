@@ -25,3 +25,8 @@ pub fn coloured(r: &mut Rng, n: usize, phi: f64, sd: f64) -> Vec<f64> {
         })
         .collect()
 }
+
+/// `n` samples of unit white noise.
+pub fn white(r: &mut Rng, n: usize) -> Vec<f64> {
+    (0..n).map(|_| r.normal()).collect()
+}

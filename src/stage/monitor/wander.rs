@@ -329,7 +329,7 @@ impl WanderDetector {
 mod tests {
     use super::*;
     use crate::rng::Rng;
-    use crate::stage::monitor::test_signals::{FS, coloured, feed};
+    use crate::stage::monitor::test_signals::{FS, coloured, feed, white};
 
     /// 1-s blocks, 120-s windows, τ = 8 s, p = 1e-5, armed after 300 s (the defaults).
     fn detector() -> WanderDetector {
@@ -347,7 +347,7 @@ mod tests {
         // seed is fixed, and the largest quiet ratio is checked to sit well under the bar.
         let mut det = detector();
         let mut r = Rng::new(31);
-        let xs: Vec<f64> = (0..1_440_000).map(|_| r.normal()).collect();
+        let xs = white(&mut r, 1_440_000);
         assert!(run(&mut det, &xs, 0).is_empty());
         assert!(det.armed());
         // White output: ρ₀ = 1 (learned over ~1780 overlapping windows ≈ 120 independent, each
@@ -372,7 +372,7 @@ mod tests {
     /// mean's white σ of 0.1): the alarms raised on each part.
     fn white_then_wander(det: &mut WanderDetector, k: f64, seed: u64) -> (usize, Vec<WanderEvent>) {
         let mut r = Rng::new(seed);
-        let xs: Vec<f64> = (0..1_440_000).map(|_| r.normal()).collect();
+        let xs = white(&mut r, 1_440_000);
         let quiet = run(det, &xs, 0).len();
         let ys = coloured(&mut r, 60_000, (-1.0 / (20.0 * FS)).exp(), 0.1 * k);
         (quiet, run(det, &ys, xs.len()))

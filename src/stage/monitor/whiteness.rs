@@ -452,7 +452,7 @@ impl WhitenessDetector {
 mod tests {
     use super::*;
     use crate::rng::Rng;
-    use crate::stage::monitor::test_signals::{coloured, feed};
+    use crate::stage::monitor::test_signals::{coloured, feed, white};
     use crate::stats::acf::acf;
 
     /// The defaults at 100 Hz: 1-s segments, 15-s blocks, 90-s windows, lags 1–10, p = 1e-5,
@@ -500,7 +500,7 @@ mod tests {
         // and the largest quiet score is checked to sit under the bar.
         let mut det = detector();
         let mut r = Rng::new(41);
-        let xs: Vec<f64> = (0..1_440_000).map(|_| r.normal()).collect();
+        let xs = white(&mut r, 1_440_000);
         assert!(run(&mut det, &xs, 0).is_empty());
         assert!(det.armed());
         // White, each 1-s segment about its own mean: E[r_k] = −(1 − k/100)/99 ≈ −0.01 (the
