@@ -447,6 +447,19 @@ impl ChannelGate {
         self.first_ratio2 = f64::INFINITY;
     }
 
+    /// The event was motion (released, or a new level): restart the predictor at the raw value
+    /// `v` with the current slope, and end the event.
+    fn continue_from(&mut self, v: f64) {
+        if let Some(pr) = self.pred.as_mut() {
+            pr.restart(v, self.slope);
+        }
+        self.x_acc = v;
+        self.h = 1;
+        self.run = 0;
+        self.n_preds = 0;
+        self.ended = Some(EventEnd { motion: true });
+    }
+
     /// Gate one value of an active channel (`bad`: non-finite or implausible; `forced`: the jump
     /// guard calls it a candidate). Per sample: no allocation.
     #[inline]
@@ -549,26 +562,16 @@ impl ChannelGate {
                 self.first_ratio2 = f64::INFINITY;
             } else if self.run >= 2 {
                 self.slope += p.slope_alpha * ((v - self.first_raw) / self.run as f64 - self.slope);
-                self.x_acc = v;
-                pred.restart(v, self.slope);
-                self.h = 1;
-                self.run = 0;
-                self.n_preds = 0;
                 self.counters.released += 1;
-                self.ended = Some(EventEnd { motion: true });
+                self.continue_from(v);
                 return Outcome::Passed;
             }
         }
         if self.run >= p.max_run {
             if usable {
                 // Too long to be a gross error: accept the new level.
-                pred.restart(v, self.slope);
-                self.x_acc = v;
-                self.h = 1;
-                self.run = 0;
-                self.n_preds = 0;
                 self.counters.level_changes += 1;
-                self.ended = Some(EventEnd { motion: true });
+                self.continue_from(v);
                 return Outcome::LevelChange;
             }
             if saturated && !bad {

@@ -177,30 +177,31 @@ impl LineDetector {
             }
             let f = self.freq(bin);
             let tol = (3.0 * self.fs / self.n as f64).max(0.1 * f);
-            if let Some(id) = self.known.iter().position(|k| (k - f).abs() <= tol) {
+            let (id, new) = match self.known.iter().position(|k| (k - f).abs() <= tol) {
                 // The same line, back (or drifted): tracked, not new.
-                self.known[id] = f;
-                self.active.push(Active {
-                    bin,
-                    missing: 0,
-                    id,
-                });
-                continue;
-            }
-            let id = self.known.len();
-            self.known.push(f);
+                Some(id) => {
+                    self.known[id] = f;
+                    (id, false)
+                }
+                None => {
+                    self.known.push(f);
+                    (self.known.len() - 1, true)
+                }
+            };
             self.active.push(Active {
                 bin,
                 missing: 0,
                 id,
             });
-            self.events += 1;
-            events.push(LineEvent {
-                t_ns,
-                freq_hz: f,
-                ratio,
-                id,
-            });
+            if new {
+                self.events += 1;
+                events.push(LineEvent {
+                    t_ns,
+                    freq_hz: f,
+                    ratio,
+                    id,
+                });
+            }
         }
     }
 

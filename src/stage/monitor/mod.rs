@@ -28,6 +28,8 @@ pub mod learn;
 pub mod line;
 pub mod settings;
 pub mod step;
+#[cfg(test)]
+mod test_signals;
 pub mod wander;
 pub mod whiteness;
 
@@ -338,43 +340,29 @@ impl MonitorStage {
                 c.whiteness.skip();
                 continue;
             }
+            let alarm = |t_ns, finding, score| Alarm {
+                channel: i,
+                t_ns,
+                finding,
+                score,
+            };
             if let Some(e) = c.level.push(s.t_ns, v) {
-                found.push(Alarm {
-                    channel: i,
-                    t_ns: e.t_ns,
-                    finding: Finding::Offset(e.offset),
-                    score: e.z,
-                });
+                found.push(alarm(e.t_ns, Finding::Offset(e.offset), e.z));
             }
             if self.settings.wander
                 && let Some(e) = c.wander.push(s.t_ns, v)
             {
-                found.push(Alarm {
-                    channel: i,
-                    t_ns: e.t_ns,
-                    finding: Finding::Wander(e.tau_s),
-                    score: e.ratio,
-                });
+                found.push(alarm(e.t_ns, Finding::Wander(e.tau_s), e.ratio));
             }
             if self.settings.whiteness
                 && let Some(e) = c.whiteness.push(s.t_ns, v)
             {
-                found.push(Alarm {
-                    channel: i,
-                    t_ns: e.t_ns,
-                    finding: Finding::Whiteness(e.q, e.q0),
-                    score: e.score,
-                });
+                found.push(alarm(e.t_ns, Finding::Whiteness(e.q, e.q0), e.score));
             }
             self.line_events.clear();
             c.line.push(s.t_ns, v, &mut self.line_events);
             for e in &self.line_events {
-                found.push(Alarm {
-                    channel: i,
-                    t_ns: e.t_ns,
-                    finding: Finding::Line(e.freq_hz, e.id),
-                    score: e.ratio,
-                });
+                found.push(alarm(e.t_ns, Finding::Line(e.freq_hz, e.id), e.ratio));
             }
         }
         for a in found {

@@ -200,14 +200,10 @@ impl LevelDetector {
 mod tests {
     use super::*;
     use crate::rng::Rng;
-
-    const FS: f64 = 100.0;
+    use crate::stage::monitor::test_signals::{FS, feed};
 
     fn run(det: &mut LevelDetector, xs: &[f64]) -> Vec<LevelEvent> {
-        xs.iter()
-            .enumerate()
-            .filter_map(|(i, &x)| det.push((i as f64 / FS * 1e9) as u64, x))
-            .collect()
+        feed(xs, 0, |t, x| det.push(t, x))
     }
 
     fn noise(seed: u64, n: usize, sd: f64) -> Vec<f64> {

@@ -329,8 +329,7 @@ impl WanderDetector {
 mod tests {
     use super::*;
     use crate::rng::Rng;
-
-    const FS: f64 = 100.0;
+    use crate::stage::monitor::test_signals::{FS, coloured, feed, white};
 
     /// 1-s blocks, 120-s windows, τ = 8 s, p = 1e-5, armed after 300 s (the defaults).
     fn detector() -> WanderDetector {
@@ -338,10 +337,7 @@ mod tests {
     }
 
     fn run(det: &mut WanderDetector, xs: &[f64], t0: usize) -> Vec<WanderEvent> {
-        xs.iter()
-            .enumerate()
-            .filter_map(|(i, &x)| det.push(((t0 + i) as f64 / FS * 1e9) as u64, x))
-            .collect()
+        feed(xs, t0, |t, x| det.push(t, x))
     }
 
     #[test]
@@ -351,7 +347,7 @@ mod tests {
         // seed is fixed, and the largest quiet ratio is checked to sit well under the bar.
         let mut det = detector();
         let mut r = Rng::new(31);
-        let xs: Vec<f64> = (0..1_440_000).map(|_| r.normal()).collect();
+        let xs = white(&mut r, 1_440_000);
         assert!(run(&mut det, &xs, 0).is_empty());
         assert!(det.armed());
         // White output: ρ₀ = 1 (learned over ~1780 overlapping windows ≈ 120 independent, each
@@ -364,14 +360,7 @@ mod tests {
         // 100 Hz): with σ_w² = 0.01 of a 1-s mean, the GM's Allan variance at 8 s is
         // 0.2·σ² = 0.032 and at 1 s ≈ (2/3)σ²/20 = 0.0053, so R = 8·A(8)/A(1) rises from 1 to
         // (0.01 + 0.256)/0.0153 ≈ 17 against a bar of ≈ 3.1: flagged within 2 min, once.
-        let mut gm = 0.4 * r.normal();
-        let phi = (-1.0 / (20.0 * FS)).exp();
-        let ys: Vec<f64> = (0..60_000)
-            .map(|_| {
-                gm = phi * gm + 0.4 * (1.0 - phi * phi).sqrt() * r.normal();
-                r.normal() + gm
-            })
-            .collect();
+        let ys = coloured(&mut r, 60_000, (-1.0 / (20.0 * FS)).exp(), 0.4);
         let ev = run(&mut det, &ys, xs.len());
         assert_eq!(ev.len(), 1, "{ev:?}");
         let raised = ev[0].t_ns as f64 * 1e-9 + 120.0 - xs.len() as f64 / FS;
@@ -383,17 +372,9 @@ mod tests {
     /// mean's white σ of 0.1): the alarms raised on each part.
     fn white_then_wander(det: &mut WanderDetector, k: f64, seed: u64) -> (usize, Vec<WanderEvent>) {
         let mut r = Rng::new(seed);
-        let xs: Vec<f64> = (0..1_440_000).map(|_| r.normal()).collect();
+        let xs = white(&mut r, 1_440_000);
         let quiet = run(det, &xs, 0).len();
-        let sd = 0.1 * k;
-        let mut gm = sd * r.normal();
-        let phi = (-1.0 / (20.0 * FS)).exp();
-        let ys: Vec<f64> = (0..60_000)
-            .map(|_| {
-                gm = phi * gm + sd * (1.0 - phi * phi).sqrt() * r.normal();
-                r.normal() + gm
-            })
-            .collect();
+        let ys = coloured(&mut r, 60_000, (-1.0 / (20.0 * FS)).exp(), 0.1 * k);
         (quiet, run(det, &ys, xs.len()))
     }
 

@@ -452,9 +452,8 @@ impl WhitenessDetector {
 mod tests {
     use super::*;
     use crate::rng::Rng;
+    use crate::stage::monitor::test_signals::{coloured, feed, white};
     use crate::stats::acf::acf;
-
-    const FS: f64 = 100.0;
 
     /// The defaults at 100 Hz: 1-s segments, 15-s blocks, 90-s windows, lags 1–10, p = 1e-5,
     /// armed after 300 s, skips of up to 1 s bridged.
@@ -463,21 +462,7 @@ mod tests {
     }
 
     fn run(det: &mut WhitenessDetector, xs: &[f64], t0: usize) -> Vec<WhitenessEvent> {
-        xs.iter()
-            .enumerate()
-            .filter_map(|(i, &x)| det.push(((t0 + i) as f64 / FS * 1e9) as u64, x))
-            .collect()
-    }
-
-    /// White noise plus an AR(1) component (pole `phi`, stationary sd `sd`).
-    fn coloured(r: &mut Rng, n: usize, phi: f64, sd: f64) -> Vec<f64> {
-        let mut a = sd * r.normal();
-        (0..n)
-            .map(|_| {
-                a = phi * a + sd * (1.0 - phi * phi).sqrt() * r.normal();
-                r.normal() + a
-            })
-            .collect()
+        feed(xs, t0, |t, x| det.push(t, x))
     }
 
     #[test]
@@ -515,7 +500,7 @@ mod tests {
         // and the largest quiet score is checked to sit under the bar.
         let mut det = detector();
         let mut r = Rng::new(41);
-        let xs: Vec<f64> = (0..1_440_000).map(|_| r.normal()).collect();
+        let xs = white(&mut r, 1_440_000);
         assert!(run(&mut det, &xs, 0).is_empty());
         assert!(det.armed());
         // White, each 1-s segment about its own mean: E[r_k] = −(1 − k/100)/99 ≈ −0.01 (the
