@@ -25,15 +25,20 @@ fn calibrate(csv: &std::path::Path, pos: &std::path::Path) -> serde_json::Value 
     serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
 }
 
+/// `calibrate` of the rtklibexplorer record `name` (`drive_0708`, `walk_0827`) with its RTK
+/// solution (None, reported as skipped: ../shared is absent).
+fn calibrate_record(name: &str) -> Option<serde_json::Value> {
+    let dir = "rtklibexplorer_drive_walk";
+    let csv = real_data(&format!("{dir}/{name}_imu.csv"))?;
+    let pos = real_data(&format!("{dir}/{name}_gnss_rtk.pos"))?;
+    Some(calibrate(&csv, &pos))
+}
+
 #[test]
 fn the_drive_shows_no_gyro_scale_error_about_the_vertical() {
-    let (Some(csv), Some(pos)) = (
-        real_data("rtklibexplorer_drive_walk/drive_0708_imu.csv"),
-        real_data("rtklibexplorer_drive_walk/drive_0708_gnss_rtk.pos"),
-    ) else {
+    let Some(r) = calibrate_record("drive_0708") else {
         return;
     };
-    let r = calibrate(&csv, &pos);
     let c = &r["course"];
     let f = |k: &str| c[k].as_f64().unwrap();
     // Measured: 77 segments, 10 turns, scale error −0.0015 % ± 0.0497 %, bias +0.1675 ± 0.0038
@@ -54,13 +59,9 @@ fn the_drive_shows_no_gyro_scale_error_about_the_vertical() {
 
 #[test]
 fn the_walk_is_too_slow_to_tell() {
-    let (Some(csv), Some(pos)) = (
-        real_data("rtklibexplorer_drive_walk/walk_0827_imu.csv"),
-        real_data("rtklibexplorer_drive_walk/walk_0827_gnss_rtk.pos"),
-    ) else {
+    let Some(r) = calibrate_record("walk_0827") else {
         return;
     };
-    let r = calibrate(&csv, &pos);
     assert!(r["course"].is_null());
     let why = r["course_skipped"].as_str().unwrap();
     assert!(why.contains("not identifiable"), "{why}");
