@@ -13,7 +13,8 @@
 //! `min_speed_m_s` and the vertical rate's mean over ±`straight_window_s` below
 //! `straight_rate_rad_s`; anchors at least `min_anchor_gap_s` apart; a segment is used only if
 //! every GNSS epoch inside it has a velocity and the speed stays ≥ `min_speed_m_s` (so the course
-//! is defined all along and unwraps correctly). The vertical is the mean specific force over the
+//! is defined all along and unwraps correctly), with no GNSS gap over 2 s and no IMU interval over
+//! 5× the median (the integral would bridge it blind). The vertical is the mean specific force over the
 //! record (a car's accelerations average out; a tilt error θ changes the projected scale by
 //! cos θ − 1, 1.5e-4 at 1°). Headings are north-to-east (clockwise seen from above), so the
 //! rate about the up axis enters with a minus sign.
@@ -27,6 +28,10 @@
 use serde::Serialize;
 
 use crate::stats::special::normal_sf;
+
+/// Longest time between two GNSS epochs inside a segment, s: across a longer gap the course
+/// cannot be unwrapped with certainty.
+const MAX_GNSS_GAP_S: f64 = 2.0;
 
 /// Settings of the course fit.
 #[derive(Clone, Debug)]
@@ -180,10 +185,27 @@ pub fn course_scale(
             anchors.push(i);
         }
     }
-    // Rows (Δψ, ∫ω_m, Δt) of segments whose course is defined all along.
+    // IMU gaps (an interval over 5× the median): the trapezoid would bridge them blind.
+    let mut dts: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    dts.sort_by(f64::total_cmp);
+    let long = 5.0 * dts.get(dts.len() / 2).copied().unwrap_or(0.0);
+    let gaps: Vec<(f64, f64)> = t
+        .windows(2)
+        .filter(|w| w[1] - w[0] > long)
+        .map(|w| (w[0], w[1]))
+        .collect();
+    let unbroken = |i: usize, j: usize| {
+        let (a, b) = (inside[i].t, inside[j].t);
+        inside[i..=j]
+            .windows(2)
+            .all(|w| w[1].t - w[0].t <= MAX_GNSS_GAP_S)
+            && !gaps.iter().any(|&(g0, g1)| g1 > a && g0 < b)
+    };
+    // Rows (Δψ, ∫ω_m, Δt) of segments whose course is defined all along, without a gap in
+    // either stream.
     let rows: Vec<[f64; 3]> = anchors
         .windows(2)
-        .filter(|p| course[p[0]..=p[1]].iter().all(|c| c.0.is_some()))
+        .filter(|p| course[p[0]..=p[1]].iter().all(|c| c.0.is_some()) && unbroken(p[0], p[1]))
         .map(|p| {
             let (a, b) = (inside[p[0]], inside[p[1]]);
             [
@@ -341,6 +363,29 @@ mod tests {
             let r = course_scale(&t, &g, &a, &e, &CourseSettings::default()).unwrap();
             assert!(!r.significant, "{seed}: {r:?}");
         }
+    }
+
+    #[test]
+    fn a_segment_across_an_imu_gap_is_left_out() {
+        // 3 s of IMU samples cut out of the record's middle: the segment around it goes (its
+        // integral would bridge the gap blind), the rest still recovers the scale within 4σ.
+        let (mut t, mut g, mut a, e) = drive(2, 0.005);
+        let full = course_scale(&t, &g, &a, &e, &CourseSettings::default()).unwrap();
+        let mid = t.len() / 2;
+        t.drain(mid..mid + 300);
+        g.drain(mid..mid + 300);
+        a.drain(mid..mid + 300);
+        let cut = course_scale(&t, &g, &a, &e, &CourseSettings::default()).unwrap();
+        assert!(
+            cut.segments < full.segments,
+            "{} vs {}",
+            cut.segments,
+            full.segments
+        );
+        assert!(
+            (cut.scale_error - 0.005).abs() < 4.0 * cut.scale_error_sd,
+            "{cut:?}"
+        );
     }
 
     #[test]
