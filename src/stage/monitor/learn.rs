@@ -3,7 +3,19 @@
 //! dropped if an alarm comes meanwhile — so the rise of an effect, seen in the windows just
 //! before the one that crossed the bar, does not teach the detector that the effect is ordinary.
 
+use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 use std::collections::VecDeque;
+
+/// Cap on the EDF of a learned value (beyond it the quantile no longer moves).
+const MAX_POOLED_EDF: f64 = 1000.0;
+
+/// The `F(ν, ν·n)` quantile at `q`: a window's statistic of EDF `ν` divided by the channel's
+/// own value learned from `n` independent windows of the same EDF (the pooled EDF capped at
+/// 1000). `None` where the distribution is undefined (ν or n not positive).
+pub fn f_quantile(nu: f64, independent: f64, q: f64) -> Option<f64> {
+    let pooled = (independent * nu).min(MAX_POOLED_EDF);
+    Some(FisherSnedecor::new(nu, pooled).ok()?.inverse_cdf(q))
+}
 
 /// Values waiting `delay` further offers before they are learned from.
 #[derive(Debug, Clone)]

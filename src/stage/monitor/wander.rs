@@ -34,15 +34,11 @@
 //! 1-s white σ is flagged by one test at p = 1e-5 with probability 0.79, against 0.11 for `R`
 //! and a Neyman–Pearson bound of 0.94 (`tests/reference/wander_power_bound.py`).
 
-use super::learn::{Delayed, LogScatter};
+use super::learn::{Delayed, LogScatter, f_quantile};
 use super::settings::WanderStatistic;
 use super::step::BlockMean;
 use crate::stats::allan_edf::{NoiseType, edf_oadev};
-use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 use std::collections::VecDeque;
-
-/// Cap on the EDF of the learned ratio (beyond it the quantile no longer moves).
-const MAX_POOLED_EDF: f64 = 1000.0;
 
 /// One alarm of the wander detector.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -157,11 +153,6 @@ impl WanderDetector {
         nu.min(self.nu2)
     }
 
-    /// EDF of the learned ratio: one window's per independent window learned.
-    fn pooled_edf(&self) -> f64 {
-        (self.independent() * self.edf()).min(MAX_POOLED_EDF)
-    }
-
     /// Whether the detector has learned enough of the channel to raise alarms (the still time,
     /// and at least two independent windows' worth of ratios).
     pub fn armed(&self) -> bool {
@@ -190,8 +181,7 @@ impl WanderDetector {
     }
 
     fn quantile(&self, q: f64) -> Option<f64> {
-        let f = FisherSnedecor::new(self.edf(), self.pooled_edf()).ok()?;
-        Some(f.inverse_cdf(q))
+        f_quantile(self.edf(), self.independent(), q)
     }
 
     /// A sample that cannot be used (not judged still, a replaced or bad value): skipped, and the

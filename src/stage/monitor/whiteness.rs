@@ -40,13 +40,9 @@
 //! (`tests/reference/whiteness_power.py`); 1.5× that sd (N·Σρ_k² = 108) is flagged by one
 //! window with probability ≈ 1, within 2 min.
 
-use super::learn::{Delayed, LogScatter};
+use super::learn::{Delayed, LogScatter, f_quantile};
 use crate::stats::acf::ljung_box_statistic;
-use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 use std::collections::VecDeque;
-
-/// Cap on the EDF of the learned scale (beyond it the quantile no longer moves).
-const MAX_POOLED_EDF: f64 = 1000.0;
 
 /// One alarm of the whiteness detector.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -300,10 +296,7 @@ impl WhitenessDetector {
 
     /// The `F(ν, ν·n_v)` quantile at `q` (ν = [`WhitenessDetector::edf`]).
     fn quantile(&self, q: f64) -> Option<f64> {
-        let nu = self.edf();
-        let nu0 = (nu * self.independent(self.scale_n)).min(MAX_POOLED_EDF);
-        let f = FisherSnedecor::new(nu, nu0).ok()?;
-        Some(f.inverse_cdf(q))
+        f_quantile(self.edf(), self.independent(self.scale_n), q)
     }
 
     /// The alarm bar on `S` now, once armed.
