@@ -187,11 +187,14 @@ fn sse(r: &[f64]) -> f64 {
 
 /// Levenberg–Marquardt (Marquardt's diagonal scaling) over the `active` entries of θ from
 /// `theta`: `resid(θ)` the residuals (non-finite where θ is not admissible), `jac(θ, idx)`
-/// their Jacobian w.r.t. the `idx` entries. Returns θ and the 1-σ of each entry from (JᵀJ)⁻¹
-/// and the residual variance (0 for inactive ones; NaN with no spare degrees of freedom).
+/// their Jacobian w.r.t. the `idx` entries; `observations` the independent components the
+/// residuals carry (their number, unless they are constrained: a difference of two unit vectors
+/// has 2 of its 3). Returns θ and the 1-σ of each entry from (JᵀJ)⁻¹ and the residual variance
+/// over `observations − p` degrees of freedom (0 for inactive entries; NaN with none spare).
 pub(crate) fn levenberg_marquardt(
     mut th: [f64; NP],
     active: &[bool; NP],
+    observations: usize,
     resid: impl Fn(&[f64; NP]) -> Vec<f64>,
     jac: impl Fn(&[f64; NP], &[usize]) -> DMatrix<f64>,
 ) -> Result<([f64; NP], [f64; NP]), AnalysisError> {
@@ -240,7 +243,7 @@ pub(crate) fn levenberg_marquardt(
         }
     }
     let j = jac(&th, &idx);
-    let dof = r.len() as f64 - idx.len() as f64;
+    let dof = observations as f64 - idx.len() as f64;
     let s2 = if dof > 0.0 { sse(&r) / dof } else { f64::NAN };
     let cov = (j.transpose() * &j)
         .try_inverse()
@@ -257,6 +260,7 @@ fn fit(f: &[Vector3<f64>], active: &[bool; NP], g: f64) -> Result<Fit, AnalysisE
     let (theta, sd) = levenberg_marquardt(
         nominal(),
         active,
+        f.len(),
         |th| residuals(th, f, g),
         |th, idx| jacobian(th, f, idx),
     )?;

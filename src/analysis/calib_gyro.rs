@@ -194,31 +194,20 @@ fn jacobian(th: &[f64; NP], ivs: &[&GyroInterval], idx: &[usize]) -> DMatrix<f64
 ///
 /// Each residual u1 − ΔRᵀu0 is a difference of two unit vectors, so it is orthogonal to
 /// u1 + ΔRᵀu0 ≈ 2u1: a motion gives 2 degrees of freedom, not 3 (so do the Jacobian's rows).
-/// `levenberg_marquardt` divides the sum of squares by 3n − p; the σ is rescaled to 2n − p.
-/// (With it, over seeds 1–10 of `replay/tumble.toml` the RMS of (fitted − true)/σ over the
+/// The residual variance is therefore over 2n − p degrees of freedom. (With it, over seeds 1–10 of `replay/tumble.toml` the RMS of (fitted − true)/σ over the
 /// nine entries is 1.11; without, 1.27× that, 1.40.)
 fn fit(
     ivs: &[&GyroInterval],
     active: &[bool; NP],
     start: [f64; NP],
 ) -> Result<([f64; NP], [f64; NP]), AnalysisError> {
-    let (th, mut sd) = levenberg_marquardt(
+    levenberg_marquardt(
         start,
         active,
+        2 * ivs.len(),
         |th| residuals(th, ivs),
         |th, idx| jacobian(th, ivs, idx),
-    )?;
-    let p = active.iter().filter(|a| **a).count() as f64;
-    let n = ivs.len() as f64;
-    let k = if 2.0 * n > p {
-        ((3.0 * n - p) / (2.0 * n - p)).sqrt()
-    } else {
-        f64::NAN
-    };
-    for v in sd.iter_mut().zip(active).filter(|(_, a)| **a) {
-        *v.0 *= k;
-    }
-    Ok((th, sd))
+    )
 }
 
 /// Condition number of the column-normalised Jacobian at K = I.
