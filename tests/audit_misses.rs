@@ -173,7 +173,7 @@ fn missed_injections_are_explained_by_the_verdict_that_let_them_pass() {
     };
     let cfg = Config::default_embedded().unwrap();
     let ge = cfg.stages.gross_error.as_ref().expect("enabled by default");
-    let th = common::thresholds(&ge.settings);
+    let th = ge.settings.thresholds();
     let mut total: BTreeMap<String, usize> = BTreeMap::new();
     for rec in RECORDINGS
         .iter()

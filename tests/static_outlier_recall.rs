@@ -116,7 +116,7 @@ fn the_static_benches_outliers_are_missed_near_the_bar_of_their_own_roughness() 
     };
     let cfg = Config::default_embedded().unwrap();
     let ge = cfg.stages.gross_error.as_ref().expect("enabled by default");
-    let th = common::thresholds(&ge.settings);
+    let th = ge.settings.thresholds();
     let mut scale = Vec::new();
     for rec in [
         "mpu6050_static_10min_temp/mpu6050_static.csv",

@@ -253,18 +253,6 @@ pub fn assert_plot(path: &std::path::Path, texts: &[&str], series: usize) {
     assert!(lines >= series, "{}: {lines} series lines", path.display());
 }
 
-/// The confirmation thresholds of the gross-error settings `s` (the settings of the same names).
-pub fn thresholds(
-    s: &imuprep::stage::gross_error::GrossErrorSettings,
-) -> imuprep::stage::gross_error::confirm::Thresholds {
-    imuprep::stage::gross_error::confirm::Thresholds {
-        confirm_k: s.confirm_k,
-        edge_k: s.edge_k,
-        stand_out: s.stand_out,
-        edge_stand_out: s.edge_stand_out,
-    }
-}
-
 /// `imuprep replay LOG --config CONFIG --out csv:OUT`: the CSV's header columns and its rows.
 pub fn replay_csv(
     log: &str,

@@ -167,6 +167,16 @@ crate::valid_settings!(
 );
 
 impl GrossErrorSettings {
+    /// The confirmation's bars (the settings of the same names).
+    pub fn thresholds(&self) -> super::confirm::Thresholds {
+        super::confirm::Thresholds {
+            confirm_k: self.confirm_k,
+            edge_k: self.edge_k,
+            stand_out: self.stand_out,
+            edge_stand_out: self.edge_stand_out,
+        }
+    }
+
     /// The one validation: every problem at once, each naming its key.
     pub fn validate(self) -> Result<ValidGrossErrorSettings, SettingsErrors> {
         let mut e = Vec::new();

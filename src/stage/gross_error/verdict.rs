@@ -112,17 +112,7 @@ impl GrossErrorStage {
         let motion_break = ev.motion && 3 * (keep - lead) < m;
         let gross = !shock
             && !motion_break
-            && evidence.is_some_and(|e| {
-                e.gross(
-                    keep - lead,
-                    &confirm::Thresholds {
-                        confirm_k: self.s.confirm_k,
-                        edge_k: self.s.edge_k,
-                        stand_out: self.s.stand_out,
-                        edge_stand_out: self.s.edge_stand_out,
-                    },
-                )
-            });
+            && evidence.is_some_and(|e| e.gross(keep - lead, &self.s.thresholds()));
         if let Some(log) = self.verdicts.as_mut() {
             log.push(super::EventVerdict {
                 channel: c,
