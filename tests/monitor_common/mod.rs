@@ -17,24 +17,31 @@ use imuprep::stage::{Stage, run_through};
 /// bias, Gauss–Markov and AR bias, random walk, quantisation — no temperature term, steps, lines,
 /// gross errors or saturation.
 pub fn clean_bench(duration_s: f64) -> Scenario {
+    bench_without(duration_s, &CLEAN, &[])
+}
+
+/// What [`clean_bench`] leaves out of the static bench's `[errors]`.
+const CLEAN: [&str; 5] = [
+    "temperature",
+    "gross",
+    "saturation",
+    "steps",
+    "vibration_lines",
+];
+
+/// The static bench without the `[errors]` tables `drop`, with further scenario overrides
+/// (`key = value`, as `--set` takes them).
+pub fn bench_without(duration_s: f64, drop: &[&str], set: &[(&str, &str)]) -> Scenario {
     let text = std::fs::read_to_string("replay/static_bench.toml").unwrap();
     let mut t: toml::Table = text.parse().unwrap();
     let errors = t.get_mut("errors").unwrap().as_table_mut().unwrap();
-    for k in [
-        "temperature",
-        "gross",
-        "saturation",
-        "steps",
-        "vibration_lines",
-    ] {
-        errors.remove(k);
+    for k in drop {
+        errors.remove(*k);
     }
     let text = toml::to_string(&t).unwrap();
-    Scenario::from_toml_str_with(
-        &text,
-        &[("motion.duration_s".into(), duration_s.to_string())],
-    )
-    .unwrap()
+    let mut overrides = vec![("motion.duration_s".to_string(), duration_s.to_string())];
+    overrides.extend(set.iter().map(|(k, v)| (k.to_string(), v.to_string())));
+    Scenario::from_toml_str_with(&text, &overrides).unwrap()
 }
 
 /// The embedded default pipeline's cleaning stages over `samples` (their output) and its

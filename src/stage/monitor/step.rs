@@ -14,7 +14,7 @@
 //! alarm holds (hysteresis: until `|m|` falls below half the threshold), so a step is one event
 //! and a ramp is one event with a duration.
 
-use super::learn::Delayed;
+use super::learn::{Bridge, Delayed};
 use std::collections::VecDeque;
 
 /// One alarm of the level detector.
@@ -96,14 +96,22 @@ pub struct LevelDetector {
     m2_sum: f64,
     m2_n: u64,
     still_blocks: u64,
+    bridge: Bridge,
     active: bool,
     pub events: u64,
 }
 
 impl LevelDetector {
     /// `block_n` samples per block, `window_blocks` blocks per window, alarm at `k` σ, armed
-    /// after `learn_blocks` still blocks (and at least `window_blocks` windows) were seen.
-    pub fn new(block_n: usize, window_blocks: usize, k: f64, learn_blocks: usize) -> Self {
+    /// after `learn_blocks` still blocks (and at least `window_blocks` windows) were seen; up
+    /// to `bridge_n` skipped samples in a row are bridged ([`LevelDetector::skip`]).
+    pub fn new(
+        block_n: usize,
+        window_blocks: usize,
+        k: f64,
+        learn_blocks: usize,
+        bridge_n: usize,
+    ) -> Self {
         LevelDetector {
             window_blocks: window_blocks.max(1),
             k,
@@ -115,6 +123,7 @@ impl LevelDetector {
             m2_sum: 0.0,
             m2_n: 0,
             still_blocks: 0,
+            bridge: Bridge::new(bridge_n),
             active: false,
             events: 0,
         }
@@ -140,8 +149,24 @@ impl LevelDetector {
         })
     }
 
-    /// The contiguous run of still data was broken (motion, a gap, a bad value).
+    /// Windows learned from so far, and how many arming needs.
+    pub fn learned_windows(&self) -> (u64, usize) {
+        (self.m2_n, self.window_blocks)
+    }
+
+    /// A sample that cannot be used (not judged still, a replaced or bad value): left out of
+    /// the block, and the run goes on, unless more than the bridge is skipped in a row — then
+    /// the run is broken ([`LevelDetector::interrupt`]).
+    pub fn skip(&mut self) {
+        if self.bridge.skip() {
+            self.interrupt();
+        }
+    }
+
+    /// The contiguous run of still data was broken (motion, a gap, more than the bridge
+    /// skipped).
     pub fn interrupt(&mut self) {
+        self.bridge.reset();
         self.block.reset();
         self.blocks.clear();
         self.active = false;
@@ -149,6 +174,7 @@ impl LevelDetector {
 
     /// One still value; returns an alarm when one is raised.
     pub fn push(&mut self, t_ns: u64, v: f64) -> Option<LevelEvent> {
+        self.bridge.reset();
         let (mean, start) = self.block.push(t_ns, v)?;
         self.still_blocks += 1;
         let w = self.window_blocks;
@@ -222,7 +248,7 @@ mod tests {
     fn white_noise_raises_no_alarm_and_a_step_one() {
         // 2 h of white noise at 100 Hz, 5-s blocks, 60-s windows, alarm at 5 σ: the window
         // mean is Gaussian, tested every 5 s (1440 correlated tests), P(|Z| ≥ 5) ≈ 6e-7.
-        let mut det = LevelDetector::new(500, 12, 5.0, 60);
+        let mut det = LevelDetector::new(500, 12, 5.0, 60, 100);
         let xs = noise(7, 720_000, 0.006);
         assert!(run(&mut det, &xs).is_empty());
         // σ of a 60-s mean = 0.006/√6000 = 7.7e-5; learned from 1429 overlapping windows
@@ -231,7 +257,7 @@ mod tests {
         assert!((sd / 7.75e-5 - 1.0).abs() < 0.15, "{sd}");
         // A step of 10 σ of a window mean leaving a 60-s transient, 20 min after the start:
         // one alarm, within 60 s, its offset between 0.5 and 1 of the step.
-        let mut det = LevelDetector::new(500, 12, 5.0, 60);
+        let mut det = LevelDetector::new(500, 12, 5.0, 60, 100);
         let mut xs = noise(8, 240_000, 0.006);
         add_transient(&mut xs, 120_000, 7.75e-4, 60.0);
         let ev = run(&mut det, &xs);
@@ -246,8 +272,32 @@ mod tests {
     }
 
     #[test]
+    fn short_skips_are_bridged_and_a_long_one_restarts_the_run() {
+        // Blocks of 100, windows of 4 blocks, bridge 10: two samples skipped every 150 (a
+        // stillness dropout or a replaced sample) leave the run whole, so 60 still blocks arm
+        // the detector as without skips; 11 in a row restart the window (no alarm on a 1.0
+        // offset until four fresh blocks are in).
+        let mut det = LevelDetector::new(100, 4, 5.0, 50, 10);
+        let xs = noise(13, 6_000, 0.01);
+        for (i, &x) in xs.iter().enumerate() {
+            if i % 150 == 0 {
+                det.skip();
+                det.skip();
+            }
+            det.push(i as u64 * 10_000_000, x);
+        }
+        assert!(det.armed(), "{:?}", det.learned_windows());
+        for _ in 0..11 {
+            det.skip();
+        }
+        let xs: Vec<f64> = noise(14, 399, 0.01).iter().map(|x| x + 1.0).collect();
+        assert!(run(&mut det, &xs).is_empty());
+        assert_eq!(run(&mut det, &[1.0]).len(), 1);
+    }
+
+    #[test]
     fn not_armed_until_learned_and_interrupt_restarts_the_run() {
-        let mut det = LevelDetector::new(100, 4, 5.0, 50);
+        let mut det = LevelDetector::new(100, 4, 5.0, 50, 100);
         let xs = noise(9, 4_000, 0.01);
         run(&mut det, &xs);
         assert!(!det.armed(), "40 blocks < 50");

@@ -34,7 +34,7 @@
 //! 1-s white σ is flagged by one test at p = 1e-5 with probability 0.79, against 0.11 for `R`
 //! and a Neyman–Pearson bound of 0.94 (`tests/reference/wander_power_bound.py`).
 
-use super::learn::{Delayed, LogScatter, f_quantile};
+use super::learn::{Bridge, Delayed, LogScatter, f_quantile};
 use super::settings::WanderStatistic;
 use super::step::BlockMean;
 use crate::stats::allan_edf::{NoiseType, edf_oadev};
@@ -73,8 +73,8 @@ pub struct WanderDetector {
     /// EDF of `A(m·b)` in one window.
     nu2: f64,
     active: bool,
-    /// Samples skipped since the last one pushed (see [`WanderDetector::skip`]).
-    skipped: usize,
+    /// Skipped samples bridged (up to a block's worth; see [`WanderDetector::skip`]).
+    bridge: Bridge,
     /// Scratch: the window's phase (running sum of the block means).
     phase: Vec<f64>,
     pub events: u64,
@@ -117,7 +117,7 @@ impl WanderDetector {
             still_blocks: 0,
             nu2: edf_oadev(NoiseType::RandomWalkFm, m, window_blocks + 1),
             active: false,
-            skipped: 0,
+            bridge: Bridge::new(block_n.max(1)),
             phase: Vec::with_capacity(window_blocks + 1),
             events: 0,
             breaks: 0,
@@ -191,8 +191,7 @@ impl WanderDetector {
     /// simulated bench, more often once a wander moves the output off the bias estimate); a
     /// break no longer than a block cannot hold a motion that changes the block means much.
     pub fn skip(&mut self) {
-        self.skipped += 1;
-        if self.skipped > self.block.n {
+        if self.bridge.skip() {
             self.interrupt();
         }
     }
@@ -202,7 +201,7 @@ impl WanderDetector {
         if !self.blocks.is_empty() || self.block.partial() {
             self.breaks += 1;
         }
-        self.skipped = 0;
+        self.bridge.reset();
         self.block.reset();
         self.blocks.clear();
         self.since_test = 0;
@@ -257,7 +256,7 @@ impl WanderDetector {
 
     /// One still value; returns an alarm when one is raised.
     pub fn push(&mut self, t_ns: u64, v: f64) -> Option<WanderEvent> {
-        self.skipped = 0;
+        self.bridge.reset();
         let (mean, start) = self.block.push(t_ns, v)?;
         self.still_blocks += 1;
         if self.blocks.len() == self.window_blocks {

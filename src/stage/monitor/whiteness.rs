@@ -40,7 +40,7 @@
 //! (`tests/reference/whiteness_power.py`); 1.5× that sd (N·Σρ_k² = 108) is flagged by one
 //! window with probability ≈ 1, within 2 min.
 
-use super::learn::{Delayed, LogScatter, f_quantile};
+use super::learn::{Bridge, Delayed, LogScatter, f_quantile};
 use crate::stats::acf::ljung_box_statistic;
 use std::collections::VecDeque;
 
@@ -153,7 +153,6 @@ pub struct WhitenessDetector {
     window_blocks: usize,
     p: f64,
     learn_n: u64,
-    bridge_n: usize,
     /// The last `h` values of the run (shifted), newest last; cleared where a sample is skipped.
     ring: VecDeque<f64>,
     /// Subtracted from every value of the run (its first value): keeps the sums' cancellation
@@ -176,7 +175,7 @@ pub struct WhitenessDetector {
     /// The learned `Q_Δ/h` values' log scatter (see [`WhitenessDetector::edf`]).
     scatter: LogScatter,
     still: u64,
-    skipped: usize,
+    bridge: Bridge,
     active: bool,
     pub events: u64,
     /// Still runs broken (more than the bridge skipped, motion, a gap).
@@ -211,7 +210,6 @@ impl WhitenessDetector {
             window_blocks,
             p,
             learn_n,
-            bridge_n,
             ring: VecDeque::with_capacity(h + 1),
             shift: None,
             seg: Raw::new(h),
@@ -228,7 +226,7 @@ impl WhitenessDetector {
             scale_n: 0,
             scatter: LogScatter::default(),
             still: 0,
-            skipped: 0,
+            bridge: Bridge::new(bridge_n),
             active: false,
             events: 0,
             breaks: 0,
@@ -310,9 +308,8 @@ impl WhitenessDetector {
     /// A sample that cannot be used: the pairs across it are not formed, and a run of more than
     /// `bridge_n` of them breaks the still run.
     pub fn skip(&mut self) {
-        self.skipped += 1;
         self.ring.clear();
-        if self.skipped > self.bridge_n {
+        if self.bridge.skip() {
             self.interrupt();
         }
     }
@@ -322,7 +319,7 @@ impl WhitenessDetector {
         if !self.blocks.is_empty() || self.cur.n > 0.0 || self.seg.n > 0.0 {
             self.breaks += 1;
         }
-        self.skipped = 0;
+        self.bridge.reset();
         self.ring.clear();
         self.shift = None;
         self.seg.clear();
@@ -333,7 +330,7 @@ impl WhitenessDetector {
 
     /// One still value; returns an alarm when one is raised.
     pub fn push(&mut self, t_ns: u64, v: f64) -> Option<WhitenessEvent> {
-        self.skipped = 0;
+        self.bridge.reset();
         self.still += 1;
         let y = v - *self.shift.get_or_insert(v);
         if self.cur.n == 0.0 && self.seg.n == 0.0 {
