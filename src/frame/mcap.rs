@@ -546,12 +546,7 @@ impl ProtocolDecoder for McapDecoder {
         let start = !self.f.in_garbage();
         self.f.truncated_front(buf, start);
     }
-    fn stats(&self) -> DecoderStats {
-        self.f.stats
-    }
-    fn descriptor(&self) -> Option<Descriptor> {
-        self.stamper.descriptor()
-    }
+    super::protocol::framer_stats_and_descriptor!();
     fn found(&self) -> String {
         let mut imu: Vec<&str> = self
             .channels
