@@ -74,6 +74,20 @@ pub fn bin() -> PathBuf {
     PathBuf::from(env!("CARGO_BIN_EXE_imuprep"))
 }
 
+/// A TCP sink on a free local port writing native frames, client queues of 8 batches; the
+/// handle and the address it listens on.
+pub async fn tcp_native_sink() -> (imuprep::io::sink::SinkHandle, std::net::SocketAddr) {
+    let h = imuprep::io::sink::start(&imuprep::config::Sink::Tcp {
+        bind: "127.0.0.1:0".parse().unwrap(),
+        format: imuprep::config::Format::Native,
+        queue: 8,
+    })
+    .await
+    .unwrap();
+    let addr = h.name.trim_start_matches("tcp:").parse().unwrap();
+    (h, addr)
+}
+
 /// Run the built `imuprep` with `args` from the crate root; its stdout and stderr, joined. Panics
 /// (with that output) when it fails.
 pub fn run_cli(args: &[&str]) -> String {
