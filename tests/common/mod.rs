@@ -88,6 +88,17 @@ pub async fn tcp_native_sink() -> (imuprep::io::sink::SinkHandle, std::net::Sock
     (h, addr)
 }
 
+/// `imuprep import <input> -o <log>` with the default units; its output, success or not.
+pub fn import(input: &std::path::Path, log: &std::path::Path) -> std::process::Output {
+    std::process::Command::new(bin())
+        .arg("import")
+        .arg(input)
+        .arg("-o")
+        .arg(log)
+        .output()
+        .unwrap()
+}
+
 /// Run the built `imuprep` with `args` from the crate root; its stdout and stderr, joined. Panics
 /// (with that output) when it fails.
 pub fn run_cli(args: &[&str]) -> String {
