@@ -244,7 +244,12 @@ fn mixture_of_n_b_k_recovers_each() {
 #[test]
 #[ignore = "prints the seed-to-seed spread behind the tolerances above (slow)"]
 fn seed_spread() {
-    let stats = |name: &str, v: Vec<f64>| {
+    // The ratio estimate / truth of term `t` over the seeds: its mean, spread and worst.
+    let stats = |name: &str, t: Term, fits: Vec<(&TermFit, f64)>| {
+        let v: Vec<f64> = fits
+            .iter()
+            .map(|(f, truth)| f.term(t).value().unwrap_or(f64::NAN) / truth)
+            .collect();
         let n = v.len() as f64;
         let m = v.iter().sum::<f64>() / n;
         let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
@@ -252,63 +257,55 @@ fn seed_spread() {
         eprintln!("{name}: mean ratio {m:.4}, sd {sd:.4}, worst |ratio-1| {worst:.4}");
     };
     let seeds = 100..120u64;
-    let val = |f: &TermFit, t: Term| f.term(t).value().unwrap_or(f64::NAN);
     let w: Vec<_> = seeds.clone().map(case_white).collect();
     stats(
         "white N",
-        w.iter()
-            .map(|(f, n)| val(f, Term::RandomWalk) / n)
-            .collect(),
+        Term::RandomWalk,
+        w.iter().map(|(f, n)| (f, *n)).collect(),
     );
     let r: Vec<_> = seeds.clone().map(case_rrw).collect();
     stats(
         "rrw K",
-        r.iter()
-            .map(|(f, k, _)| val(f, Term::RateRandomWalk) / k)
-            .collect(),
+        Term::RateRandomWalk,
+        r.iter().map(|(f, k, _)| (f, *k)).collect(),
     );
     stats(
         "rrw N",
-        r.iter()
-            .map(|(f, _, n)| val(f, Term::RandomWalk) / n)
-            .collect(),
+        Term::RandomWalk,
+        r.iter().map(|(f, _, n)| (f, *n)).collect(),
     );
     let q: Vec<_> = seeds.clone().map(case_quant).collect();
     stats(
         "quant Q",
-        q.iter()
-            .map(|(f, q, _)| val(f, Term::Quantisation) / q)
-            .collect(),
+        Term::Quantisation,
+        q.iter().map(|(f, q, _)| (f, *q)).collect(),
     );
     stats(
         "quant N",
-        q.iter()
-            .map(|(f, _, n)| val(f, Term::RandomWalk) / n)
-            .collect(),
+        Term::RandomWalk,
+        q.iter().map(|(f, _, n)| (f, *n)).collect(),
     );
     let rr: Vec<_> = seeds.clone().map(case_ramp).collect();
     stats(
         "ramp R",
-        rr.iter().map(|(f, r)| val(f, Term::RateRamp) / r).collect(),
+        Term::RateRamp,
+        rr.iter().map(|(f, r)| (f, *r)).collect(),
     );
     let m: Vec<_> = seeds.map(case_mixture).collect();
     stats(
         "mix N",
-        m.iter()
-            .map(|(f, t)| val(f, Term::RandomWalk) / t[0])
-            .collect(),
+        Term::RandomWalk,
+        m.iter().map(|(f, t)| (f, t[0])).collect(),
     );
     stats(
         "mix B",
-        m.iter()
-            .map(|(f, t)| val(f, Term::BiasInstability) / t[1])
-            .collect(),
+        Term::BiasInstability,
+        m.iter().map(|(f, t)| (f, t[1])).collect(),
     );
     stats(
         "mix K",
-        m.iter()
-            .map(|(f, t)| val(f, Term::RateRandomWalk) / t[2])
-            .collect(),
+        Term::RateRandomWalk,
+        m.iter().map(|(f, t)| (f, t[2])).collect(),
     );
 }
 
