@@ -244,69 +244,36 @@ fn mixture_of_n_b_k_recovers_each() {
 #[test]
 #[ignore = "prints the seed-to-seed spread behind the tolerances above (slow)"]
 fn seed_spread() {
-    // The ratio estimate / truth of term `t` over the seeds: its mean, spread and worst.
-    let stats = |name: &str, t: Term, fits: Vec<(&TermFit, f64)>| {
-        let v: Vec<f64> = fits
+    // The ratio estimate / truth of term `t` over the seeds' cases: its mean, spread and worst.
+    fn spread<C>(name: &str, t: Term, cases: &[C], fit_truth: impl Fn(&C) -> (&TermFit, f64)) {
+        let v: Vec<f64> = cases
             .iter()
-            .map(|(f, truth)| f.term(t).value().unwrap_or(f64::NAN) / truth)
+            .map(|c| {
+                let (f, truth) = fit_truth(c);
+                f.term(t).value().unwrap_or(f64::NAN) / truth
+            })
             .collect();
         let n = v.len() as f64;
         let m = v.iter().sum::<f64>() / n;
         let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
         let worst = v.iter().map(|x| (x - 1.0).abs()).fold(0.0, f64::max);
         eprintln!("{name}: mean ratio {m:.4}, sd {sd:.4}, worst |ratio-1| {worst:.4}");
-    };
+    }
     let seeds = 100..120u64;
     let w: Vec<_> = seeds.clone().map(case_white).collect();
-    stats(
-        "white N",
-        Term::RandomWalk,
-        w.iter().map(|(f, n)| (f, *n)).collect(),
-    );
+    spread("white N", Term::RandomWalk, &w, |c| (&c.0, c.1));
     let r: Vec<_> = seeds.clone().map(case_rrw).collect();
-    stats(
-        "rrw K",
-        Term::RateRandomWalk,
-        r.iter().map(|(f, k, _)| (f, *k)).collect(),
-    );
-    stats(
-        "rrw N",
-        Term::RandomWalk,
-        r.iter().map(|(f, _, n)| (f, *n)).collect(),
-    );
+    spread("rrw K", Term::RateRandomWalk, &r, |c| (&c.0, c.1));
+    spread("rrw N", Term::RandomWalk, &r, |c| (&c.0, c.2));
     let q: Vec<_> = seeds.clone().map(case_quant).collect();
-    stats(
-        "quant Q",
-        Term::Quantisation,
-        q.iter().map(|(f, q, _)| (f, *q)).collect(),
-    );
-    stats(
-        "quant N",
-        Term::RandomWalk,
-        q.iter().map(|(f, _, n)| (f, *n)).collect(),
-    );
+    spread("quant Q", Term::Quantisation, &q, |c| (&c.0, c.1));
+    spread("quant N", Term::RandomWalk, &q, |c| (&c.0, c.2));
     let rr: Vec<_> = seeds.clone().map(case_ramp).collect();
-    stats(
-        "ramp R",
-        Term::RateRamp,
-        rr.iter().map(|(f, r)| (f, *r)).collect(),
-    );
+    spread("ramp R", Term::RateRamp, &rr, |c| (&c.0, c.1));
     let m: Vec<_> = seeds.map(case_mixture).collect();
-    stats(
-        "mix N",
-        Term::RandomWalk,
-        m.iter().map(|(f, t)| (f, t[0])).collect(),
-    );
-    stats(
-        "mix B",
-        Term::BiasInstability,
-        m.iter().map(|(f, t)| (f, t[1])).collect(),
-    );
-    stats(
-        "mix K",
-        Term::RateRandomWalk,
-        m.iter().map(|(f, t)| (f, t[2])).collect(),
-    );
+    spread("mix N", Term::RandomWalk, &m, |c| (&c.0, c.1[0]));
+    spread("mix B", Term::BiasInstability, &m, |c| (&c.0, c.1[1]));
+    spread("mix K", Term::RateRandomWalk, &m, |c| (&c.0, c.1[2]));
 }
 
 // --- exports and input handling ---
