@@ -292,11 +292,7 @@ fn six_channel_samples(n: usize) -> Vec<Sample> {
         .collect();
     (0..n)
         .map(|i| {
-            let mut s = Sample {
-                seq: i as u32,
-                t_ns: (i as u64) * 10_000_000,
-                ..Sample::default()
-            };
+            let mut s = Sample::nth(i, 10_000_000);
             let v: [f64; 6] = std::array::from_fn(|c| chans[c][i]);
             s.set_channels(&v);
             s

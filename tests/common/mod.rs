@@ -37,14 +37,12 @@ pub fn samples(n: usize, seed: u64) -> Vec<Sample> {
     (0..n)
         .map(|i| {
             let mut s = Sample {
-                seq: i as u32,
-                t_ns: i as u64 * 5_000_000,
                 temp_c: if i % 7 == 0 {
                     None
                 } else {
                     Some(25.0 + r.normal())
                 },
-                ..Sample::default()
+                ..Sample::nth(i, 5_000_000)
             };
             s.set_channels(&[
                 0.01 * r.normal(),
