@@ -300,6 +300,20 @@ fn six_channel_samples(n: usize) -> Vec<Sample> {
         .collect()
 }
 
+/// The number after `sep` on the line of `text` that starts with `name`, up to a `#` comment.
+fn value_after(text: &str, name: &str, sep: char) -> f64 {
+    let line = text.lines().find(|l| l.starts_with(name)).unwrap();
+    line.split(sep)
+        .nth(1)
+        .unwrap()
+        .split('#')
+        .next()
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap()
+}
+
 #[test]
 fn exports_carry_the_terms_in_their_units() {
     let samples = six_channel_samples(1 << 20);
@@ -314,18 +328,7 @@ fn exports_carry_the_terms_in_their_units() {
         .fold(0.0, f64::max);
     assert_eq!(g.noise_density, max_n);
     let yaml = kalibr_yaml(&r).unwrap();
-    let field = |name: &str| -> f64 {
-        let line = yaml.lines().find(|l| l.starts_with(name)).unwrap();
-        line.split(':')
-            .nth(1)
-            .unwrap()
-            .split('#')
-            .next()
-            .unwrap()
-            .trim()
-            .parse()
-            .unwrap()
-    };
+    let field = |name: &str| value_after(&yaml, name, ':');
     // a printed value is the aggregate to 7 digits
     assert_rel(
         field("gyroscope_noise_density"),
@@ -348,18 +351,7 @@ fn exports_carry_the_terms_in_their_units() {
     assert_rel(field("accelerometer_random_walk"), 1e-3, 0.40, "accel K");
     // GNSS_IMU: deg/s/√Hz and µg/√Hz
     let cfg = gnss_imu_config(&r).unwrap();
-    let cfg_val = |name: &str| -> f64 {
-        let line = cfg.lines().find(|l| l.starts_with(name)).unwrap();
-        line.split('=')
-            .nth(1)
-            .unwrap()
-            .split('#')
-            .next()
-            .unwrap()
-            .trim()
-            .parse()
-            .unwrap()
-    };
+    let cfg_val = |name: &str| value_after(&cfg, name, '=');
     assert_rel(
         cfg_val("gyro_noise_PSD"),
         g.noise_density.to_degrees(),
