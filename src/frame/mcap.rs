@@ -25,10 +25,10 @@
 //! A vector whose covariance has −1 in element 0 ("data not available", the message's own
 //! convention, as the MCAP sink writes a triad the sensor lacks) gives three absent channels.
 
+use super::Descriptor;
 use super::framing::{Fault, Framer, Stamper};
 use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
 use super::ros2;
-use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
 use std::collections::{HashMap, VecDeque};
