@@ -27,11 +27,7 @@ fn synthetic_samples(n: usize) -> Vec<Sample> {
     let mut slow = [0.0f64; 6];
     (0..n)
         .map(|i| {
-            let mut s = Sample {
-                seq: i as u32,
-                t_ns: i as u64 * 10_000_000,
-                ..Sample::default()
-            };
+            let mut s = Sample::nth(i, 10_000_000);
             let v: [f64; 6] = std::array::from_fn(|c| {
                 walk[c] += 1e-6 * rng.normal();
                 // a 100-s Gauss-Markov stands in for the flicker floor

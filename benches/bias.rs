@@ -22,10 +22,8 @@ fn input() -> Vec<Sample> {
             let moving = t % 30.0 >= 8.0;
             let m = if moving { 1.0 } else { 0.0 };
             let mut s = Sample {
-                seq: k as u32,
-                t_ns: k as u64 * 10_000_000,
                 temp_c: Some(25.0),
-                ..Default::default()
+                ..Sample::nth(k, 10_000_000)
             };
             s.set_channels(&[
                 0.002 + 0.00175 * r.normal() + m * 0.01 * r.normal(),

@@ -25,10 +25,8 @@ fn synthetic(n: usize) -> Vec<Sample> {
     (0..n)
         .map(|i| {
             let mut s = Sample {
-                seq: i as u32,
-                t_ns: i as u64 * 10_000_000,
                 temp_c: Some(25.0),
-                ..Sample::default()
+                ..Sample::nth(i, 10_000_000)
             };
             let line = 0.009 * (2.0 * std::f64::consts::PI * 0.5667 * i as f64 / 100.0).sin();
             let v: [f64; 6] = std::array::from_fn(|c| {

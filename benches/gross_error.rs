@@ -39,11 +39,7 @@ fn samples(n: usize) -> Vec<Sample> {
     let mut v = [0.0f64; N_CHANNELS];
     (0..n)
         .map(|i| {
-            let mut s = Sample {
-                seq: i as u32,
-                t_ns: i as u64 * 5_000_000,
-                ..Sample::default()
-            };
+            let mut s = Sample::nth(i, 5_000_000);
             let ch: [f64; N_CHANNELS] = std::array::from_fn(|c| {
                 v[c] = 0.5 * v[c] + 0.004 * rng.normal();
                 let spike = if rng.uniform() < 0.002 { 0.1 } else { 0.0 };

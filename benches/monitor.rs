@@ -17,11 +17,7 @@ fn input() -> Vec<Sample> {
     let mut r = Rng::new(1);
     (0..N)
         .map(|i| {
-            let mut s = Sample {
-                seq: i as u32,
-                t_ns: i as u64 * 10_000_000,
-                ..Sample::default()
-            };
+            let mut s = Sample::nth(i, 10_000_000);
             s.set_channels(&[
                 0.01 * r.normal(),
                 0.01 * r.normal(),

@@ -19,10 +19,8 @@ fn input() -> Vec<u8> {
     let mut b = BytesMut::new();
     for i in 0..N {
         let mut s = Sample {
-            seq: i as u32,
-            t_ns: i as u64 * 5_000_000,
             temp_c: Some(25.0),
-            ..Sample::default()
+            ..Sample::nth(i, 5_000_000)
         };
         s.set_channels(&[
             r.normal(),

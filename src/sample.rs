@@ -143,6 +143,17 @@ impl Default for Sample {
 }
 
 impl Sample {
+    /// The `i`-th sample of a stream that starts at t = 0 with one sample every `period_ns`:
+    /// `seq` = i (wrapping as the wire's counter does), `t_ns` = i · `period_ns`, the rest as
+    /// [`Sample::default`] (channels 0, no temperature, no flags).
+    pub fn nth(i: usize, period_ns: u64) -> Sample {
+        Sample {
+            seq: i as u32,
+            t_ns: i as u64 * period_ns,
+            ..Sample::default()
+        }
+    }
+
     /// Value of channel `c` (0..6: gx gy gz ax ay az).
     #[inline]
     pub fn channel(&self, c: usize) -> f64 {

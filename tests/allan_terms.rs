@@ -244,72 +244,36 @@ fn mixture_of_n_b_k_recovers_each() {
 #[test]
 #[ignore = "prints the seed-to-seed spread behind the tolerances above (slow)"]
 fn seed_spread() {
-    let stats = |name: &str, v: Vec<f64>| {
+    // The ratio estimate / truth of term `t` over the seeds' cases: its mean, spread and worst.
+    fn spread<C>(name: &str, t: Term, cases: &[C], fit_truth: impl Fn(&C) -> (&TermFit, f64)) {
+        let v: Vec<f64> = cases
+            .iter()
+            .map(|c| {
+                let (f, truth) = fit_truth(c);
+                f.term(t).value().unwrap_or(f64::NAN) / truth
+            })
+            .collect();
         let n = v.len() as f64;
         let m = v.iter().sum::<f64>() / n;
         let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
         let worst = v.iter().map(|x| (x - 1.0).abs()).fold(0.0, f64::max);
         eprintln!("{name}: mean ratio {m:.4}, sd {sd:.4}, worst |ratio-1| {worst:.4}");
-    };
+    }
     let seeds = 100..120u64;
-    let val = |f: &TermFit, t: Term| f.term(t).value().unwrap_or(f64::NAN);
     let w: Vec<_> = seeds.clone().map(case_white).collect();
-    stats(
-        "white N",
-        w.iter()
-            .map(|(f, n)| val(f, Term::RandomWalk) / n)
-            .collect(),
-    );
+    spread("white N", Term::RandomWalk, &w, |c| (&c.0, c.1));
     let r: Vec<_> = seeds.clone().map(case_rrw).collect();
-    stats(
-        "rrw K",
-        r.iter()
-            .map(|(f, k, _)| val(f, Term::RateRandomWalk) / k)
-            .collect(),
-    );
-    stats(
-        "rrw N",
-        r.iter()
-            .map(|(f, _, n)| val(f, Term::RandomWalk) / n)
-            .collect(),
-    );
+    spread("rrw K", Term::RateRandomWalk, &r, |c| (&c.0, c.1));
+    spread("rrw N", Term::RandomWalk, &r, |c| (&c.0, c.2));
     let q: Vec<_> = seeds.clone().map(case_quant).collect();
-    stats(
-        "quant Q",
-        q.iter()
-            .map(|(f, q, _)| val(f, Term::Quantisation) / q)
-            .collect(),
-    );
-    stats(
-        "quant N",
-        q.iter()
-            .map(|(f, _, n)| val(f, Term::RandomWalk) / n)
-            .collect(),
-    );
+    spread("quant Q", Term::Quantisation, &q, |c| (&c.0, c.1));
+    spread("quant N", Term::RandomWalk, &q, |c| (&c.0, c.2));
     let rr: Vec<_> = seeds.clone().map(case_ramp).collect();
-    stats(
-        "ramp R",
-        rr.iter().map(|(f, r)| val(f, Term::RateRamp) / r).collect(),
-    );
+    spread("ramp R", Term::RateRamp, &rr, |c| (&c.0, c.1));
     let m: Vec<_> = seeds.map(case_mixture).collect();
-    stats(
-        "mix N",
-        m.iter()
-            .map(|(f, t)| val(f, Term::RandomWalk) / t[0])
-            .collect(),
-    );
-    stats(
-        "mix B",
-        m.iter()
-            .map(|(f, t)| val(f, Term::BiasInstability) / t[1])
-            .collect(),
-    );
-    stats(
-        "mix K",
-        m.iter()
-            .map(|(f, t)| val(f, Term::RateRandomWalk) / t[2])
-            .collect(),
-    );
+    spread("mix N", Term::RandomWalk, &m, |c| (&c.0, c.1[0]));
+    spread("mix B", Term::BiasInstability, &m, |c| (&c.0, c.1[1]));
+    spread("mix K", Term::RateRandomWalk, &m, |c| (&c.0, c.1[2]));
 }
 
 // --- exports and input handling ---
@@ -328,16 +292,26 @@ fn six_channel_samples(n: usize) -> Vec<Sample> {
         .collect();
     (0..n)
         .map(|i| {
-            let mut s = Sample {
-                seq: i as u32,
-                t_ns: (i as u64) * 10_000_000,
-                ..Sample::default()
-            };
+            let mut s = Sample::nth(i, 10_000_000);
             let v: [f64; 6] = std::array::from_fn(|c| chans[c][i]);
             s.set_channels(&v);
             s
         })
         .collect()
+}
+
+/// The number after `sep` on the line of `text` that starts with `name`, up to a `#` comment.
+fn value_after(text: &str, name: &str, sep: char) -> f64 {
+    let line = text.lines().find(|l| l.starts_with(name)).unwrap();
+    line.split(sep)
+        .nth(1)
+        .unwrap()
+        .split('#')
+        .next()
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap()
 }
 
 #[test]
@@ -354,18 +328,7 @@ fn exports_carry_the_terms_in_their_units() {
         .fold(0.0, f64::max);
     assert_eq!(g.noise_density, max_n);
     let yaml = kalibr_yaml(&r).unwrap();
-    let field = |name: &str| -> f64 {
-        let line = yaml.lines().find(|l| l.starts_with(name)).unwrap();
-        line.split(':')
-            .nth(1)
-            .unwrap()
-            .split('#')
-            .next()
-            .unwrap()
-            .trim()
-            .parse()
-            .unwrap()
-    };
+    let field = |name: &str| value_after(&yaml, name, ':');
     // a printed value is the aggregate to 7 digits
     assert_rel(
         field("gyroscope_noise_density"),
@@ -388,18 +351,7 @@ fn exports_carry_the_terms_in_their_units() {
     assert_rel(field("accelerometer_random_walk"), 1e-3, 0.40, "accel K");
     // GNSS_IMU: deg/s/√Hz and µg/√Hz
     let cfg = gnss_imu_config(&r).unwrap();
-    let cfg_val = |name: &str| -> f64 {
-        let line = cfg.lines().find(|l| l.starts_with(name)).unwrap();
-        line.split('=')
-            .nth(1)
-            .unwrap()
-            .split('#')
-            .next()
-            .unwrap()
-            .trim()
-            .parse()
-            .unwrap()
-    };
+    let cfg_val = |name: &str| value_after(&cfg, name, '=');
     assert_rel(
         cfg_val("gyro_noise_PSD"),
         g.noise_density.to_degrees(),

@@ -7,7 +7,7 @@
 //! `tests/reference/ar_fit_timing.py`.
 use imuprep::analysis::allan::overlapping_adev;
 use imuprep::analysis::wavelet::{denoise, wavedec, waverec};
-use imuprep::model::{burg, burg_orders, yule_walker, yule_walker_orders};
+use imuprep::model::{ArFit, burg, burg_orders, yule_walker, yule_walker_orders};
 
 fn fixture() -> Vec<f64> {
     include_str!("fixtures/ar_wavelet_allan.csv")
@@ -20,6 +20,19 @@ fn fixture() -> Vec<f64> {
 /// Relative/absolute closeness with a stated tolerance.
 fn close(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol * (1.0 + b.abs())
+}
+
+/// `f`'s coefficients and noise variance against the reference `want` and `var`, each within
+/// `tol` (relative to 1 + |value|); `what` names the fit in the message.
+fn assert_fit(what: &str, f: &ArFit, want: &[f64], var: f64, tol: f64) {
+    for (a, b) in f.coeffs.iter().zip(want) {
+        assert!(close(*a, *b, tol), "{what}: {a} vs {b}");
+    }
+    assert!(
+        close(f.noise_var / var, 1.0, tol),
+        "{what} var {}",
+        f.noise_var
+    );
 }
 
 // AR coefficients: statsmodels solves the same Toeplitz system by LU and runs the same Burg
@@ -58,14 +71,7 @@ fn yule_walker_matches_statsmodels() {
     let all = yule_walker_orders(&x, 10).unwrap();
     for (p, want, var) in cases {
         for f in [yule_walker(&x, p).unwrap(), all[p - 1].clone()] {
-            for (a, b) in f.coeffs.iter().zip(want) {
-                assert!(close(*a, *b, AR_TOL), "p={p}: {a} vs {b}");
-            }
-            assert!(
-                close(f.noise_var / var, 1.0, AR_TOL),
-                "p={p} var {}",
-                f.noise_var
-            );
+            assert_fit(&format!("p={p}"), &f, want, var, AR_TOL);
         }
     }
 }
@@ -105,14 +111,7 @@ fn burg_matches_statsmodels() {
     let all = burg_orders(&x, 10).unwrap();
     for (p, want, var) in cases {
         for f in [burg(&x, p).unwrap(), all[p - 1].clone()] {
-            for (a, b) in f.coeffs.iter().zip(want) {
-                assert!(close(*a, *b, AR_TOL), "p={p}: {a} vs {b}");
-            }
-            assert!(
-                close(f.noise_var / var, 1.0, AR_TOL),
-                "p={p} var {}",
-                f.noise_var
-            );
+            assert_fit(&format!("p={p}"), &f, want, var, AR_TOL);
         }
     }
 }
@@ -179,14 +178,7 @@ fn bench_series_fits_match_statsmodels() {
         ),
     ];
     for (name, f, want, var) in fits {
-        for (a, b) in f.coeffs.iter().zip(want) {
-            assert!(close(*a, *b, BENCH_TOL), "{name}: {a} vs {b}");
-        }
-        assert!(
-            close(f.noise_var / var, 1.0, BENCH_TOL),
-            "{name} var {}",
-            f.noise_var
-        );
+        assert_fit(name, &f, want, var, BENCH_TOL);
     }
 }
 

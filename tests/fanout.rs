@@ -2,23 +2,15 @@
 //! lag counter rises; the stream never waits.
 mod common;
 
-use imuprep::config::{Format, Sink};
 use imuprep::frame::{FrameDecoder, Message};
-use imuprep::io::sink::{self, SinkItem};
+use imuprep::io::sink::SinkItem;
 use std::sync::Arc;
 use tokio::io::AsyncReadExt;
 use tokio_util::codec::Decoder;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn slow_tcp_client_falls_behind_and_never_stalls_the_other() {
-    let h = sink::start(&Sink::Tcp {
-        bind: "127.0.0.1:0".parse().unwrap(),
-        format: Format::Native,
-        queue: 8,
-    })
-    .await
-    .unwrap();
-    let addr: std::net::SocketAddr = h.name.trim_start_matches("tcp:").parse().unwrap();
+    let (h, addr) = common::tcp_native_sink().await;
     let _stalled = tokio::net::TcpStream::connect(addr).await.unwrap(); // never reads
     let mut reader = tokio::net::TcpStream::connect(addr).await.unwrap();
     // Wait until the server has registered both clients.

@@ -10,11 +10,7 @@ use tokio_util::codec::Decoder;
 fn samples(n: usize) -> Vec<Sample> {
     (0..n)
         .map(|i| {
-            let mut s = Sample {
-                seq: i as u32,
-                t_ns: i as u64 * 10_000_000,
-                ..Default::default()
-            };
+            let mut s = Sample::nth(i, 10_000_000);
             s.gyro[0] = i as f64 * 1e-3;
             s.accel[2] = 9.8 + (i % 7) as f64 * 1e-2;
             s

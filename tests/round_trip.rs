@@ -28,13 +28,7 @@ fn import_replay_export_round_trips_canonical_csv() {
     let log = dir.path().join("in.log");
     let clean = dir.path().join("clean.log");
     let out = dir.path().join("out.csv");
-    let st = Command::new(common::bin())
-        .args(["import"])
-        .arg(&input)
-        .arg("-o")
-        .arg(&log)
-        .status()
-        .unwrap();
+    let st = common::import(&input, &log).status;
     assert!(st.success());
     let passthrough =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("config/passthrough.toml");
@@ -92,13 +86,7 @@ fn import_reports_bad_cell_with_line_and_column() {
         "t,gx,gy,gz,ax,ay,az,temp\n0,1,2,3,4,5,6,\n0.01,1,2,abc,4,5,6,\n",
     )
     .unwrap();
-    let out = Command::new(common::bin())
-        .arg("import")
-        .arg(&input)
-        .arg("-o")
-        .arg(dir.path().join("x.log"))
-        .output()
-        .unwrap();
+    let out = common::import(&input, &dir.path().join("x.log"));
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -114,13 +102,7 @@ fn import_names_an_absent_channel_and_refuses_a_file_without_any() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("five.csv");
     std::fs::write(&input, "t,gx,gy,gz,ax,ay\n0,1,2,3,4,5\n0.01,1,2,3,4,5\n").unwrap();
-    let out = Command::new(common::bin())
-        .arg("import")
-        .arg(&input)
-        .arg("-o")
-        .arg(dir.path().join("x.log"))
-        .output()
-        .unwrap();
+    let out = common::import(&input, &dir.path().join("x.log"));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(
@@ -130,13 +112,7 @@ fn import_names_an_absent_channel_and_refuses_a_file_without_any() {
 
     let input = dir.path().join("bad.csv");
     std::fs::write(&input, "t,temp,pressure\n0,25,1013\n").unwrap();
-    let out = Command::new(common::bin())
-        .arg("import")
-        .arg(&input)
-        .arg("-o")
-        .arg(dir.path().join("y.log"))
-        .output()
-        .unwrap();
+    let out = common::import(&input, &dir.path().join("y.log"));
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -156,16 +132,7 @@ fn nan_values_are_flagged_and_passed_on() {
     .unwrap();
     let log = dir.path().join("nan.log");
     let out = dir.path().join("nan_out.csv");
-    assert!(
-        Command::new(common::bin())
-            .arg("import")
-            .arg(&input)
-            .arg("-o")
-            .arg(&log)
-            .status()
-            .unwrap()
-            .success()
-    );
+    assert!(common::import(&input, &log).status.success());
     assert!(
         Command::new(common::bin())
             .arg("replay")
@@ -251,13 +218,7 @@ fn every_real_recording_imports_with_one_command() {
             continue; // 1 M rows: exercised by the fit/compare tests; keep this test quick
         }
         let log = dir.path().join("r.log");
-        let out = Command::new(common::bin())
-            .arg("import")
-            .arg(&p)
-            .arg("-o")
-            .arg(&log)
-            .output()
-            .unwrap();
+        let out = common::import(&p, &log);
         assert!(
             out.status.success(),
             "{f}: {}",

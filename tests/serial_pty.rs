@@ -31,6 +31,22 @@ fn pty_at(link: &std::path::Path) -> SerialStream {
     master
 }
 
+/// Wait until the source has (re)opened the port, keeping the outage count it reports on the
+/// way in `outages`.
+async fn connected(rx: &mut mpsc::Receiver<SourceEvent>, outages: &mut u64) {
+    loop {
+        match tokio::time::timeout(Duration::from_secs(10), rx.recv())
+            .await
+            .unwrap()
+        {
+            Some(SourceEvent::Connected { .. }) => return,
+            Some(SourceEvent::Outage { outages: n, .. }) => *outages = n,
+            Some(_) => {}
+            None => panic!("source ended"),
+        }
+    }
+}
+
 async fn collect(
     rx: &mut mpsc::Receiver<SourceEvent>,
     want: usize,
@@ -67,16 +83,7 @@ async fn frames_over_a_pty_arrive_and_a_vanished_port_is_survived() {
     // slave must be open for the line discipline to hold the bytes).
     let mut got = Vec::new();
     let mut outages = 0;
-    loop {
-        match tokio::time::timeout(Duration::from_secs(10), rx.recv())
-            .await
-            .unwrap()
-        {
-            Some(SourceEvent::Connected { .. }) => break,
-            Some(_) => {}
-            None => panic!("source ended"),
-        }
-    }
+    connected(&mut rx, &mut 0).await;
     master.write_all(&frames(0..100)).await.unwrap();
     collect(&mut rx, 100, &mut got, &mut outages).await;
     assert_eq!(
@@ -90,17 +97,7 @@ async fn frames_over_a_pty_arrive_and_a_vanished_port_is_survived() {
     tokio::time::sleep(Duration::from_millis(300)).await;
     // It comes back (a new pty at the same path); frames 150.. are sent, 100..150 were lost.
     let mut master = pty_at(&link);
-    loop {
-        match tokio::time::timeout(Duration::from_secs(10), rx.recv())
-            .await
-            .unwrap()
-        {
-            Some(SourceEvent::Connected { .. }) => break,
-            Some(SourceEvent::Outage { outages: n, .. }) => outages = n,
-            Some(_) => {}
-            None => panic!("source ended"),
-        }
-    }
+    connected(&mut rx, &mut outages).await;
     master.write_all(&frames(150..200)).await.unwrap();
     collect(&mut rx, 150, &mut got, &mut outages).await;
     assert!(outages >= 1, "the outage is counted");
@@ -179,16 +176,7 @@ async fn a_silent_open_port_is_reported_as_a_stall_and_reopened() {
     assert_eq!(got.len(), 50);
     assert_eq!(stalls, 1);
     // Reopened, and data flows again.
-    loop {
-        match tokio::time::timeout(Duration::from_secs(10), rx.recv())
-            .await
-            .unwrap()
-        {
-            Some(SourceEvent::Connected { .. }) => break,
-            Some(_) => {}
-            None => panic!("source ended"),
-        }
-    }
+    connected(&mut rx, &mut 0).await;
     master.write_all(&frames(50..60)).await.unwrap();
     let mut outages = 0;
     collect(&mut rx, 60, &mut got, &mut outages).await;

@@ -26,6 +26,46 @@ fn stuck_fifo(path: &Path) -> std::fs::File {
         .unwrap()
 }
 
+/// The embedded default config replaying `n` samples (`common::samples(n, seed)`, written to
+/// `dir/in.log`) at `speed`× into `sinks`, health published every 0.1 s.
+fn replay_config(dir: &Path, n: usize, seed: u64, speed: f64, sinks: Vec<Sink>) -> Config {
+    let log = dir.join("in.log");
+    imuprep::io::log::write_log(&log, &common::descriptor(), &common::samples(n, seed)).unwrap();
+    let mut cfg = Config::default_embedded().unwrap();
+    cfg.source = SourceConfig::Replay { path: log, speed };
+    cfg.sinks = sinks;
+    cfg.health.interval_s = 0.1;
+    cfg
+}
+
+/// The daemon's loop over `cfg` with no cleaning stage; panics with `froze` if it has not ended
+/// within `secs` seconds.
+async fn run_within(cfg: &Config, secs: u64, froze: &str) -> imuprep::runtime::Health {
+    tokio::time::timeout(
+        Duration::from_secs(secs),
+        imuprep::runtime::run(cfg, Pipeline::pass_through()),
+    )
+    .await
+    .expect(froze)
+    .unwrap()
+}
+
+/// A JSON-lines output: how many sample records, and the health records in order.
+fn jsonl_samples_and_health(path: &Path) -> (usize, Vec<serde_json::Value>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut samples = 0;
+    let mut reports = Vec::new();
+    for line in text.lines() {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap();
+        if v.get("type").and_then(|t| t.as_str()) == Some("health") {
+            reports.push(v);
+        } else {
+            samples += 1;
+        }
+    }
+    (samples, reports)
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn stuck_file_sink_drops_counted_and_never_blocks_the_stream() {
     let dir = tempfile::tempdir().unwrap();
@@ -61,14 +101,7 @@ async fn stuck_file_sink_drops_counted_and_never_blocks_the_stream() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn tcp_clients_that_leave_are_freed_and_folded_into_totals() {
-    let h = sink::start(&Sink::Tcp {
-        bind: "127.0.0.1:0".parse().unwrap(),
-        format: Format::Native,
-        queue: 8,
-    })
-    .await
-    .unwrap();
-    let addr: std::net::SocketAddr = h.name.trim_start_matches("tcp:").parse().unwrap();
+    let (h, addr) = common::tcp_native_sink().await;
     let batch = Arc::new(common::samples(10, 1));
     for _ in 0..50 {
         let c = tokio::net::TcpStream::connect(addr).await.unwrap();
@@ -93,14 +126,7 @@ async fn tcp_clients_that_leave_are_freed_and_folded_into_totals() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn tcp_sent_counts_what_was_written_not_what_was_queued() {
-    let h = sink::start(&Sink::Tcp {
-        bind: "127.0.0.1:0".parse().unwrap(),
-        format: Format::Native,
-        queue: 8,
-    })
-    .await
-    .unwrap();
-    let addr: std::net::SocketAddr = h.name.trim_start_matches("tcp:").parse().unwrap();
+    let (h, addr) = common::tcp_native_sink().await;
     let stalled = tokio::net::TcpStream::connect(addr).await.unwrap(); // reads nothing yet
     for _ in 0..200 {
         if h.stats.report(&h.name).clients.len() == 1 {
@@ -180,40 +206,32 @@ async fn tcp_sent_counts_what_was_written_not_what_was_queued() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn stuck_consumer_never_freezes_the_run_and_health_travels_with_the_data() {
     let dir = tempfile::tempdir().unwrap();
-    let log = dir.path().join("in.log");
     let n = 4000; // 20 s at 200 Hz, replayed at 20× ≈ 1 s
-    imuprep::io::log::write_log(&log, &common::descriptor(), &common::samples(n, 9)).unwrap();
     let fifo = dir.path().join("stuck.csv");
     let reader = stuck_fifo(&fifo);
     let jsonl = dir.path().join("out.jsonl");
     let native = dir.path().join("out.log");
-    let mut cfg = Config::default_embedded().unwrap();
-    cfg.source = SourceConfig::Replay {
-        path: log,
-        speed: 20.0,
-    };
-    cfg.sinks = vec![
-        Sink::File {
-            path: fifo,
-            format: Format::Csv,
-        },
-        Sink::File {
-            path: jsonl.clone(),
-            format: Format::Jsonl,
-        },
-        Sink::File {
-            path: native.clone(),
-            format: Format::Native,
-        },
-    ];
-    cfg.health.interval_s = 0.1;
-    let health = tokio::time::timeout(
-        Duration::from_secs(30),
-        imuprep::runtime::run(&cfg, Pipeline::pass_through()),
-    )
-    .await
-    .expect("a stuck sink froze the run")
-    .unwrap();
+    let cfg = replay_config(
+        dir.path(),
+        n,
+        9,
+        20.0,
+        vec![
+            Sink::File {
+                path: fifo,
+                format: Format::Csv,
+            },
+            Sink::File {
+                path: jsonl.clone(),
+                format: Format::Jsonl,
+            },
+            Sink::File {
+                path: native.clone(),
+                format: Format::Native,
+            },
+        ],
+    );
+    let health = run_within(&cfg, 30, "a stuck sink froze the run").await;
     drop(reader);
     assert_eq!(health.samples_out, n as u64);
     assert!(health.sinks[0].dropped > 0, "{:?}", health.sinks[0]);
@@ -221,17 +239,7 @@ async fn stuck_consumer_never_freezes_the_run_and_health_travels_with_the_data()
 
     // JSON lines: every sample, and health records beside them. The run lasts ≥ 1 s of wall
     // time (paced replay) with a 0.1-s interval; ≥ 3 reports leaves room for a loaded machine.
-    let text = std::fs::read_to_string(&jsonl).unwrap();
-    let mut samples = 0;
-    let mut reports = Vec::new();
-    for line in text.lines() {
-        let v: serde_json::Value = serde_json::from_str(line).unwrap();
-        if v.get("type").and_then(|t| t.as_str()) == Some("health") {
-            reports.push(v);
-        } else {
-            samples += 1;
-        }
-    }
+    let (samples, reports) = jsonl_samples_and_health(&jsonl);
     assert_eq!(samples, n);
     assert!(reports.len() >= 3, "{} health records", reports.len());
     let last = reports.last().unwrap();
@@ -266,49 +274,31 @@ async fn stuck_consumer_never_freezes_the_run_and_health_travels_with_the_data()
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn stuck_pty_inline_sink_never_freezes_the_run_and_its_drops_show_as_they_happen() {
     let dir = tempfile::tempdir().unwrap();
-    let log = dir.path().join("in.log");
     // 40 000 native frames (2.2 MB, far beyond a pty's buffer) at 200 Hz = 200 s, replayed at
     // 100× ≈ 2 s of wall time.
     let n = 40_000;
-    imuprep::io::log::write_log(&log, &common::descriptor(), &common::samples(n, 13)).unwrap();
     let jsonl = dir.path().join("out.jsonl");
-    let mut cfg = Config::default_embedded().unwrap();
-    cfg.source = SourceConfig::Replay {
-        path: log,
-        speed: 100.0,
-    };
-    cfg.sinks = vec![
-        Sink::Inline { path: None },
-        Sink::File {
-            path: jsonl.clone(),
-            format: Format::Jsonl,
-        },
-    ];
-    cfg.health.interval_s = 0.1;
-    let health = tokio::time::timeout(
-        Duration::from_secs(60),
-        imuprep::runtime::run(&cfg, Pipeline::pass_through()),
-    )
-    .await
-    .expect("a pty nobody reads froze the run")
-    .unwrap();
+    let cfg = replay_config(
+        dir.path(),
+        n,
+        13,
+        100.0,
+        vec![
+            Sink::Inline { path: None },
+            Sink::File {
+                path: jsonl.clone(),
+                format: Format::Jsonl,
+            },
+        ],
+    );
+    let health = run_within(&cfg, 60, "a pty nobody reads froze the run").await;
     assert_eq!(health.samples_out, n as u64);
     let pty = &health.sinks[0];
     assert!(pty.name.starts_with("pty:"), "{pty:?}");
     assert!(pty.dropped > 0, "{pty:?}");
     assert!(pty.samples_out + pty.dropped <= n as u64, "{pty:?}");
     assert_eq!(health.sinks[1].dropped, 0, "{:?}", health.sinks[1]);
-    let text = std::fs::read_to_string(&jsonl).unwrap();
-    let mut samples = 0;
-    let mut reports = Vec::new();
-    for line in text.lines() {
-        let v: serde_json::Value = serde_json::from_str(line).unwrap();
-        if v.get("type").and_then(|t| t.as_str()) == Some("health") {
-            reports.push(v);
-        } else {
-            samples += 1;
-        }
-    }
+    let (samples, reports) = jsonl_samples_and_health(&jsonl);
     assert_eq!(samples, n);
     // Drops in a report published before the end (the last one is the closing report).
     assert!(

@@ -62,11 +62,7 @@ fn bench(phi: f64, seed: u64) -> Vec<Sample> {
         .collect();
     (0..n)
         .map(|k| {
-            let mut s = Sample {
-                seq: k as u32,
-                t_ns: k as u64 * 10_000_000,
-                ..Default::default()
-            };
+            let mut s = Sample::nth(k, 10_000_000);
             for (c, x) in ch.iter().enumerate() {
                 s.set_channel(c, x[k] + if c == 5 { 9.81 } else { 0.0 });
             }

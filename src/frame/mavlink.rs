@@ -34,11 +34,11 @@
 //! checksum, while the crate generates every dialect message (≈ 20 s more cold build for the
 //! common dialect alone) and parses into typed values, where pass-through needs the bytes.
 
+use super::Descriptor;
 use super::framing::{Fault, Framer, Stamper};
 use super::mavlink_crc::CRC_EXTRA;
 use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
 use super::settle::{self, Held, Settle};
-use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
 use crc::{CRC_16_MCRF4XX, Crc, Table};
@@ -459,12 +459,7 @@ impl ProtocolDecoder for MavlinkDecoder {
         let start = matches!(buf.first(), Some(&(STX_V1 | STX_V2)));
         self.f.truncated_front(buf, start);
     }
-    fn stats(&self) -> DecoderStats {
-        self.f.stats
-    }
-    fn descriptor(&self) -> Option<Descriptor> {
-        self.stamper.descriptor()
-    }
+    super::protocol::framer_stats_and_descriptor!();
     fn found(&self) -> String {
         let mut s = format!(
             "MAVLink: {} v1 and {} v2 frames; IMU streams:",
@@ -607,6 +602,7 @@ pub fn highres_payload(s: &Sample, instance: u8) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frame::DecoderStats;
 
     fn decode_all(
         opts: MavlinkOptions,

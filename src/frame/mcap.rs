@@ -25,10 +25,10 @@
 //! A vector whose covariance has −1 in element 0 ("data not available", the message's own
 //! convention, as the MCAP sink writes a triad the sensor lacks) gives three absent channels.
 
+use super::Descriptor;
 use super::framing::{Fault, Framer, Stamper};
 use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
 use super::ros2;
-use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
 use std::collections::{HashMap, VecDeque};
@@ -546,12 +546,7 @@ impl ProtocolDecoder for McapDecoder {
         let start = !self.f.in_garbage();
         self.f.truncated_front(buf, start);
     }
-    fn stats(&self) -> DecoderStats {
-        self.f.stats
-    }
-    fn descriptor(&self) -> Option<Descriptor> {
-        self.stamper.descriptor()
-    }
+    super::protocol::framer_stats_and_descriptor!();
     fn found(&self) -> String {
         let mut imu: Vec<&str> = self
             .channels

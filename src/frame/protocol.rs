@@ -30,6 +30,21 @@ macro_rules! default_from_options {
 }
 pub(crate) use default_from_options;
 
+/// `ProtocolDecoder::stats` and `ProtocolDecoder::descriptor` of a decoder that keeps its
+/// counters in a `Framer` at `self.f` and its time base in a `Stamper` at `self.stamper` (UBX,
+/// MAVLink, ULog, MCAP); expands inside the `impl ProtocolDecoder` block.
+macro_rules! framer_stats_and_descriptor {
+    () => {
+        fn stats(&self) -> $crate::frame::DecoderStats {
+            self.f.stats
+        }
+        fn descriptor(&self) -> Option<$crate::frame::Descriptor> {
+            self.stamper.descriptor()
+        }
+    };
+}
+pub(crate) use framer_stats_and_descriptor;
+
 /// The wire formats imuprep reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]

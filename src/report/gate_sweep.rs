@@ -230,11 +230,7 @@ pub fn run_stage(
         .iter()
         .enumerate()
         .map(|(i, &v)| {
-            let mut smp = Sample {
-                seq: i as u32,
-                t_ns: i as u64 * 5_000_000,
-                ..Sample::default()
-            };
+            let mut smp = Sample::nth(i, 5_000_000);
             smp.set_channel(channel, v);
             smp
         })

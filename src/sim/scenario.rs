@@ -87,10 +87,44 @@ fn default_accel_range() -> f64 {
     16.0
 }
 
-/// The true motion of the sensor.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum MotionConfig {
+/// `MotionConfig`, every kind of which also takes the same four keys: `gravity_m_s2`,
+/// `earth_rate`, `latitude_deg` (written after the kind's own leading keys) and `vibration`
+/// (last). They are fields of each variant, not a `#[serde(flatten)]`ed table: with `flatten`
+/// the files parse the same, but a misspelt key's error loses its "expected one of …" list.
+macro_rules! motion_config {
+    ($(
+        $(#[$doc:meta])*
+        $kind:ident { $($lead:tt)* } then { $($tail:tt)* }
+    )*) => {
+        /// The true motion of the sensor.
+        #[derive(Debug, Clone, Deserialize, PartialEq)]
+        #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+        pub enum MotionConfig {
+            $(
+                $(#[$doc])*
+                $kind {
+                    $($lead)*
+                    /// Local gravity magnitude, m/s².
+                    #[serde(default = "default_gravity")]
+                    gravity_m_s2: f64,
+                    /// Add the Earth rotation rate to the gyros.
+                    #[serde(default)]
+                    earth_rate: bool,
+                    /// Latitude for the Earth rate, deg.
+                    #[serde(default)]
+                    latitude_deg: f64,
+                    $($tail)*
+                    /// Mechanical vibration modes (bench, engine, road): real motion, see
+                    /// [`VibrationMode`].
+                    #[serde(default)]
+                    vibration: Vec<VibrationMode>,
+                },
+            )*
+        }
+    };
+}
+
+motion_config! {
     /// At rest at a fixed attitude.
     Static {
         /// Record length, s.
@@ -102,36 +136,16 @@ pub enum MotionConfig {
         pitch_deg: f64,
         #[serde(default)]
         yaw_deg: f64,
-        /// Local gravity magnitude, m/s².
-        #[serde(default = "default_gravity")]
-        gravity_m_s2: f64,
-        /// Add the Earth rotation rate to the gyros.
-        #[serde(default)]
-        earth_rate: bool,
-        /// Latitude for the Earth rate, deg.
-        #[serde(default)]
-        latitude_deg: f64,
-        /// Mechanical vibration modes (bench, engine): real motion, see [`VibrationMode`].
-        #[serde(default)]
-        vibration: Vec<VibrationMode>,
-    },
+    } then {}
     /// A land-vehicle drive made of consecutive segments.
     Drive {
         /// Heading at the start, deg (0 = north, positive clockwise seen from above).
         #[serde(default)]
         initial_heading_deg: f64,
-        #[serde(default = "default_gravity")]
-        gravity_m_s2: f64,
-        #[serde(default)]
-        earth_rate: bool,
-        #[serde(default)]
-        latitude_deg: f64,
+    } then {
         /// The drive, in order. The vehicle starts at rest.
         segments: Vec<Segment>,
-        /// Road / engine vibration modes: real motion, see [`VibrationMode`].
-        #[serde(default)]
-        vibration: Vec<VibrationMode>,
-    },
+    }
     /// Multi-position calibration (a hand or a fixture tumbling the IMU): still stops at a
     /// sequence of attitudes, each reached from the last by a jerk-limited rotation about one
     /// body-fixed axis, the IMU at the centre of rotation (no lever arm). Give either `scheme`
@@ -150,16 +164,7 @@ pub enum MotionConfig {
         /// Time over which the rate builds up (and dies down), s.
         #[serde(default = "default_jerk_time")]
         edge_s: f64,
-        #[serde(default = "default_gravity")]
-        gravity_m_s2: f64,
-        #[serde(default)]
-        earth_rate: bool,
-        #[serde(default)]
-        latitude_deg: f64,
-        /// Mechanical vibration modes: real motion, see [`VibrationMode`].
-        #[serde(default)]
-        vibration: Vec<VibrationMode>,
-    },
+    } then {}
 }
 
 impl MotionConfig {

@@ -63,10 +63,8 @@ impl ArGen {
 
 pub fn sample(k: usize, gyro: [f64; 3], accel: [f64; 3], temp_c: Option<f64>) -> Sample {
     let mut s = Sample {
-        seq: k as u32,
-        t_ns: (k as u64) * 10_000_000,
         temp_c,
-        ..Default::default()
+        ..Sample::nth(k, 10_000_000)
     };
     s.set_channels(&[gyro[0], gyro[1], gyro[2], accel[0], accel[1], accel[2]]);
     s

@@ -37,14 +37,12 @@ pub fn samples(n: usize, seed: u64) -> Vec<Sample> {
     (0..n)
         .map(|i| {
             let mut s = Sample {
-                seq: i as u32,
-                t_ns: i as u64 * 5_000_000,
                 temp_c: if i % 7 == 0 {
                     None
                 } else {
                     Some(25.0 + r.normal())
                 },
-                ..Sample::default()
+                ..Sample::nth(i, 5_000_000)
             };
             s.set_channels(&[
                 0.01 * r.normal(),
@@ -72,6 +70,31 @@ pub fn descriptor() -> Descriptor {
 
 pub fn bin() -> PathBuf {
     PathBuf::from(env!("CARGO_BIN_EXE_imuprep"))
+}
+
+/// A TCP sink on a free local port writing native frames, client queues of 8 batches; the
+/// handle and the address it listens on.
+pub async fn tcp_native_sink() -> (imuprep::io::sink::SinkHandle, std::net::SocketAddr) {
+    let h = imuprep::io::sink::start(&imuprep::config::Sink::Tcp {
+        bind: "127.0.0.1:0".parse().unwrap(),
+        format: imuprep::config::Format::Native,
+        queue: 8,
+    })
+    .await
+    .unwrap();
+    let addr = h.name.trim_start_matches("tcp:").parse().unwrap();
+    (h, addr)
+}
+
+/// `imuprep import <input> -o <log>` with the default units; its output, success or not.
+pub fn import(input: &std::path::Path, log: &std::path::Path) -> std::process::Output {
+    std::process::Command::new(bin())
+        .arg("import")
+        .arg(input)
+        .arg("-o")
+        .arg(log)
+        .output()
+        .unwrap()
 }
 
 /// Run the built `imuprep` with `args` from the crate root; its stdout and stderr, joined. Panics

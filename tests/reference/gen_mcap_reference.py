@@ -13,21 +13,12 @@ log time, angular velocity, linear acceleration, the three covariance diagonals)
 
     python3 tests/reference/gen_mcap_reference.py
 """
-import csv, random, shutil, tempfile
-from pathlib import Path
+import random
 
-from rosbags.rosbag2 import Reader, StoragePlugin, Writer
-from rosbags.typesys import Stores, get_typestore
-
-HERE = Path(__file__).resolve().parent
-ts = get_typestore(Stores.ROS2_HUMBLE)
-Imu = ts.types["sensor_msgs/msg/Imu"]
-Header = ts.types["std_msgs/msg/Header"]
-Time = ts.types["builtin_interfaces/msg/Time"]
-Quat = ts.types["geometry_msgs/msg/Quaternion"]
-Vec3 = ts.types["geometry_msgs/msg/Vector3"]
-String = ts.types["std_msgs/msg/String"]
 import numpy as np
+from rosbags.rosbag2 import Reader
+
+from rosbags_common import HERE, IMU_COLUMNS, Imu, Quat, String, Vec3, header, imu_row, write_bag, write_csv
 
 random.seed(14)
 
@@ -41,7 +32,7 @@ def cov(d):
 
 def imu(t_ns, frame, g, a):
     return Imu(
-        header=Header(stamp=Time(sec=t_ns // 10**9, nanosec=t_ns % 10**9), frame_id=frame),
+        header=header(t_ns, frame),
         orientation=Quat(x=0.0, y=0.0, z=0.0, w=1.0),
         orientation_covariance=np.array([-1.0] + [0.0] * 8),
         angular_velocity=Vec3(x=g[0], y=g[1], z=g[2]),
@@ -51,8 +42,6 @@ def imu(t_ns, frame, g, a):
     )
 
 
-tmp = Path(tempfile.mkdtemp())
-bag = tmp / "bag"
 msgs = []  # (topic, log_time_ns, message)
 t0 = 1_700_000_000 * 10**9 + 123_456_789
 for k in range(60):
@@ -67,15 +56,7 @@ for k in range(12):
     msgs.append(("/chatter", t0 + k * 25_000_000 + 7, String(data=f"hello {k} " + "x" * k)))
 msgs.sort(key=lambda m: m[1])
 
-with Writer(bag, version=8, storage_plugin=StoragePlugin.MCAP) as w:
-    conns = {}
-    for topic, ty in (("/imu/data", Imu), ("/imu/second", Imu), ("/chatter", String)):
-        conns[topic] = w.add_connection(topic, ty.__msgtype__, typestore=ts)
-    for topic, t, m in msgs:
-        w.write(conns[topic], t, ts.serialize_cdr(m, type(m).__msgtype__))
-
-mcap = next(bag.glob("*.mcap"))
-shutil.copy(mcap, HERE / "mcap_bag.mcap")
+write_bag(HERE / "mcap_bag.mcap", (("/imu/data", Imu), ("/imu/second", Imu), ("/chatter", String)), msgs)
 
 # Read back with rosbags (from the copied file) and write what it decodes.
 rows = []
@@ -83,16 +64,6 @@ with Reader(HERE / "mcap_bag.mcap") as r:
     for conn, t, raw in r.messages():
         if conn.msgtype != "sensor_msgs/msg/Imu":
             continue
-        m = ts.deserialize_cdr(raw, conn.msgtype)
-        st = m.header.stamp.sec * 10**9 + m.header.stamp.nanosec
-        g, a = m.angular_velocity, m.linear_acceleration
-        gc, ac, oc = m.angular_velocity_covariance, m.linear_acceleration_covariance, m.orientation_covariance
-        rows.append([conn.topic, st, t, repr(g.x), repr(g.y), repr(g.z), repr(a.x), repr(a.y), repr(a.z),
-                     *(repr(float(v)) for v in (gc[0], gc[4], gc[8], ac[0], ac[4], ac[8], oc[0]))])
-with open(HERE / "mcap_expected.csv", "w", newline="") as f:
-    w = csv.writer(f)
-    w.writerow(["topic", "stamp_ns", "log_time_ns", "gx", "gy", "gz", "ax", "ay", "az",
-                "gcov_xx", "gcov_yy", "gcov_zz", "acov_xx", "acov_yy", "acov_zz", "ocov_0"])
-    w.writerows(rows)
-shutil.rmtree(tmp)
+        rows.append(imu_row(conn, t, raw))
+write_csv(HERE / "mcap_expected.csv", IMU_COLUMNS, rows)
 print(f"{len(rows)} Imu messages, {(HERE / 'mcap_bag.mcap').stat().st_size} bytes")

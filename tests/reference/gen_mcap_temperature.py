@@ -14,25 +14,10 @@ when there is none. The rule is computed here on rosbags' deserialised values.
 
     python3 tests/reference/gen_mcap_temperature.py
 """
-import csv, shutil, tempfile
-from pathlib import Path
-
 import numpy as np
-from rosbags.rosbag2 import Reader, StoragePlugin, Writer
-from rosbags.typesys import Stores, get_typestore
+from rosbags.rosbag2 import Reader
 
-HERE = Path(__file__).resolve().parent
-ts = get_typestore(Stores.ROS2_HUMBLE)
-Imu = ts.types["sensor_msgs/msg/Imu"]
-Temperature = ts.types["sensor_msgs/msg/Temperature"]
-Header = ts.types["std_msgs/msg/Header"]
-Time = ts.types["builtin_interfaces/msg/Time"]
-Quat = ts.types["geometry_msgs/msg/Quaternion"]
-Vec3 = ts.types["geometry_msgs/msg/Vector3"]
-
-
-def header(t_ns, frame):
-    return Header(stamp=Time(sec=t_ns // 10**9, nanosec=t_ns % 10**9), frame_id=frame)
+from rosbags_common import HERE, Imu, Quat, Temperature, Vec3, header, ts, write_bag, write_csv
 
 
 t0 = 1_700_000_100 * 10**9 + 1_000_000
@@ -50,15 +35,7 @@ for k in range(4):
     msgs.append(("/imu/temperature", t + 7_000_000, m))
 msgs.sort(key=lambda m: m[1])
 
-tmp = Path(tempfile.mkdtemp())
-bag = tmp / "bag"
-with Writer(bag, version=8, storage_plugin=StoragePlugin.MCAP) as w:
-    conns = {topic: w.add_connection(topic, ty.__msgtype__, typestore=ts)
-             for topic, ty in (("/imu/data", Imu), ("/imu/temperature", Temperature))}
-    for topic, t, m in msgs:
-        w.write(conns[topic], t, ts.serialize_cdr(m, type(m).__msgtype__))
-shutil.copy(next(bag.glob("*.mcap")), HERE / "mcap_temp_bag.mcap")
-shutil.rmtree(tmp)
+write_bag(HERE / "mcap_temp_bag.mcap", (("/imu/data", Imu), ("/imu/temperature", Temperature)), msgs)
 
 rows, readings = [], []
 with Reader(HERE / "mcap_temp_bag.mcap") as r:
@@ -71,8 +48,5 @@ with Reader(HERE / "mcap_temp_bag.mcap") as r:
         before = [x for x in readings if x[0] <= st]
         temp = repr(max(before)[1]) if before else ""
         rows.append([st, temp])
-with open(HERE / "mcap_temp_expected.csv", "w", newline="") as f:
-    w = csv.writer(f)
-    w.writerow(["stamp_ns", "temp_c"])
-    w.writerows(rows)
+write_csv(HERE / "mcap_temp_expected.csv", ["stamp_ns", "temp_c"], rows)
 print(f"{len(rows)} Imu rows, {sum(1 for r in rows if r[1])} with a temperature")

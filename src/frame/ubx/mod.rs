@@ -27,9 +27,9 @@ pub mod port;
 pub use esf::*;
 pub use port::{MAX_PAYLOAD, SYNC};
 
+use super::Descriptor;
 use super::framing::{Framer, Front, Stamper};
 use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder, mark_absent};
-use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
 use std::collections::VecDeque;
@@ -445,12 +445,7 @@ impl ProtocolDecoder for UbxDecoder {
         let start = buf.first().is_some_and(|&b| port::is_start(b));
         self.f.truncated_front(buf, start);
     }
-    fn stats(&self) -> DecoderStats {
-        self.f.stats
-    }
-    fn descriptor(&self) -> Option<Descriptor> {
-        self.stamper.descriptor()
-    }
+    crate::frame::protocol::framer_stats_and_descriptor!();
     fn found(&self) -> String {
         format!(
             "UBX: {} ESF-RAW and {} ESF-MEAS messages with IMU data, {} other messages (UBX, NMEA, RTCM) passed through",
@@ -462,6 +457,7 @@ impl ProtocolDecoder for UbxDecoder {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frame::DecoderStats;
 
     fn decode_all(bytes: &[u8], chunk: usize) -> (Vec<Decoded>, DecoderStats) {
         crate::frame::protocol::decode_chunked(&mut UbxDecoder::default(), bytes, chunk)

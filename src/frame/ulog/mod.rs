@@ -31,9 +31,9 @@
 
 mod format;
 
+use super::Descriptor;
 use super::framing::{Framer, Stamper};
 use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder, mark_absent};
-use super::{DecoderStats, Descriptor};
 use crate::sample::Sample;
 use bytes::{Bytes, BytesMut};
 use format::{Formats, Layout, Role};
@@ -419,12 +419,7 @@ impl ProtocolDecoder for UlogDecoder {
             self.f.skip(buf, n);
         }
     }
-    fn stats(&self) -> DecoderStats {
-        self.f.stats
-    }
-    fn descriptor(&self) -> Option<Descriptor> {
-        self.stamper.descriptor()
-    }
+    crate::frame::protocol::framer_stats_and_descriptor!();
     fn found(&self) -> String {
         let imu: Vec<&String> = self
             .found_topics
@@ -546,6 +541,7 @@ pub fn encode_sensor_combined_log(samples: &[Sample], out: &mut BytesMut) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frame::DecoderStats;
 
     fn decode_all(bytes: &[u8], chunk: usize) -> (Vec<Decoded>, DecoderStats) {
         crate::frame::protocol::decode_chunked(&mut UlogDecoder::default(), bytes, chunk)
