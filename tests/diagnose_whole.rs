@@ -266,8 +266,7 @@ fn clean_logs_get_no_effects_over_50_seeds() {
     // The bench with no undeclared effect: temperature coefficients zero (the warm-up stays, so
     // the temperature candidate is tried every time), no steps, no lines, no gross errors; its
     // Gauss-Markov and AR wander (declared stochastic bias) stay. 300-s logs (30 blocks of 10 s)
-    // keep the 50 seeds quick (10-min logs gave the same kind of misses: seeds 22 and 50, one
-    // temperature term each, in a spot check of five seeds).
+    // keep the 50 seeds quick.
     let dir = tempfile::tempdir().unwrap();
     let mut found = Vec::new();
     for seed in 1..=50u64 {
@@ -295,11 +294,13 @@ fn clean_logs_get_no_effects_over_50_seeds() {
     }
     eprintln!("effects on clean logs: {found:#?}");
     // The target is 0. Measured (this seed range, 300 channel runs): no step, line,
-    // g-sensitivity or random walk anywhere, but 3 temperature terms (seed 22 gy, 34 az, 49 gx)
-    // — the warm-up curve and the Gauss-Markov wander are confounded on a record a few
-    // correlation times long, and the held-out test's noise model (one GM) is then too
-    // optimistic. The target is missed; this bound guards against it getting worse and the
-    // family check against any other kind of false finding.
+    // g-sensitivity or random walk anywhere, and one temperature term (seed 22 gy, held-out
+    // z = 4.1, 40 % of the held-out MSE of the 1-s means removed, and it lowers the SSE of all
+    // five contiguous spans when fitted on the other four: the wander's slow excursion on this
+    // seed follows the warm-up over the whole record). Before the contiguous-span check
+    // (`diagnose_slow::FOLDS`) there were 3 (seeds 22 gy, 34 az, 49 gz). The target is missed by
+    // one; this bound guards against it getting worse and the family check against any other
+    // kind of false finding.
     assert!(
         found
             .iter()
@@ -307,7 +308,7 @@ fn clean_logs_get_no_effects_over_50_seeds() {
         "non-temperature effects on clean logs: {found:#?}"
     );
     assert!(
-        found.len() <= 3,
+        found.len() <= 1,
         "{} channels with effects on clean logs: {found:#?}",
         found.len()
     );
