@@ -285,6 +285,26 @@ fn clean_effects(
         let out = dir.path().join(format!("out{seed}"));
         let (m, j, _) = diagnose(&log, &out);
         report_agrees(&m, &j);
+        // The temperature candidates' held-out z, kept or not (printed: the test's calibration).
+        let mut z: Vec<f64> = Vec::new();
+        for c in j["channels"].as_array().unwrap() {
+            let tests = c["effects"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|e| &e["test"])
+                .chain(c["rejected"].as_array().unwrap());
+            z.extend(
+                tests
+                    .filter(|t| t["family"] == "temperature")
+                    .map(|t| t["z"].as_f64().unwrap()),
+            );
+        }
+        eprintln!(
+            "seed {seed}: {} temperature candidates, z > 3.09 (one-sided 0.1 %): {:?}",
+            z.len(),
+            z.iter().filter(|v| **v > 3.09).collect::<Vec<_>>()
+        );
         for c in &m.channels {
             if !c.effects.is_empty() {
                 found.push((seed, c.channel.clone(), c.effects.clone()));
