@@ -261,20 +261,19 @@ fn a_temperature_ramp_that_starts_late_is_found() {
     }
 }
 
-#[test]
-fn clean_logs_get_no_effects_over_50_seeds() {
-    // The bench with no undeclared effect: temperature coefficients zero (the warm-up stays, so
-    // the temperature candidate is tried every time), no steps, no lines, no gross errors; its
-    // Gauss-Markov and AR wander (declared stochastic bias) stay. 300-s logs (30 blocks of 10 s)
-    // keep the 50 seeds quick (10-min logs gave the same kind of misses: seeds 22 and 50, one
-    // temperature term each, in a spot check of five seeds).
+/// Effects in the model files of clean benches (module docs of the test below), one per channel
+/// that has any: `(seed, channel, effects)`.
+fn clean_effects(
+    duration_s: f64,
+    seeds: std::ops::RangeInclusive<u64>,
+) -> Vec<(u64, String, Vec<Effect>)> {
     let dir = tempfile::tempdir().unwrap();
     let mut found = Vec::new();
-    for seed in 1..=50u64 {
+    for seed in seeds {
         let log = dir.path().join(format!("clean{seed}.log"));
         simulate(
             &log,
-            300.0,
+            duration_s,
             Some(seed),
             &[
                 "errors.temperature.gyro_deg_s_per_c=[0.0, 0.0, 0.0]",
@@ -286,20 +285,58 @@ fn clean_logs_get_no_effects_over_50_seeds() {
         let out = dir.path().join(format!("out{seed}"));
         let (m, j, _) = diagnose(&log, &out);
         report_agrees(&m, &j);
+        // The temperature candidates' held-out z, kept or not (printed: the test's calibration).
+        let mut z: Vec<f64> = Vec::new();
+        for c in j["channels"].as_array().unwrap() {
+            let tests = c["effects"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|e| &e["test"])
+                .chain(c["rejected"].as_array().unwrap());
+            z.extend(
+                tests
+                    .filter(|t| t["family"] == "temperature")
+                    .map(|t| t["z"].as_f64().unwrap()),
+            );
+        }
+        eprintln!(
+            "seed {seed}: {} temperature candidates, z > 3.09 (one-sided 0.1 %): {:?}",
+            z.len(),
+            z.iter().filter(|v| **v > 3.09).collect::<Vec<_>>()
+        );
         for c in &m.channels {
             if !c.effects.is_empty() {
                 found.push((seed, c.channel.clone(), c.effects.clone()));
             }
         }
         std::fs::remove_file(&log).unwrap();
+        std::fs::remove_dir_all(&out).unwrap();
     }
+    found
+}
+
+/// How many of `found` carry an effect of the kind `pred` picks.
+fn count(found: &[(u64, String, Vec<Effect>)], pred: fn(&Effect) -> bool) -> usize {
+    found.iter().filter(|(_, _, e)| e.iter().any(pred)).count()
+}
+
+#[test]
+fn clean_logs_get_no_effects_over_50_seeds() {
+    // The bench with no undeclared effect: temperature coefficients zero (the warm-up stays, so
+    // the temperature candidate is tried every time), no steps, no lines, no gross errors; its
+    // Gauss-Markov and AR wander (declared stochastic bias) stay. 300-s logs (30 blocks of 10 s)
+    // keep the 50 seeds quick; longer ones in the ignored test below.
+    let found = clean_effects(300.0, 1..=50);
     eprintln!("effects on clean logs: {found:#?}");
     // The target is 0. Measured (this seed range, 300 channel runs): no step, line,
-    // g-sensitivity or random walk anywhere, but 3 temperature terms (seed 22 gy, 34 az, 49 gx)
-    // — the warm-up curve and the Gauss-Markov wander are confounded on a record a few
-    // correlation times long, and the held-out test's noise model (one GM) is then too
-    // optimistic. The target is missed; this bound guards against it getting worse and the
-    // family check against any other kind of false finding.
+    // g-sensitivity or random walk anywhere, and one temperature term (seed 22 gy, held-out
+    // z = 4.1, 40 % of the held-out MSE of the 1-s means removed, and it lowers the SSE of all
+    // five contiguous spans when fitted on the other four: the wander's slow excursion on this
+    // seed follows the warm-up over the whole record). Before the contiguous-span check
+    // (`diagnose_slow::FOLDS`) there were 3 (seeds 22 gy, 34 az, 49 gz). The target is missed by
+    // one; this bound guards against it getting worse and the family check against any other
+    // kind of false finding.
     assert!(
         found
             .iter()
@@ -307,7 +344,7 @@ fn clean_logs_get_no_effects_over_50_seeds() {
         "non-temperature effects on clean logs: {found:#?}"
     );
     assert!(
-        found.len() <= 3,
+        found.len() <= 1,
         "{} channels with effects on clean logs: {found:#?}",
         found.len()
     );
@@ -359,4 +396,22 @@ fn adis16405_bench_only_held_out_effects_and_the_line_tracked_throughout() {
             );
         }
     }
+}
+
+#[test]
+#[ignore = "about a minute: 50 ten-minute and 20 twenty-minute clean benches"]
+fn clean_longer_logs_temperature_terms() {
+    // The clean bench of the test above, 10 min (40 blocks of 15 s) and 20 min (40 of 30 s).
+    // Measured (these seeds): 10 min — temperature terms on 3 of 300 channel runs (seeds 12 gx,
+    // 22 gx, 47 gy; 6 before the contiguous-span check: also 9 az, 15 gx, 50 ax), besides two
+    // random walks (7 az, 29 ax) and a step (33 gz) that the temperature check does not touch;
+    // 20 min — no temperature term (1 before: 19 az), one random walk (1 ax). The bounds guard
+    // against more.
+    let is_temp = |e: &Effect| matches!(e, Effect::Temperature { .. });
+    let ten = clean_effects(600.0, 1..=50);
+    eprintln!("10 min: {ten:#?}");
+    let twenty = clean_effects(1200.0, 1..=20);
+    eprintln!("20 min: {twenty:#?}");
+    assert!(count(&ten, is_temp) <= 3, "{ten:#?}");
+    assert_eq!(count(&twenty, is_temp), 0, "{twenty:#?}");
 }
