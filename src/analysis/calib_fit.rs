@@ -43,7 +43,7 @@
 //!
 //! Held-out errors before/after are reported for the final model against none.
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, Vector3};
 use serde::Serialize;
 
 use super::AnalysisError;
@@ -55,6 +55,8 @@ use crate::stage::bias::settings::CalibrationSettings;
 pub const GROUPS: [&str; 3] = ["bias", "scale", "misalignment"];
 /// Number of parameters.
 const NP: usize = 9;
+/// A covariance of the nine parameters (of this module's θ, or of the gyro's K row-major).
+pub(crate) type Cov9 = SMatrix<f64, NP, NP>;
 
 /// Settings of the calibration fit.
 #[derive(Clone, Debug)]
@@ -82,7 +84,7 @@ impl Default for CalibSettings {
 }
 
 /// θ = nominal (no calibration).
-fn nominal() -> [f64; NP] {
+pub(crate) fn nominal() -> [f64; NP] {
     [0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0]
 }
 
@@ -94,6 +96,9 @@ fn group_mask(g: usize) -> [bool; NP] {
     }
     m
 }
+
+/// (i, j) of each L parameter in θ order 3..9.
+const LIJ: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (1, 0), (2, 0), (2, 1)];
 
 fn l_of(th: &[f64; NP]) -> Matrix3<f64> {
     Matrix3::new(th[3], 0.0, 0.0, th[6], th[4], 0.0, th[7], th[8], th[5])
@@ -111,6 +116,28 @@ fn corrected(th: &[f64; NP], f: &Vector3<f64>) -> Option<Vector3<f64>> {
     Some(Vector3::new(t0, t1, t2))
 }
 
+/// The direction u = t/|t| of f through θ (t = L⁻¹(f − b)), ∂u/∂f = P L⁻¹ and ∂u/∂θ, with
+/// P = (I − u uᵀ)/|t|: ∂t/∂b_i = −L⁻¹e_i, ∂t/∂L_ij = −L⁻¹e_i t_j. None when θ is not
+/// admissible.
+pub(crate) fn direction(
+    th: &[f64; NP],
+    f: &Vector3<f64>,
+) -> Option<(Vector3<f64>, Matrix3<f64>, SMatrix<f64, 3, NP>)> {
+    let t = corrected(th, f)?;
+    let n = t.norm();
+    let u = t / n;
+    let du_df = (Matrix3::identity() - u * u.transpose()) / n * l_of(th).try_inverse()?;
+    let du_dth = SMatrix::<f64, 3, NP>::from_fn(|r, c| {
+        if c < 3 {
+            -du_df[(r, c)]
+        } else {
+            let (i, j) = LIJ[c - 3];
+            -du_df[(r, i)] * t[j]
+        }
+    });
+    Some((u, du_df, du_dth))
+}
+
 /// Residuals |t_k| − g (infinite when θ is not admissible).
 fn residuals(th: &[f64; NP], f: &[Vector3<f64>], g: f64) -> Vec<f64> {
     f.iter()
@@ -122,8 +149,6 @@ fn residuals(th: &[f64; NP], f: &[Vector3<f64>], g: f64) -> Vec<f64> {
 fn jacobian(th: &[f64; NP], f: &[Vector3<f64>], idx: &[usize]) -> DMatrix<f64> {
     let l = l_of(th);
     let linv = l.try_inverse().unwrap_or_else(Matrix3::identity);
-    // (i, j) of each L parameter in θ order 3..9.
-    const LIJ: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (1, 0), (2, 0), (2, 1)];
     DMatrix::from_fn(f.len(), idx.len(), |k, c| {
         let t = corrected(th, &f[k]).unwrap_or_else(|| f[k]);
         let u = t / t.norm().max(f64::MIN_POSITIVE);
@@ -174,11 +199,18 @@ pub(crate) fn scaled_condition(mut m: DMatrix<f64>) -> f64 {
 
 /// A least-squares fit of the `active` parameters.
 #[derive(Clone, Debug)]
-struct Fit {
-    theta: [f64; NP],
-    /// 1-σ of each θ from (JᵀJ)⁻¹ and the residual variance (0 for inactive ones; NaN when
-    /// there are no spare degrees of freedom).
-    sd: [f64; NP],
+pub(crate) struct Fit {
+    pub theta: [f64; NP],
+    /// Covariance of θ: (JᵀJ)⁻¹ times the residual variance (0 in the rows and columns of
+    /// inactive entries; NaN when there are no spare degrees of freedom).
+    pub cov: Cov9,
+}
+
+impl Fit {
+    /// 1-σ of each θ.
+    pub fn sd(&self) -> [f64; NP] {
+        std::array::from_fn(|i| self.cov[(i, i)].sqrt())
+    }
 }
 
 fn sse(r: &[f64]) -> f64 {
@@ -189,19 +221,22 @@ fn sse(r: &[f64]) -> f64 {
 /// `theta`: `resid(θ)` the residuals (non-finite where θ is not admissible), `jac(θ, idx)`
 /// their Jacobian w.r.t. the `idx` entries; `observations` the independent components the
 /// residuals carry (their number, unless they are constrained: a difference of two unit vectors
-/// has 2 of its 3). Returns θ and the 1-σ of each entry from (JᵀJ)⁻¹ and the residual variance
-/// over `observations − p` degrees of freedom (0 for inactive entries; NaN with none spare).
+/// has 2 of its 3). Returns θ and its covariance, (JᵀJ)⁻¹ times the residual variance over
+/// `observations − p` degrees of freedom (0 for inactive entries; NaN with none spare).
 pub(crate) fn levenberg_marquardt(
     mut th: [f64; NP],
     active: &[bool; NP],
     observations: usize,
     resid: impl Fn(&[f64; NP]) -> Vec<f64>,
     jac: impl Fn(&[f64; NP], &[usize]) -> DMatrix<f64>,
-) -> Result<([f64; NP], [f64; NP]), AnalysisError> {
+) -> Result<Fit, AnalysisError> {
     let idx: Vec<usize> = (0..NP).filter(|&i| active[i]).collect();
     let mut r = resid(&th);
     if idx.is_empty() {
-        return Ok((th, [0.0; NP]));
+        return Ok(Fit {
+            theta: th,
+            cov: Cov9::zeros(),
+        });
     }
     if r.len() < idx.len() {
         return Err(AnalysisError::bad("fewer residuals than parameters"));
@@ -248,23 +283,27 @@ pub(crate) fn levenberg_marquardt(
     let cov = (j.transpose() * &j)
         .try_inverse()
         .ok_or_else(|| AnalysisError::singular("calibration normal equations"))?;
-    let mut sd = [0.0; NP];
+    let mut full = Cov9::zeros();
     for (d, &p) in idx.iter().enumerate() {
-        sd[p] = (s2 * cov[(d, d)]).sqrt();
+        for (e, &q) in idx.iter().enumerate() {
+            full[(p, q)] = s2 * cov[(d, e)];
+        }
     }
-    Ok((th, sd))
+    Ok(Fit {
+        theta: th,
+        cov: full,
+    })
 }
 
 /// The accelerometer fit of the `active` parameters from the nominal calibration.
 fn fit(f: &[Vector3<f64>], active: &[bool; NP], g: f64) -> Result<Fit, AnalysisError> {
-    let (theta, sd) = levenberg_marquardt(
+    levenberg_marquardt(
         nominal(),
         active,
         f.len(),
         |th| residuals(th, f, g),
         |th, idx| jacobian(th, f, idx),
-    )?;
-    Ok(Fit { theta, sd })
+    )
 }
 
 /// Backward elimination over parameter groups (module docs, test 2): `model` the groups in
@@ -368,6 +407,12 @@ pub struct FittedCalibration {
     pub bias_sd_m_s2: [f64; 3],
     pub scale_sd: [f64; 3],
     pub misalignment_sd_rad: [f64; 3],
+    /// θ (bias, scale, L below the diagonal) and its covariance, for what the gyro fit takes
+    /// from this calibration (`calib_gyro_noise`).
+    #[serde(skip)]
+    pub(crate) theta: [f64; NP],
+    #[serde(skip)]
+    pub(crate) cov: Cov9,
     /// Misalignment angles N_yx, N_zx, N_zy, mrad (small-angle: the sensitivity of each axis to
     /// the earlier ones' input).
     pub misalignment_mrad: [f64; 3],
@@ -567,12 +612,15 @@ pub fn calibrate_accel(
     let fitted = (!kept.is_empty()).then(|| {
         let settings = to_settings(&full.theta);
         let n = settings.misalignment;
+        let sd = full.sd();
         FittedCalibration {
             groups: kept.iter().map(|s| s.to_string()).collect(),
             settings,
-            bias_sd_m_s2: [full.sd[0], full.sd[1], full.sd[2]],
-            scale_sd: [full.sd[3], full.sd[4], full.sd[5]],
-            misalignment_sd_rad: [full.sd[6], full.sd[7], full.sd[8]],
+            bias_sd_m_s2: [sd[0], sd[1], sd[2]],
+            scale_sd: [sd[3], sd[4], sd[5]],
+            misalignment_sd_rad: [sd[6], sd[7], sd[8]],
+            theta: full.theta,
+            cov: full.cov,
             misalignment_mrad: [n[1][0] * 1e3, n[2][0] * 1e3, n[2][1] * 1e3],
         }
     });

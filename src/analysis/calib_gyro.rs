@@ -23,18 +23,26 @@
 //! three components of each left-out interval, and the bias stage's validation of the result.
 //! No LSB floor here: an interval integrates hundreds of samples, which dithers the gyro's
 //! quantisation into noise that the held-out test already sees.
+//!
+//! The fit is generalised least squares over the residuals' modelled noise, and K's σ include
+//! the accelerometer calibration's error (`calib_gyro_noise`): consecutive motions share a still
+//! stretch, and every direction goes through the accelerometer calibration.
 
-use nalgebra::{DMatrix, Matrix3, Rotation3, Vector3};
+use nalgebra::{DMatrix, Matrix3, Rotation3, Vector2, Vector3};
 use serde::Serialize;
 
 use super::AnalysisError;
 use super::calib_fit::{
-    Candidate, NotIdentifiable, eliminate, levenberg_marquardt, rms, scaled_condition,
+    Candidate, Fit, FittedCalibration, NotIdentifiable, eliminate, levenberg_marquardt, rms,
+    scaled_condition,
+};
+use super::calib_gyro_noise::{
+    MotionNoise, MotionRates, Selected, Whitener, motion_noise, stretch_noise,
 };
 use super::calib_still::AccelStretch;
 use super::diagnose_blocks::{GainNoise, held_out_test};
 use crate::sample::Sample;
-use crate::stage::bias::settings::{Calibration, CalibrationSettings};
+use crate::stage::bias::settings::CalibrationSettings;
 
 /// Parameters: K row-major.
 const NP: usize = 9;
@@ -76,44 +84,73 @@ pub struct GyroInterval {
     /// The two gravity directions (unit).
     pub u0: [f64; 3],
     pub u1: [f64; 3],
+    /// The two still stretches it joins (indices into the stretches given): consecutive
+    /// motions share one.
+    pub stretches: [usize; 2],
+    /// The modelled 1-σ of each of its residual's two components, rad (`calib_gyro_noise`).
+    pub noise_sd_rad: f64,
     /// Bias-free raw rate and time step of each sample (not serialised).
     #[serde(skip)]
     pub rates: Vec<(Vector3<f64>, f64)>,
+    /// Its residual's noise (`calib_gyro_noise`).
+    #[serde(skip)]
+    pub(crate) noise: MotionNoise,
+}
+
+/// Parts of the gyro fit's noise model (`calib_gyro_noise`), to switch off one by one and see
+/// what each does to the σ (`tests/calibrate_sigma.rs`); `calibrate` uses them all.
+#[derive(Clone, Copy, Debug)]
+pub struct NoiseParts {
+    /// Weight the motions by their modelled noise (else all alike, as independent).
+    pub weights: bool,
+    /// Correlate consecutive motions through their shared still stretch.
+    pub shared_stretches: bool,
+    /// Add the accelerometer calibration's error to K's covariance.
+    pub accel_frame: bool,
+}
+
+impl GyroInterval {
+    /// Drop the parts of its noise model that `keep` does not keep.
+    pub fn reduce_noise_model(&mut self, keep: NoiseParts) {
+        if !keep.shared_stretches || !keep.weights {
+            self.noise.next = None;
+        }
+        if !keep.weights {
+            self.noise.own = nalgebra::Matrix2::identity();
+        }
+        if !keep.accel_frame {
+            self.noise.accel = Default::default();
+        }
+    }
 }
 
 /// The motions between consecutive `stretches` of `samples` that last at most
 /// `max_interval_s`, have no gap (a step over 2.5 nominal intervals) and change the gravity
 /// direction by at least `min_tilt_deg` (the attitude-group angle: between two stretches of one
 /// attitude there is no rotation to check, only noise, whose random columns would pass any
-/// condition-number test); `accel` the kept accelerometer calibration, if any.
+/// condition-number test); `accel` the kept accelerometer calibration, if any (the directions
+/// go through it, and its covariance into the gyro's σ).
 pub fn gyro_intervals(
     samples: &[Sample],
     stretches: &[AccelStretch],
-    accel: Option<&Calibration>,
+    accel: Option<&FittedCalibration>,
     rate_hz: f64,
     max_interval_s: f64,
     min_tilt_deg: f64,
 ) -> Vec<GyroInterval> {
-    let mean_gyro = |s: &AccelStretch| {
-        samples[s.start..s.start + s.len]
-            .iter()
-            .map(|x| x.gyro)
-            .sum::<Vector3<f64>>()
-    };
-    let dir = |s: &AccelStretch| {
-        let f = accel.map_or(s.mean(), |c| c.apply(&s.mean()));
-        f.normalize()
-    };
-    stretches
+    let st = stretch_noise(samples, stretches, accel);
+    let mut out: Vec<GyroInterval> = stretches
         .windows(2)
-        .filter_map(|w| {
+        .enumerate()
+        .filter_map(|(k, w)| {
             let (a, b) = (&w[0], &w[1]);
             let (from, to) = (a.start + a.len, b.start);
             let dur = (to - from) as f64 / rate_hz;
             if to <= from || dur > max_interval_s {
                 return None;
             }
-            let bias = (mean_gyro(a) + mean_gyro(b)) / (a.len + b.len) as f64;
+            let (na, nb) = (st[k].n as f64, st[k + 1].n as f64);
+            let bias = (st[k].gyro_mean * na + st[k + 1].gyro_mean * nb) / (na + nb);
             let mut rates = Vec::with_capacity(to - from);
             for i in from..to {
                 let dt = (samples[i].t_ns.saturating_sub(samples[i - 1].t_ns)) as f64 * 1e-9;
@@ -123,7 +160,7 @@ pub fn gyro_intervals(
                 }
                 rates.push((w, dt));
             }
-            let (u0, u1) = (dir(a), dir(b));
+            let (u0, u1) = (st[k].u, st[k + 1].u);
             let tilt_change_deg = u0.dot(&u1).clamp(-1.0, 1.0).acos().to_degrees();
             if tilt_change_deg < min_tilt_deg {
                 return None;
@@ -136,8 +173,36 @@ pub fn gyro_intervals(
                 tilt_change_deg,
                 u0: u0.into(),
                 u1: u1.into(),
+                stretches: [k, k + 1],
+                noise_sd_rad: f64::NAN,
                 rates,
+                noise: MotionNoise::default(),
             })
+        })
+        .collect();
+    let motions: Vec<MotionRates> = out
+        .iter()
+        .map(|iv| MotionRates {
+            stretches: iv.stretches,
+            rates: &iv.rates,
+        })
+        .collect();
+    let noise = motion_noise(&motions, &st);
+    for (iv, n) in out.iter_mut().zip(noise) {
+        iv.noise_sd_rad = (n.own.trace() / 2.0).sqrt();
+        iv.noise = n;
+    }
+    out
+}
+
+/// The motions' noise for the whitening, each with whether it shares a stretch with the one
+/// before it in `ivs`.
+fn selected<'a>(ivs: &[&'a GyroInterval]) -> Vec<Selected<'a>> {
+    ivs.iter()
+        .enumerate()
+        .map(|(k, iv)| {
+            let shares = k > 0 && ivs[k - 1].stretches[1] == iv.stretches[0];
+            (&iv.noise, shares)
         })
         .collect()
 }
@@ -152,21 +217,21 @@ fn residual(th: &[f64; NP], iv: &GyroInterval) -> Vector3<f64> {
     Vector3::from(iv.u1) - r.inverse() * Vector3::from(iv.u0)
 }
 
-fn residuals(th: &[f64; NP], ivs: &[&GyroInterval]) -> Vec<f64> {
-    ivs.iter()
-        .flat_map(|iv| {
-            let r = residual(th, iv);
-            [r.x, r.y, r.z]
-        })
-        .collect()
+/// The residuals projected on each motion's plane and whitened (2 per motion).
+fn residuals(th: &[f64; NP], ivs: &[&GyroInterval], w: &Whitener) -> Vec<f64> {
+    let x: Vec<Vector2<f64>> = ivs
+        .iter()
+        .map(|iv| iv.noise.basis.transpose() * residual(th, iv))
+        .collect();
+    w.apply(&x).iter().flat_map(|v| [v.x, v.y]).collect()
 }
 
 /// The Jacobian w.r.t. the `idx` entries, in one pass per interval. With R_i the rotation up
 /// to and including sample i and δφ_i = δK w_i Δt_i, first order in the per-sample angle
 /// (≤ 0.01 rad at 1 rad/s and 100 Hz; only the step direction and the σ use it, never the
 /// residual):  δ(ΔRᵀu0) = ΔRᵀ [u0]× Σ_i R_i δφ_i,  so  ∂r/∂K_ab = −ΔRᵀ [u0]× (M_b)_{:,a},
-/// M_b = Σ_i R_i w_i[b] Δt_i.
-fn jacobian(th: &[f64; NP], ivs: &[&GyroInterval], idx: &[usize]) -> DMatrix<f64> {
+/// M_b = Σ_i R_i w_i[b] Δt_i. Unprojected: 3 rows per interval.
+fn raw_jacobian(th: &[f64; NP], ivs: &[&GyroInterval], idx: &[usize]) -> DMatrix<f64> {
     let k = k_of(th);
     let mut j = DMatrix::zeros(3 * ivs.len(), idx.len());
     for (n, iv) in ivs.iter().enumerate() {
@@ -189,42 +254,86 @@ fn jacobian(th: &[f64; NP], ivs: &[&GyroInterval], idx: &[usize]) -> DMatrix<f64
     j
 }
 
+/// The Jacobian of [`residuals`]: projected and whitened as they are.
+fn jacobian(th: &[f64; NP], ivs: &[&GyroInterval], idx: &[usize], w: &Whitener) -> DMatrix<f64> {
+    let j = raw_jacobian(th, ivs, idx);
+    let projected = DMatrix::from_fn(2 * ivs.len(), idx.len(), |row, c| {
+        let (k, e) = (row / 2, row % 2);
+        let col = ivs[k].noise.basis.column(e);
+        (0..3).map(|a| col[a] * j[(3 * k + a, c)]).sum()
+    });
+    w.apply_columns(&projected)
+}
+
 /// The fit of the `active` entries of K from `start` (inactive entries stay as there), and the
-/// 1-σ of each entry.
+/// covariance of K from the residuals alone.
 ///
-/// Each residual u1 − ΔRᵀu0 is a difference of two unit vectors, so it is orthogonal to
-/// u1 + ΔRᵀu0 ≈ 2u1: a motion gives 2 degrees of freedom, not 3 (so do the Jacobian's rows).
-/// The residual variance is therefore over 2n − p degrees of freedom. (With it, over seeds 1–10 of `replay/tumble.toml` the RMS of (fitted − true)/σ over the
-/// nine entries is 1.11; without, 1.27× that, 1.40.)
-fn fit(
-    ivs: &[&GyroInterval],
-    active: &[bool; NP],
-    start: [f64; NP],
-) -> Result<([f64; NP], [f64; NP]), AnalysisError> {
+/// Generalised least squares (`calib_gyro_noise`): each residual u1 − ΔRᵀu0 is a difference of
+/// two unit vectors, so to first order it lies in the plane orthogonal to u1 (2 degrees of
+/// freedom per motion, not 3); the two components there are whitened with the modelled
+/// block-tridiagonal covariance of consecutive motions, which share a still stretch. The
+/// covariance is (JᵀJ)⁻¹ of the whitened Jacobian times the whitened residuals' variance over
+/// 2n − p degrees of freedom (≈ 1 when the noise model is right).
+fn fit(ivs: &[&GyroInterval], active: &[bool; NP], start: [f64; NP]) -> Result<Fit, AnalysisError> {
+    let w = Whitener::new(&selected(ivs));
     levenberg_marquardt(
         start,
         active,
         2 * ivs.len(),
-        |th| residuals(th, ivs),
-        |th, idx| jacobian(th, ivs, idx),
+        |th| residuals(th, ivs, &w),
+        |th, idx| jacobian(th, ivs, idx, &w),
     )
+}
+
+/// `fit`'s covariance plus what the accelerometer calibration's error adds through the
+/// directions (`calib_gyro_noise`): D Cov(θ_a) Dᵀ, D = (JᵀJ)⁻¹Jᵀ ∂r/∂θ_a, all whitened. Also the
+/// whitened residuals' variance (the factor the σ were scaled by).
+fn covariance(ivs: &[&GyroInterval], active: &[bool; NP], f: &Fit) -> (Fit, f64) {
+    let idx: Vec<usize> = (0..NP).filter(|&i| active[i]).collect();
+    let w = Whitener::new(&selected(ivs));
+    let r = residuals(&f.theta, ivs, &w);
+    let dof = r.len() as f64 - idx.len() as f64;
+    let ratio = if dof > 0.0 {
+        r.iter().map(|v| v * v).sum::<f64>() / dof
+    } else {
+        f64::NAN
+    };
+    let mut out = f.clone();
+    if idx.is_empty() {
+        return (out, ratio);
+    }
+    let j = jacobian(&f.theta, ivs, &idx, &w);
+    let a = w.apply_columns(&DMatrix::from_fn(2 * ivs.len(), 9, |row, c| {
+        ivs[row / 2].noise.accel[(row % 2, c)]
+    }));
+    let Some(inv) = (j.transpose() * &j).try_inverse() else {
+        return (out, ratio);
+    };
+    let d = inv * j.transpose() * a;
+    let add = &d * d.transpose();
+    for (r, &p) in idx.iter().enumerate() {
+        for (c, &q) in idx.iter().enumerate() {
+            out.cov[(p, q)] += add[(r, c)];
+        }
+    }
+    (out, ratio)
 }
 
 /// Condition number of the column-normalised Jacobian at K = I.
 fn condition(ivs: &[&GyroInterval], active: &[bool; NP]) -> f64 {
     let idx: Vec<usize> = (0..NP).filter(|&i| active[i]).collect();
-    scaled_condition(jacobian(&nominal(), ivs, &idx))
+    scaled_condition(raw_jacobian(&nominal(), ivs, &idx))
 }
 
 /// Held-out residuals of each interval (3 components each): K fitted on the others (started
 /// from the fit on all of them, which only saves iterations: the training optimum is the same).
 fn held_out(ivs: &[&GyroInterval], active: &[bool; NP]) -> Result<Vec<f64>, AnalysisError> {
     let mut out = Vec::with_capacity(3 * ivs.len());
-    let (all, _) = fit(ivs, active, nominal())?;
+    let all = fit(ivs, active, nominal())?.theta;
     for h in 0..ivs.len() {
         let train: Vec<&GyroInterval> =
             (0..ivs.len()).filter(|&i| i != h).map(|i| ivs[i]).collect();
-        let (th, _) = fit(&train, active, all)?;
+        let th = fit(&train, active, all)?.theta;
         out.extend(residual(&th, ivs[h]).iter());
     }
     Ok(out)
@@ -236,8 +345,11 @@ pub struct FittedGyro {
     pub groups: Vec<String>,
     pub settings: CalibrationSettings,
     /// 1-σ of K's entries (row-major; ≈ of scale − 1 on the diagonal, of the misalignment in
-    /// rad off it).
+    /// rad off it): the residuals' own, with the accelerometer calibration's error added.
     pub k_sd: [f64; NP],
+    /// The whitened residuals' variance over their degrees of freedom: ≈ 1 when the modelled
+    /// noise (`calib_gyro_noise`) is the residuals' real noise; the σ are scaled by it.
+    pub noise_ratio: f64,
 }
 
 /// The result of [`calibrate_gyro`].
@@ -317,7 +429,8 @@ pub fn calibrate_gyro(
         })
     })?;
     let active = mask_of(&model);
-    let (th, sd) = fit(&ivs, &active, nominal())?;
+    let (full, noise_ratio) = covariance(&ivs, &active, &fit(&ivs, &active, nominal())?);
+    let (th, sd) = (full.theta, full.sd());
     let mut settings = CalibrationSettings::default();
     let mut implausible = Vec::new();
     if let Some(a) = k_of(&th).try_inverse() {
@@ -360,6 +473,7 @@ pub fn calibrate_gyro(
             groups: model.iter().map(|&g| GROUPS[g].to_string()).collect(),
             settings,
             k_sd: sd,
+            noise_ratio,
         }),
         verdict,
     })

@@ -86,15 +86,25 @@ impl AccelStretch {
     }
 }
 
+/// Mean and sample variance per axis of `v` over `samples`.
+pub(crate) fn mean_var(
+    samples: &[Sample],
+    v: impl Fn(&Sample) -> Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let n = samples.len().max(1) as f64;
+    let mean = samples.iter().map(&v).sum::<Vector3<f64>>() / n;
+    let var = samples
+        .iter()
+        .map(|s| (v(s) - mean).component_mul(&(v(s) - mean)))
+        .sum::<Vector3<f64>>()
+        / (n - 1.0).max(1.0);
+    (mean, var)
+}
+
 /// Mean, per-axis sd and the white-noise σ of the mean norm over `samples`.
 fn stretch_stats(samples: &[Sample]) -> ([f64; 3], [f64; 3], f64) {
     let n = samples.len().max(1) as f64;
-    let mean = samples.iter().map(|s| s.accel).sum::<Vector3<f64>>() / n;
-    let var = samples
-        .iter()
-        .map(|s| (s.accel - mean).component_mul(&(s.accel - mean)))
-        .sum::<Vector3<f64>>()
-        / (n - 1.0).max(1.0);
+    let (mean, var) = mean_var(samples, |s| s.accel);
     let norm_mean = samples.iter().map(|s| s.accel.norm()).sum::<f64>() / n;
     let norm_var = samples
         .iter()

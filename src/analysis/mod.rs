@@ -10,6 +10,7 @@ pub mod bias_compare;
 pub mod calib_course;
 pub mod calib_fit;
 pub mod calib_gyro;
+mod calib_gyro_noise;
 pub mod calib_still;
 #[cfg(test)]
 mod calib_tests;

@@ -121,11 +121,10 @@ pub fn calibrate(log: &Path, o: &CalibrateOptions) -> Result<CalibrateReport> {
             Some("the log has no (or not every) gyro channel".to_string()),
         )
     } else {
-        let cal = accel.fitted.as_ref().and_then(|f| f.settings.build());
         let ivs = gyro_intervals(
             &samples,
             &accel.stretches,
-            cal.as_ref(),
+            accel.fitted.as_ref(),
             rate,
             MAX_INTERVAL_S,
             still.group_deg,
@@ -482,6 +481,11 @@ fn gyro_text(o: &mut String, g: &GyroCalibration) {
                 .iter()
                 .fold(0.0, |a: f64, b| a.max(*b))
                 * 1e3,
+        );
+        let _ = writeln!(
+            o,
+            "  (σ by generalised least squares over the modelled noise of the motions, whose consecutive pairs share a still stretch; whitened residual variance {:.2}, ≈ 1 when that model is right; plus the accelerometer calibration's error)",
+            f.noise_ratio
         );
     }
 }
