@@ -84,7 +84,9 @@ fn oadev_at(y: &[f64], m: usize) -> f64 {
 }
 
 struct Bench {
-    dir: PathBuf,
+    /// A scratch directory of this run's own (deleted when the bench is dropped): two runs of
+    /// the suite at once must not share one, as a fixed name under the temp dir did.
+    tmp: tempfile::TempDir,
     model: BiasModelFile,
     with: PathBuf,
     without: PathBuf,
@@ -93,9 +95,11 @@ struct Bench {
 /// Import, diagnose, replay with and without the model; `None` (skipped) without the data.
 fn run(name: &str, csv: &str) -> Option<Bench> {
     let src = common::real_data(csv)?;
-    let dir = std::env::temp_dir().join(format!("imuprep_learned_allan_{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix(&format!("imuprep_learned_allan_{name}"))
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path().to_path_buf();
     let p = |f: &str| dir.join(f);
     let s = |f: &str| p(f).to_str().unwrap().to_string();
     imuprep(&["import", src.to_str().unwrap(), "-o", &s("in.log")]);
@@ -128,7 +132,7 @@ fn run(name: &str, csv: &str) -> Option<Bench> {
         with: p("with.log"),
         without: p("without.log"),
         model,
-        dir,
+        tmp,
     })
 }
 
@@ -136,8 +140,8 @@ fn run(name: &str, csv: &str) -> Option<Bench> {
 /// of the without-model ±1σ band (a difference smaller than the estimate's own 1σ spread is
 /// no evidence of harm; anything above it fails). Returns the largest with/without ratio.
 fn assert_no_tau_worse(b: &Bench) -> f64 {
-    let with = allan_json(&b.with, &b.dir.join("allan_with"));
-    let without = allan_json(&b.without, &b.dir.join("allan_without"));
+    let with = allan_json(&b.with, &b.tmp.path().join("allan_with"));
+    let without = allan_json(&b.without, &b.tmp.path().join("allan_without"));
     let mut worst: f64 = 0.0;
     for ((ch, w), (_, o)) in with.iter().zip(&without) {
         for (pw, po) in w.iter().zip(o) {
