@@ -19,8 +19,9 @@
 //! Groups: scale (K's diagonal) and misalignment (the six entries off it), with the tests of
 //! `calib_fit`: identifiable (2(n − 1) ≥ p + 2 for n intervals, so a fit without one interval is
 //! over-determined, and the column-normalised Jacobian's condition number ≤ `max_condition`),
-//! then backward elimination by leave-one-interval-out with `diagnose`'s paired z-test on the
-//! three components of each left-out interval, and the bias stage's validation of the result.
+//! then backward elimination by leave-one-interval-out with `diagnose`'s paired z-test on each
+//! left-out interval's residual in the fit's form (its two in-plane components, whitened with
+//! the same noise model: `calib_gyro_noise`), and the bias stage's validation of the result.
 //! No LSB floor here: an interval integrates hundreds of samples, which dithers the gyro's
 //! quantisation into noise that the held-out test already sees.
 //!
@@ -325,18 +326,35 @@ fn condition(ivs: &[&GyroInterval], active: &[bool; NP]) -> f64 {
     scaled_condition(raw_jacobian(&nominal(), ivs, &idx))
 }
 
-/// Held-out residuals of each interval (3 components each): K fitted on the others (started
-/// from the fit on all of them, which only saves iterations: the training optimum is the same).
-fn held_out(ivs: &[&GyroInterval], active: &[bool; NP]) -> Result<Vec<f64>, AnalysisError> {
-    let mut out = Vec::with_capacity(3 * ivs.len());
+/// Held-out residuals of each interval, projected on its plane (2 components each, rad, as the
+/// fit sees them): K fitted on the others (started from the fit on all of them, which only saves
+/// iterations: the training optimum is the same).
+fn held_out(
+    ivs: &[&GyroInterval],
+    active: &[bool; NP],
+) -> Result<Vec<Vector2<f64>>, AnalysisError> {
+    let mut out = Vec::with_capacity(ivs.len());
     let all = fit(ivs, active, nominal())?.theta;
     for h in 0..ivs.len() {
         let train: Vec<&GyroInterval> =
             (0..ivs.len()).filter(|&i| i != h).map(|i| ivs[i]).collect();
         let th = fit(&train, active, all)?.theta;
-        out.extend(residual(&th, ivs[h]).iter());
+        out.push(ivs[h].noise.basis.transpose() * residual(&th, ivs[h]));
     }
     Ok(out)
+}
+
+/// The stacked held-out residuals whitened with the fit's noise model over all the motions
+/// (`calib_gyro_noise`: each motion's own covariance, and consecutive motions correlated
+/// through their shared stretch), so that the held-out test's paired z sees independent,
+/// equally weighted components, as its gain's noise assumes.
+fn whitened(e: &[Vector2<f64>], w: &Whitener) -> Vec<f64> {
+    w.apply(e).iter().flat_map(|v| [v.x, v.y]).collect()
+}
+
+/// RMS of the held-out residuals' components, rad.
+fn rms_rad(e: &[Vector2<f64>]) -> f64 {
+    rms(&e.iter().flat_map(|v| [v.x, v.y]).collect::<Vec<_>>())
 }
 
 /// The kept gyroscope calibration in the bias stage's form (bias 0: estimated online).
@@ -359,9 +377,14 @@ pub struct GyroCalibration {
     pub not_identifiable: Vec<NotIdentifiable>,
     pub candidates: Vec<Candidate>,
     pub fitted: Option<FittedGyro>,
-    /// RMS of the held-out direction errors (rad) without and with the kept calibration.
+    /// RMS of the held-out direction errors' two components (rad) without and with the kept
+    /// calibration.
     pub held_out_rms_before_rad: f64,
     pub held_out_rms_after_rad: f64,
+    /// The same whitened (`calib_gyro_noise`; ≈ 1 where only the modelled noise is left): what
+    /// the held-out test compares.
+    pub held_out_white_rms_before: f64,
+    pub held_out_white_rms_after: f64,
     pub verdict: String,
 }
 
@@ -403,11 +426,12 @@ pub fn calibrate_gyro(
             reason,
         });
     }
+    let white = Whitener::new(&selected(&ivs));
     let candidates = eliminate(&mut model, alpha, |m, k, round, level| {
         let with = mask_of(m);
         let rest: Vec<usize> = m.iter().copied().filter(|&g| g != k).collect();
-        let e1 = held_out(&ivs, &with)?;
-        let e0 = held_out(&ivs, &mask_of(&rest))?;
+        let e1 = whitened(&held_out(&ivs, &with)?, &white);
+        let e0 = whitened(&held_out(&ivs, &mask_of(&rest))?, &white);
         let desc = format!("gyro {} in [{}]", GROUPS[k], names(m));
         let test = held_out_test(
             "gyro calibration",
@@ -464,8 +488,10 @@ pub fn calibrate_gyro(
             .into()
     };
     Ok(GyroCalibration {
-        held_out_rms_before_rad: rms(&e_none),
-        held_out_rms_after_rad: rms(&e_after),
+        held_out_rms_before_rad: rms_rad(&e_none),
+        held_out_rms_after_rad: rms_rad(&e_after),
+        held_out_white_rms_before: rms(&whitened(&e_none, &white)),
+        held_out_white_rms_after: rms(&whitened(&e_after, &white)),
         intervals,
         not_identifiable,
         candidates,

@@ -441,6 +441,12 @@ fn gyro_text(o: &mut String, g: &GyroCalibration) {
             )
         }
     );
+    if !g.candidates.is_empty() {
+        let _ = writeln!(
+            o,
+            "(held-out test on each left-out motion's two in-plane residual components, whitened by the fit's noise model: MSE in units of the modelled variance)"
+        );
+    }
     tests_text(o, &g.not_identifiable, &g.candidates);
     let _ = writeln!(o, "result (gyro): {}", g.verdict);
     if g.intervals.is_empty() {
@@ -451,8 +457,11 @@ fn gyro_text(o: &mut String, g: &GyroCalibration) {
     } else {
         let _ = writeln!(
             o,
-            "held-out RMS direction error (leave-one-motion-out): {:.4e} -> {:.4e} rad",
-            g.held_out_rms_before_rad, g.held_out_rms_after_rad
+            "held-out RMS direction error (leave-one-motion-out, per in-plane component): {:.4e} -> {:.4e} rad; whitened by the noise model (what the test compares, ≈ 1 when only noise is left): {:.3} -> {:.3}",
+            g.held_out_rms_before_rad,
+            g.held_out_rms_after_rad,
+            g.held_out_white_rms_before,
+            g.held_out_white_rms_after
         );
     }
     if let Some(f) = &g.fitted {
