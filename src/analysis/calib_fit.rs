@@ -204,6 +204,9 @@ pub(crate) struct Fit {
     /// Covariance of θ: (JᵀJ)⁻¹ times the residual variance (0 in the rows and columns of
     /// inactive entries; NaN when there are no spare degrees of freedom).
     pub cov: Cov9,
+    /// The residual variance over `observations − p` degrees of freedom: the factor `cov`
+    /// carries (≈ 1 for whitened residuals whose noise is modelled right; NaN with none spare).
+    pub residual_variance: f64,
 }
 
 impl Fit {
@@ -232,10 +235,15 @@ pub(crate) fn levenberg_marquardt(
 ) -> Result<Fit, AnalysisError> {
     let idx: Vec<usize> = (0..NP).filter(|&i| active[i]).collect();
     let mut r = resid(&th);
+    let variance = |r: &[f64]| {
+        let dof = observations as f64 - idx.len() as f64;
+        if dof > 0.0 { sse(r) / dof } else { f64::NAN }
+    };
     if idx.is_empty() {
         return Ok(Fit {
             theta: th,
             cov: Cov9::zeros(),
+            residual_variance: variance(&r),
         });
     }
     if r.len() < idx.len() {
@@ -278,8 +286,7 @@ pub(crate) fn levenberg_marquardt(
         }
     }
     let j = jac(&th, &idx);
-    let dof = observations as f64 - idx.len() as f64;
-    let s2 = if dof > 0.0 { sse(&r) / dof } else { f64::NAN };
+    let s2 = variance(&r);
     let cov = (j.transpose() * &j)
         .try_inverse()
         .ok_or_else(|| AnalysisError::singular("calibration normal equations"))?;
@@ -292,6 +299,7 @@ pub(crate) fn levenberg_marquardt(
     Ok(Fit {
         theta: th,
         cov: full,
+        residual_variance: s2,
     })
 }
 

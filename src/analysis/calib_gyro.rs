@@ -286,29 +286,21 @@ fn fit(ivs: &[&GyroInterval], active: &[bool; NP], start: [f64; NP]) -> Result<F
     )
 }
 
-/// `fit`'s covariance plus what the accelerometer calibration's error adds through the
-/// directions (`calib_gyro_noise`): D Cov(θ_a) Dᵀ, D = (JᵀJ)⁻¹Jᵀ ∂r/∂θ_a, all whitened. Also the
-/// whitened residuals' variance (the factor the σ were scaled by).
-fn covariance(ivs: &[&GyroInterval], active: &[bool; NP], f: &Fit) -> (Fit, f64) {
+/// `fit`'s covariance (over all of `ivs`, whose whitener is `w`) plus what the accelerometer
+/// calibration's error adds through the directions (`calib_gyro_noise`): D Cov(θ_a) Dᵀ,
+/// D = (JᵀJ)⁻¹Jᵀ ∂r/∂θ_a, all whitened.
+fn covariance(ivs: &[&GyroInterval], active: &[bool; NP], f: &Fit, w: &Whitener) -> Fit {
     let idx: Vec<usize> = (0..NP).filter(|&i| active[i]).collect();
-    let w = Whitener::new(&selected(ivs));
-    let r = residuals(&f.theta, ivs, &w);
-    let dof = r.len() as f64 - idx.len() as f64;
-    let ratio = if dof > 0.0 {
-        r.iter().map(|v| v * v).sum::<f64>() / dof
-    } else {
-        f64::NAN
-    };
     let mut out = f.clone();
     if idx.is_empty() {
-        return (out, ratio);
+        return out;
     }
-    let j = jacobian(&f.theta, ivs, &idx, &w);
+    let j = jacobian(&f.theta, ivs, &idx, w);
     let a = w.apply_columns(&DMatrix::from_fn(2 * ivs.len(), 9, |row, c| {
         ivs[row / 2].noise.accel[(row % 2, c)]
     }));
     let Some(inv) = (j.transpose() * &j).try_inverse() else {
-        return (out, ratio);
+        return out;
     };
     let d = inv * j.transpose() * a;
     let add = &d * d.transpose();
@@ -317,7 +309,7 @@ fn covariance(ivs: &[&GyroInterval], active: &[bool; NP], f: &Fit) -> (Fit, f64)
             out.cov[(p, q)] += add[(r, c)];
         }
     }
-    (out, ratio)
+    out
 }
 
 /// Condition number of the column-normalised Jacobian at K = I.
@@ -453,8 +445,8 @@ pub fn calibrate_gyro(
         })
     })?;
     let active = mask_of(&model);
-    let (full, noise_ratio) = covariance(&ivs, &active, &fit(&ivs, &active, nominal())?);
-    let (th, sd) = (full.theta, full.sd());
+    let full = covariance(&ivs, &active, &fit(&ivs, &active, nominal())?, &white);
+    let (th, sd, noise_ratio) = (full.theta, full.sd(), full.residual_variance);
     let mut settings = CalibrationSettings::default();
     let mut implausible = Vec::new();
     if let Some(a) = k_of(&th).try_inverse() {
