@@ -18,6 +18,31 @@ pub use crate::stage::bias::health::{BiasChannelHealth, BiasChannelState, BiasHe
 pub use crate::stage::gross_error::health::{GateChannelHealth, GateState, GrossErrorHealth};
 pub use crate::stage::monitor::MonitorHealth;
 
+/// Defines a struct of `u64` counters from one list of fields, with `named()` (every counter
+/// with its field name, in declaration order: the order the summary prints them) and `add()`
+/// (the element-wise sum), so neither can drift from the fields.
+macro_rules! counters {
+    ($(#[$attr:meta])* pub struct $name:ident { $($(#[$doc:meta])* $field:ident),+ $(,)? }) => {
+        $(#[$attr])*
+        pub struct $name {
+            $($(#[$doc])* pub $field: u64,)+
+        }
+
+        impl $name {
+            /// Every counter, named as the summary prints it, in declaration order.
+            pub fn named(&self) -> [(&'static str, u64); [$(stringify!($field)),+].len()] {
+                [$((stringify!($field), self.$field)),+]
+            }
+
+            /// Element-wise sum (stage totals over channels).
+            pub fn add(&mut self, o: &Self) {
+                $(self.$field += o.$field;)+
+            }
+        }
+    };
+}
+pub(crate) use counters;
+
 /// The health of one stage, as [`crate::stage::Stage::health`] returns it.
 // Built once per health report, never per sample: its size costs nothing.
 #[allow(clippy::large_enum_variant)]

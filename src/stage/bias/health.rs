@@ -5,63 +5,40 @@ use serde::Serialize;
 use super::BiasStage;
 use crate::sample::N_CHANNELS;
 
-/// Counted by the bias stage since the run started.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-pub struct BiasCounters {
-    /// Samples processed.
-    pub samples: u64,
-    /// Samples the stillness detector called still (flag `STILL`).
-    pub still_samples: u64,
-    /// Still measurements taken by a gyro filter (summed over channels).
-    pub bias_updates: u64,
-    /// CUSUM step alarms (each inflated a random-constant state; summed over channels).
-    pub step_alarms: u64,
-    /// Warm-up models fitted (one per gyro channel without a model, once).
-    pub warmup_fits: u64,
-    /// Warm-up stretches that could not be fitted (constant values) and were started again.
-    pub warmup_fit_failures: u64,
-    /// Samples with a non-finite channel after calibration (flag `NON_FINITE`).
-    pub non_finite_samples: u64,
-    /// Gaps over 100 samples: delay line flushed without updates, stillness restarted.
-    pub long_gaps: u64,
-    /// Channels of the model file whose white-noise variance was clamped (at build).
-    pub white_noise_clamped_channels: u64,
-    /// Effects of the model file the stage cannot apply (too many lines; steps or random walks
-    /// on accel channels), at build.
-    pub ignored_effects: u64,
-    /// Still measurements the consistency guard rejected (beyond 4 σ of the prediction).
-    pub rejected_updates: u64,
-    /// Times a gyro estimate re-anchored after 2 s of disagreeing still measurements.
-    pub reanchors: u64,
-    /// Stale repeats (`REPEATED`): given the current bias, no measurement.
-    pub repeats: u64,
-    /// Gyro channels that started subtracting their estimate (a model file's at once, the
-    /// warm-up model's once distinguishable from zero, `apply_k`; at most once per channel).
-    pub engagements: u64,
-}
-
-impl BiasCounters {
-    /// Every counter, named as the summary prints it, in a fixed order.
-    pub fn named(&self) -> [(&'static str, u64); 14] {
-        [
-            ("samples", self.samples),
-            ("still_samples", self.still_samples),
-            ("bias_updates", self.bias_updates),
-            ("step_alarms", self.step_alarms),
-            ("warmup_fits", self.warmup_fits),
-            ("warmup_fit_failures", self.warmup_fit_failures),
-            ("non_finite_samples", self.non_finite_samples),
-            ("long_gaps", self.long_gaps),
-            (
-                "white_noise_clamped_channels",
-                self.white_noise_clamped_channels,
-            ),
-            ("ignored_effects", self.ignored_effects),
-            ("rejected_updates", self.rejected_updates),
-            ("reanchors", self.reanchors),
-            ("repeats", self.repeats),
-            ("engagements", self.engagements),
-        ]
+crate::stage::health::counters! {
+    /// Counted by the bias stage since the run started.
+    #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+    pub struct BiasCounters {
+        /// Samples processed.
+        samples,
+        /// Samples the stillness detector called still (flag `STILL`).
+        still_samples,
+        /// Still measurements taken by a gyro filter (summed over channels).
+        bias_updates,
+        /// CUSUM step alarms (each inflated a random-constant state; summed over channels).
+        step_alarms,
+        /// Warm-up models fitted (one per gyro channel without a model, once).
+        warmup_fits,
+        /// Warm-up stretches that could not be fitted (constant values) and were started again.
+        warmup_fit_failures,
+        /// Samples with a non-finite channel after calibration (flag `NON_FINITE`).
+        non_finite_samples,
+        /// Gaps over 100 samples: delay line flushed without updates, stillness restarted.
+        long_gaps,
+        /// Channels of the model file whose white-noise variance was clamped (at build).
+        white_noise_clamped_channels,
+        /// Effects of the model file the stage cannot apply (too many lines; steps or random walks
+        /// on accel channels), at build.
+        ignored_effects,
+        /// Still measurements the consistency guard rejected (beyond 4 σ of the prediction).
+        rejected_updates,
+        /// Times a gyro estimate re-anchored after 2 s of disagreeing still measurements.
+        reanchors,
+        /// Stale repeats (`REPEATED`): given the current bias, no measurement.
+        repeats,
+        /// Gyro channels that started subtracting their estimate (a model file's at once, the
+        /// warm-up model's once distinguishable from zero, `apply_k`; at most once per channel).
+        engagements,
     }
 }
 

@@ -112,32 +112,34 @@ impl GateParams {
     }
 }
 
-/// Health counters of one channel.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct ChannelCounters {
-    /// Samples replaced (confirmed gross errors and bad values).
-    pub replaced: u64,
-    /// Events (runs of successive candidates; a single spike is a run of 1).
-    pub runs: u64,
-    /// Events confirmed as gross errors (replaced).
-    pub confirmed: u64,
-    /// Events passed unchanged, flagged suspect, and their samples.
-    pub suspect_events: u64,
-    pub suspect: u64,
-    /// Runs longer than `max_run` accepted as level changes.
-    pub level_changes: u64,
-    /// Events released by the release rule.
-    pub released: u64,
-    /// Non-finite values seen.
-    pub non_finite: u64,
-    /// Finite values beyond the plausible range of any MEMS sensor.
-    pub implausible: u64,
-    /// Saturated samples seen.
-    pub saturated: u64,
-    /// Samples passed through while warming up.
-    pub warmup: u64,
-    /// Identifications that fell back to the white-noise model.
-    pub fallback_models: u64,
+crate::stage::health::counters! {
+    /// Health counters of one channel.
+    #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+    pub struct ChannelCounters {
+        /// Samples replaced (confirmed gross errors and bad values).
+        replaced,
+        /// Events (runs of successive candidates; a single spike is a run of 1).
+        runs,
+        /// Events confirmed as gross errors (replaced).
+        confirmed,
+        /// Events passed unchanged, flagged suspect, and their samples.
+        suspect_events,
+        suspect,
+        /// Runs longer than `max_run` accepted as level changes.
+        level_changes,
+        /// Events released by the release rule.
+        released,
+        /// Non-finite values seen.
+        non_finite,
+        /// Finite values beyond the plausible range of any MEMS sensor.
+        implausible,
+        /// Saturated samples seen.
+        saturated,
+        /// Samples passed through while warming up.
+        warmup,
+        /// Identifications that fell back to the white-noise model.
+        fallback_models,
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -61,42 +61,6 @@ pub struct GrossErrorHealth {
     pub channels: [GateChannelHealth; N_CHANNELS],
 }
 
-impl ChannelCounters {
-    /// Every counter, named, in a fixed order.
-    pub fn named(&self) -> [(&'static str, u64); 12] {
-        [
-            ("replaced", self.replaced),
-            ("runs", self.runs),
-            ("confirmed", self.confirmed),
-            ("suspect_events", self.suspect_events),
-            ("suspect", self.suspect),
-            ("level_changes", self.level_changes),
-            ("released", self.released),
-            ("non_finite", self.non_finite),
-            ("implausible", self.implausible),
-            ("saturated", self.saturated),
-            ("warmup", self.warmup),
-            ("fallback_models", self.fallback_models),
-        ]
-    }
-
-    /// Element-wise sum (stage totals over channels).
-    pub fn add(&mut self, o: &ChannelCounters) {
-        self.replaced += o.replaced;
-        self.runs += o.runs;
-        self.confirmed += o.confirmed;
-        self.suspect_events += o.suspect_events;
-        self.suspect += o.suspect;
-        self.level_changes += o.level_changes;
-        self.released += o.released;
-        self.non_finite += o.non_finite;
-        self.implausible += o.implausible;
-        self.saturated += o.saturated;
-        self.warmup += o.warmup;
-        self.fallback_models += o.fallback_models;
-    }
-}
-
 impl GrossErrorHealth {
     /// Every counter, named as the summary prints it: the stage's, then each enabled channel's
     /// as `<channel>.<counter>`.
