@@ -656,10 +656,7 @@ mod tests {
             ..Default::default()
         };
         let (out, st) = decode_all(opts, &b, 13);
-        let n = out
-            .iter()
-            .filter(|d| matches!(d, Decoded::Sample(..)))
-            .count();
+        let n = out.iter().filter_map(Decoded::sample).count();
         assert_eq!(n, 10);
         assert_eq!(st.other_messages, 10);
         assert_eq!(

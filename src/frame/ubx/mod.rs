@@ -523,10 +523,7 @@ mod tests {
         let len = b.len() / 3;
         b[len + 10] ^= 0x40;
         let (out, st) = decode_all(&b, 7);
-        let n = out
-            .iter()
-            .filter(|d| matches!(d, Decoded::Sample(..)))
-            .count();
+        let n = out.iter().filter_map(Decoded::sample).count();
         assert_eq!(n, 2);
         assert_eq!(st.crc_errors, 1);
     }
