@@ -336,7 +336,10 @@ fn clean_logs_get_no_effects_over_50_seeds() {
     // seed follows the warm-up over the whole record). Before the contiguous-span check
     // (`diagnose_slow::FOLDS`) there were 3 (seeds 22 gy, 34 az, 49 gz). The target is missed by
     // one; this bound guards against it getting worse and the family check against any other
-    // kind of false finding.
+    // kind of false finding. A two-component wander does not remove it: on 300 s the likelihood
+    // does not ask for a second component, and the term's likelihood ratio against a wander of
+    // its own (2Δℓ = 16.6) is that of the step log's true warm-up terms (16.6–22.4;
+    // docs/results-diagnose-real.md, "A two-component wander").
     assert!(
         found
             .iter()

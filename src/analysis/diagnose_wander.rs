@@ -16,6 +16,13 @@
 //! when the best GM's τ̂ is beyond half the record (the record cannot show it levelling off) and
 //! Λ ≤ 3.84; otherwise undecided. So a GM with τ = 200 s on a 20-min record is never called a
 //! random walk: either its levelling off is seen (GM), or the report says it cannot tell.
+//!
+//! **One component.** A bench usually has several (the simulated one: GM τ = 20 s and 200 s). A
+//! second, slower component in a two-state filter, chosen by likelihood ratio, was tried
+//! (`docs/experiments/diagnose_two_component_wander.patch`, numbers in
+//! docs/results-diagnose-real.md): it finds the two on hours of record, but on the 5–20-min clean
+//! logs the likelihood does not ask for it, it changed no finding, and it more than doubled the
+//! whole-log diagnose's time; not kept.
 
 use serde::Serialize;
 
