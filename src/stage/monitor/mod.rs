@@ -304,14 +304,23 @@ impl MonitorStage {
         // sample is one).
         let bridge = fs.round().max(1.0) as usize;
         self.ch = (0..N_CHANNELS)
-            .map(|_| Channel {
-                level: LevelDetector::new(
-                    block_n,
-                    window_blocks,
-                    st.offset_k,
-                    learn_blocks,
-                    bridge,
-                ),
+            .map(|c| Channel {
+                level: {
+                    let level = LevelDetector::new(
+                        block_n,
+                        window_blocks,
+                        st.offset_k,
+                        learn_blocks,
+                        bridge,
+                    );
+                    // An accelerometer's output at rest holds gravity's projection: its level
+                    // is tested against a reference level before it, not against zero.
+                    if c >= 3 {
+                        level.against_reference()
+                    } else {
+                        level
+                    }
+                },
                 line: LineDetector::new(seg_n, st.line_averages, st.line_k, fs),
                 wander: WanderDetector::new(wb_n, wb_s, w_blocks, w_m, st.wander_p, w_learn)
                     .with_statistic(st.wander_statistic),
