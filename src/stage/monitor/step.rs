@@ -191,6 +191,11 @@ impl LevelDetector {
         self
     }
 
+    /// Blocks of unbroken still data one test needs.
+    pub fn test_blocks(&self) -> usize {
+        self.span()
+    }
+
     /// Blocks one test needs: the window, and against a reference the guard and the reference.
     fn span(&self) -> usize {
         if self.reference_blocks > 0 {
