@@ -4,7 +4,8 @@
 //! Targets: false alarms ≤ 1 per hour on clean simulated logs and on the real static benches;
 //! an effect of the size `diagnose` finds flagged within 2 min. On the real benches every alarm
 //! must be a real effect: a line the whole neighbourhood of the alarm shows in the output's own
-//! spectrum, and no offset alarm (those benches hold no step). Real data skipped visibly when
+//! spectrum, or an accelerometer offset on a real excursion of the output (at most 1 per hour;
+//! no gyro offset alarm: those benches hold no step). Real data skipped visibly when
 //! `../shared/data/real` is absent.
 
 mod monitor_common;
@@ -16,6 +17,7 @@ use monitor_common::{
 use imuprep::analysis::spectrum::welch;
 use imuprep::report::detector_compare::simulate_decoded;
 use imuprep::sample::{CHANNEL_NAMES, Sample};
+use imuprep::stage::Stage;
 use imuprep::stage::monitor::{Alarm, Finding, MonitorSettings, MonitorStage, WanderStatistic};
 
 /// The embedded default pipeline's cleaning stages over `samples`, then the monitor (the last
@@ -174,7 +176,7 @@ fn line_strength(out: &[Sample], c: usize, t_s: f64, hz: f64, rate: f64) -> f64 
 }
 
 #[test]
-fn real_static_benches_alarm_only_for_real_lines() {
+fn real_static_benches_alarm_only_for_real_lines_and_excursions() {
     for (rel, rate, hours, samples) in real_static_benches() {
         let (out, settings) = cleaned(&samples, rate, false);
         // The wander test (off by default), each statistic: measured, held to no alarm on the
@@ -223,9 +225,43 @@ fn real_static_benches_alarm_only_for_real_lines() {
         for x in &a {
             eprintln!("  {x}");
         }
+        // Offset alarms: none on a gyro (the bias model tracks the gyros' level); on the
+        // accelerometers (tested against a reference level, not zero) at most 1 per hour of
+        // the bench, each on a real excursion of the output: in the 240 s its test spans (the
+        // reference, the guard and the window), a 10-s mean ≥ 4 of the 10-s white σ from their
+        // median (white noise: P ≈ 24 × 6e-5 < 2e-3).
+        let off: Vec<&Alarm> = a
+            .iter()
+            .filter(|x| matches!(x.finding, Finding::Offset(_)))
+            .collect();
         assert!(
-            a.iter().all(|x| matches!(x.finding, Finding::Line(..))),
-            "{rel}: an offset alarm on a bench that holds no step: {a:?}"
+            off.iter().all(|x| x.channel >= 3),
+            "{rel}: an offset alarm on a gyro: {off:?}"
+        );
+        assert!(
+            off.len() as f64 <= hours,
+            "{rel}: {} offset alarms in {hours:.2} h: {off:?}",
+            off.len()
+        );
+        for x in &off {
+            let t0 = x.t_ns as f64 * 1e-9 - 180.0;
+            let e: Vec<f64> = (3..6)
+                .map(|c| {
+                    let m = means_10s(&out, c, t0, 24, rate);
+                    let mid = median(m.clone());
+                    m.iter().map(|v| (v - mid).abs()).fold(0.0, f64::max) / sd10[c - 3]
+                })
+                .collect();
+            eprintln!(
+                "  {x}: 10-s excursion over its test's 240 s (× the 10-s white σ) ax {:.1} ay {:.1} az {:.1}",
+                e[0], e[1], e[2]
+            );
+            assert!(e[x.channel - 3] >= 4.0, "{rel}: {x} on no excursion: {e:?}");
+        }
+        assert!(
+            a.iter()
+                .all(|x| matches!(x.finding, Finding::Line(..) | Finding::Offset(_))),
+            "{a:?}"
         );
         for x in &a {
             let Finding::Line(hz, _) = x.finding else {
@@ -426,6 +462,109 @@ fn wander_of_the_size_diagnose_finds() {
                      (None: not in 600 s)"
                 );
             }
+        }
+    }
+}
+
+/// 1 mg, m/s².
+const MG: f64 = 9.80665e-3;
+
+/// The monitor over `out`, with the sensor time at which each alarm was raised (the alarm
+/// itself names the start of the window that first showed the effect).
+fn watch_timed(out: &[Sample], settings: MonitorSettings, rate_hz: f64) -> Vec<(f64, Alarm)> {
+    let mut m = MonitorStage::new(settings, Some(rate_hz)).unwrap();
+    let mut sink = Vec::with_capacity(1);
+    let mut raised = Vec::new();
+    let mut seen = 0;
+    for s in out {
+        m.push(*s, &mut sink);
+        sink.clear();
+        let n = m.alarms().count();
+        if n > seen {
+            raised.extend(m.alarms().skip(seen).map(|a| (s.t_s(), *a)));
+            seen = n;
+        }
+    }
+    raised
+}
+
+/// Seconds from an accelerometer bias step (`mg` on every accelerometer axis from `t0` s of a
+/// clean bench of `len_s`, seed `seed`) to each axis's first offset alarm (`None`: not raised),
+/// and every alarm of the run with the time it was raised.
+fn accel_step_flagged_after_s(
+    mg: f64,
+    t0: f64,
+    len_s: f64,
+    seed: u64,
+) -> ([Option<f64>; 3], Vec<(f64, Alarm)>) {
+    let scn = clean_bench(len_s);
+    let (mut samples, _) = simulate_decoded(&scn, seed).unwrap();
+    for s in samples.iter_mut().filter(|s| s.t_s() >= t0) {
+        for a in 0..3 {
+            s.accel[a] += mg * MG;
+        }
+    }
+    let (out, settings) = cleaned(&samples, 100.0, false);
+    let a = watch_timed(&out, settings, 100.0);
+    let mut after = [None; 3];
+    for (t, x) in &a {
+        if let Finding::Offset(_) = x.finding
+            && x.channel >= 3
+            && after[x.channel - 3].is_none()
+        {
+            after[x.channel - 3] = Some(t - t0);
+        }
+    }
+    (after, a)
+}
+
+#[test]
+fn an_accelerometer_step_is_flagged_within_two_minutes() {
+    // A bias step on every accelerometer axis at 800 s of a 20-min clean bench, seeds 21–24.
+    // `diagnose` keeps a step of 1 mg (ax) on 3 of 4 such logs, 0.75 mg (az) on 3 of 4, 0.5 mg
+    // (ay) on 1 of 4, 1.5 and 2 mg on all (docs/model-health.md), so 1 mg is the size it finds. Against zero the
+    // offset test flagged none of them (2 mg, seed 21: no axis; its learned scale held
+    // gravity's projection); against
+    // the reference level: 2 mg on all 12 axes in 51.6–57.6 s, 1 mg on 10 of 12 in 56.6–77.8 s
+    // (az: 136.6 s on seed 23, missed on seed 22). No alarm before the step on any seed.
+    let mut within_1mg = 0;
+    for seed in 21..25u64 {
+        for (mg, need_all) in [(2.0, true), (1.0, false)] {
+            let (after, a) = accel_step_flagged_after_s(mg, 800.0, 1200.0, seed);
+            eprintln!("{mg} mg, seed {seed}: flagged after {after:?} s");
+            assert!(
+                a.iter().all(|(t, x)| *t >= 800.0 && x.channel >= 3),
+                "{mg} mg, seed {seed}: {a:?}"
+            );
+            let fast = after.iter().flatten().filter(|t| **t <= 120.0).count();
+            if need_all {
+                assert_eq!(fast, 3, "{mg} mg, seed {seed}: {after:?}");
+            } else {
+                within_1mg += fast;
+            }
+        }
+    }
+    // Measured 10 of 12: a regression, not noise, if fewer (the runs are seeded).
+    assert!(
+        within_1mg >= 10,
+        "1 mg flagged within 2 min on {within_1mg} of 12 axes"
+    );
+}
+
+#[test]
+#[ignore]
+fn sweep_accel_step_size() {
+    for mg in [0.5, 0.75, 1.0, 2.0, 3.0] {
+        for seed in 21..25u64 {
+            let (after, a) = accel_step_flagged_after_s(mg, 800.0, 1200.0, seed);
+            let other: Vec<String> = a
+                .iter()
+                .filter(|(t, _)| *t < 800.0)
+                .map(|(t, x)| format!("{t:.0} s: {x}"))
+                .collect();
+            eprintln!(
+                "{mg} mg, seed {seed}: ax/ay/az flagged after {after:?} s; before the step: {other:?}"
+            );
         }
     }
 }

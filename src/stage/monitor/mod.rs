@@ -6,7 +6,9 @@
 //! zero-mean noise with a smooth spectrum; the monitor looks, per channel, for
 //!
 //! - an **offset** the model does not explain — a step, a drift, a temperature term it lacks
-//!   ([`step::LevelDetector`]: a window's mean output against the channel's own history), and
+//!   ([`step::LevelDetector`]: a window's mean output against the channel's own history; on an
+//!   accelerometer, whose output at rest holds gravity's projection, the change of its median
+//!   level from a reference level before it), and
 //! - a **spectral line** — a vibration or an electrical line appearing ([`line::LineDetector`]:
 //!   a moving Welch average, each bin against its neighbours), and
 //! - a **wander** — the output losing its whiteness at tens of seconds, a bias instability the
@@ -236,16 +238,20 @@ impl MonitorStage {
         }
         // Enough still time, but the offset test also needs quiet windows of unbroken still
         // data to learn its scale from: say so rather than repeat a need already met.
-        let (learned, needed) = self
+        // The channel nearest to arming (the accelerometers' tests need more, and longer, runs).
+        let (learned, needed, blocks) = self
             .ch
             .iter()
-            .map(|c| c.level.learned_windows())
-            .max()
-            .unwrap_or((0, 0));
+            .map(|c| {
+                let (l, n) = c.level.learned_windows();
+                (l, n, c.level.test_blocks())
+            })
+            .max_by(|a, b| (a.0 * b.1 as u64).cmp(&(b.0 * a.1 as u64)))
+            .unwrap_or((0, 0, 0));
         format!(
             "learning ({seen:.0} s still seen; the offset test has learned {learned} of the \
              {needed} window means it needs, each from {:.0} s of unbroken still data)",
-            self.settings.window_s
+            blocks as f64 * self.settings.block_s
         )
     }
 
@@ -304,14 +310,23 @@ impl MonitorStage {
         // sample is one).
         let bridge = fs.round().max(1.0) as usize;
         self.ch = (0..N_CHANNELS)
-            .map(|_| Channel {
-                level: LevelDetector::new(
-                    block_n,
-                    window_blocks,
-                    st.offset_k,
-                    learn_blocks,
-                    bridge,
-                ),
+            .map(|c| Channel {
+                level: {
+                    let level = LevelDetector::new(
+                        block_n,
+                        window_blocks,
+                        st.offset_k,
+                        learn_blocks,
+                        bridge,
+                    );
+                    // An accelerometer's output at rest holds gravity's projection: its level
+                    // is tested against a reference level before it, not against zero.
+                    if c >= 3 {
+                        level.against_reference()
+                    } else {
+                        level
+                    }
+                },
                 line: LineDetector::new(seg_n, st.line_averages, st.line_k, fs),
                 wander: WanderDetector::new(wb_n, wb_s, w_blocks, w_m, st.wander_p, w_learn)
                     .with_statistic(st.wander_statistic),

@@ -11,7 +11,9 @@ pub struct MonitorSettings {
     /// Window whose mean output is tested for an offset the model lacks, s (a multiple of
     /// `block_s`; about the bias model's time constant is where a step shows most).
     pub window_s: f64,
-    /// Offset alarm threshold, in the channel's own learned RMS of a window mean.
+    /// Offset alarm threshold, in the channel's own learned RMS of a window mean (on an
+    /// accelerometer, of the change of its median level from a reference level before it, which
+    /// must hold for half a window of tests: docs/model-health.md).
     pub offset_k: f64,
     /// Still time a channel needs before its offset test is armed, s.
     pub learn_s: f64,

@@ -13,6 +13,16 @@
 //! the same signal-to-noise as comparing two raw windows, without needing the raw bias. The
 //! alarm holds (hysteresis: until `|m|` falls below half the threshold), so a step is one event
 //! and a ramp is one event with a duration.
+//!
+//! An accelerometer's output at rest holds gravity's projection on its axis, a level no bias
+//! model removes, so its mean is tested against a reference level instead of zero
+//! ([`LevelDetector::against_reference`]): the median of the last window's block means minus the
+//! median of the `2W` seconds of block means that end one window before that window starts. The
+//! medians make it a test of a *persistent* change: the last window's median moves only once
+//! half of it (`W/2`) is off, and the reference's is not moved by an excursion filling less than
+//! half of it (`W`); an alarm needs `W/2` tests in a row at or above the bar, so the new level
+//! has held about a window. The guard of one window keeps a step's pre-step reference in view
+//! until `3W` after the step, so the step is tested at full size from `W/2` to `3W` after it.
 
 use super::learn::{Bridge, Delayed};
 use std::collections::VecDeque;
@@ -23,7 +33,8 @@ pub struct LevelEvent {
     /// Sensor time of the start of the window that raised the alarm, ns (the effect began
     /// within it, or before it when it grew slowly).
     pub t_ns: u64,
-    /// The window's mean output, channel unit: the offset the model does not explain.
+    /// The window's mean output, channel unit: the offset the model does not explain (against
+    /// a reference level: the change of the level, [`LevelDetector::against_reference`]).
     pub offset: f64,
     /// `|m| / √E[m²]` at the alarm.
     pub z: f64,
@@ -91,19 +102,35 @@ pub struct LevelDetector {
     pending: Delayed<(f64, f64)>,
     // Learned E[m²], and E[b²] of single block means (12× the independent samples: with
     // E[b²]/W it gives a floor for E[m²] — exact for white noise — while E[m²] itself, which
-    // also holds the slower noise, is still uncertain).
+    // also holds the slower noise, is still uncertain); against a reference, E[(b_k − b_{k−1})²]
+    // (`floor_c`).
     b2_sum: f64,
     m2_sum: f64,
     m2_n: u64,
     still_blocks: u64,
     bridge: Bridge,
+    // Reference blocks when tested against a reference level ([`LevelDetector::against_reference`]),
+    // 0 against zero.
+    reference_blocks: usize,
+    // The floor of `E[m²]`: this times the learned mean of the block statistic's square.
+    floor_c: f64,
+    // Scratch for the medians (no allocation per block).
+    scratch: Vec<f64>,
+    // Tests in a row at or above the bar that raise an alarm (1 against zero), those seen so
+    // far, and the start of the window of the first of them.
+    confirm: usize,
+    // Learned tests arming needs.
+    arm_tests: usize,
+    over: usize,
+    over_since_ns: u64,
     active: bool,
     pub events: u64,
 }
 
 impl LevelDetector {
     /// `block_n` samples per block, `window_blocks` blocks per window, alarm at `k` σ, armed
-    /// after `learn_blocks` still blocks (and at least `window_blocks` windows) were seen; up
+    /// after `learn_blocks` still blocks (and at least `window_blocks` windows learned from,
+    /// `4 × window_blocks` against a reference) were seen; up
     /// to `bridge_n` skipped samples in a row are bridged ([`LevelDetector::skip`]).
     pub fn new(
         block_n: usize,
@@ -124,14 +151,79 @@ impl LevelDetector {
             m2_n: 0,
             still_blocks: 0,
             bridge: Bridge::new(bridge_n),
+            reference_blocks: 0,
+            floor_c: 1.0 / window_blocks.max(1) as f64,
+            scratch: Vec::new(),
+            confirm: 1,
+            arm_tests: window_blocks.max(1),
+            over: 0,
+            over_since_ns: 0,
             active: false,
             events: 0,
         }
     }
 
+    /// Tests the change of the level — the median of the last window's block means minus the
+    /// median of `2W` of block means ending one window (`W`) before that window starts — not the
+    /// mean against zero: for an accelerometer, whose output at rest holds gravity's projection
+    /// on its axis (a level that changes with every attitude and that no bias model removes).
+    /// Against zero that level enters `E[m²]` and hides any offset smaller than a few times
+    /// itself (on the ADIS16405 bench the RMS of az's 60-s mean is 1328× its spread). A test
+    /// needs `4W` of unbroken still data. The floor of `E[m²]` is `(π/2)(1/W + 1/2W)` times
+    /// the variance of one block mean, `E[(b_k − b_{k−1})²]/2` (the large-sample variance of
+    /// a median of white block means; exact neither for small `W` nor for coloured noise, a
+    /// floor until the learned value takes over). An alarm needs `W/2` tests in a row at or
+    /// above the bar, and the detector arms after `4W` learned tests.
+    pub fn against_reference(mut self) -> Self {
+        let w = self.window_blocks;
+        self.reference_blocks = 2 * w;
+        self.floor_c = std::f64::consts::FRAC_PI_2 * (1.0 / w as f64 + 0.5 / w as f64) / 2.0;
+        self.blocks = VecDeque::with_capacity(4 * w + 1);
+        self.scratch = Vec::with_capacity(2 * w);
+        // Confirmed over half a window of tests in a row: the last window's median moves only
+        // once half its blocks are off, so a level must hold about `W/2` for `W/2` tests to
+        // raise an alarm (an excursion shorter than `W/2` never moves it), longer near the bar.
+        self.confirm = (w / 2).max(1);
+        // Learned tests: one test's span (`4W`; successive tests are correlated over about
+        // that span). With `W` (a quarter of it) a 20-min clean bench armed on a scale learned
+        // from one minute of tests and alarmed at 6.1 σ (docs/model-health.md).
+        self.arm_tests = 4 * w;
+        self
+    }
+
+    /// Blocks of unbroken still data one test needs.
+    pub fn test_blocks(&self) -> usize {
+        self.span()
+    }
+
+    /// Blocks one test needs: the window, and against a reference the guard and the reference.
+    fn span(&self) -> usize {
+        if self.reference_blocks > 0 {
+            2 * self.window_blocks + self.reference_blocks
+        } else {
+            self.window_blocks
+        }
+    }
+
+    /// The median of block means `from..from + n` (oldest first).
+    fn median_of(&mut self, from: usize, n: usize) -> f64 {
+        self.scratch.clear();
+        self.scratch
+            .extend(self.blocks.iter().skip(from).take(n).map(|b| b.0));
+        self.scratch.sort_unstable_by(f64::total_cmp);
+        let k = self.scratch.len();
+        if k == 0 {
+            0.0
+        } else if k % 2 == 1 {
+            self.scratch[k / 2]
+        } else {
+            0.5 * (self.scratch[k / 2 - 1] + self.scratch[k / 2])
+        }
+    }
+
     /// Whether the detector has learned enough of the channel to raise alarms.
     pub fn armed(&self) -> bool {
-        self.still_blocks >= self.learn_blocks as u64 && self.m2_n >= self.window_blocks as u64
+        self.still_blocks >= self.learn_blocks as u64 && self.m2_n >= self.arm_tests as u64
     }
 
     /// Whether an alarm is holding now.
@@ -143,15 +235,13 @@ impl LevelDetector {
     pub fn window_sd(&self) -> Option<f64> {
         (self.m2_n > 0).then(|| {
             let n = self.m2_n as f64;
-            (self.m2_sum / n)
-                .max(self.b2_sum / n / self.window_blocks as f64)
-                .sqrt()
+            (self.m2_sum / n).max(self.b2_sum / n * self.floor_c).sqrt()
         })
     }
 
     /// Windows learned from so far, and how many arming needs.
     pub fn learned_windows(&self) -> (u64, usize) {
-        (self.m2_n, self.window_blocks)
+        (self.m2_n, self.arm_tests)
     }
 
     /// A sample that cannot be used (not judged still, a replaced or bad value): left out of
@@ -169,6 +259,7 @@ impl LevelDetector {
         self.bridge.reset();
         self.block.reset();
         self.blocks.clear();
+        self.over = 0;
         self.active = false;
     }
 
@@ -178,14 +269,26 @@ impl LevelDetector {
         let (mean, start) = self.block.push(t_ns, v)?;
         self.still_blocks += 1;
         let w = self.window_blocks;
-        if self.blocks.len() == w {
+        let span = self.span();
+        let before = self.blocks.back().map(|b| b.0);
+        if self.blocks.len() == span {
             self.blocks.pop_front();
         }
         self.blocks.push_back((mean, start));
-        if self.blocks.len() < w {
+        if self.blocks.len() < span {
             return None;
         }
-        let m = self.blocks.iter().map(|b| b.0).sum::<f64>() / w as f64;
+        // The statistic, and the block-level value whose mean square floors `E[m²]`.
+        let (m, mean) = if self.reference_blocks > 0 {
+            let recent = self.median_of(span - w, w);
+            let reference = self.median_of(0, self.reference_blocks);
+            (recent - reference, mean - before.unwrap_or(mean))
+        } else {
+            (
+                self.blocks.iter().map(|b| b.0).sum::<f64>() / w as f64,
+                mean,
+            )
+        };
         let armed = self.armed();
         let sd = self.window_sd().unwrap_or(0.0);
         let z = if sd > 0.0 { m.abs() / sd } else { 0.0 };
@@ -208,17 +311,26 @@ impl LevelDetector {
             }
             return None;
         }
-        if z >= self.k {
-            self.active = true;
-            self.events += 1;
-            self.pending.drop_pending();
-            return Some(LevelEvent {
-                t_ns: self.blocks[0].1,
-                offset: m,
-                z,
-            });
+        if z < self.k {
+            self.over = 0;
+            return None;
         }
-        None
+        if self.over == 0 {
+            self.over_since_ns = self.blocks[span - w].1;
+        }
+        self.over += 1;
+        if self.over < self.confirm {
+            return None;
+        }
+        self.over = 0;
+        self.active = true;
+        self.events += 1;
+        self.pending.drop_pending();
+        Some(LevelEvent {
+            t_ns: self.over_since_ns,
+            offset: m,
+            z,
+        })
     }
 }
 
@@ -269,6 +381,50 @@ mod tests {
             "{:?}",
             ev[0]
         );
+    }
+
+    #[test]
+    fn against_a_reference_a_level_is_ignored_a_step_flagged_and_an_excursion_not() {
+        // 2 h at a level of 9.81 (gravity on the axis) with white noise: against zero the
+        // learned scale would be the level itself; against the reference, no alarm in 2 h
+        // (1440 tests at 5 σ of a Gaussian-like statistic) and the scale is the noise's:
+        // σ of a 60-s median minus a 120-s median of 5-s means, ≈ √(π/2 · (1/6000 + 1/12000))
+        // · 0.006 = 1.2e-4 for white noise; learned within 25 % (≈ 30 independent spans).
+        let fresh = || LevelDetector::new(500, 12, 5.0, 60, 100).against_reference();
+        let mut det = fresh();
+        let xs: Vec<f64> = noise(17, 720_000, 0.006).iter().map(|x| x + 9.81).collect();
+        assert!(run(&mut det, &xs).is_empty());
+        let sd = det.window_sd().unwrap();
+        assert!((sd / 1.2e-4 - 1.0).abs() < 0.25, "{sd}");
+        // A step of 10× that scale at 20 min: one alarm, raised once the last window's median
+        // crossed the bar (half a window or a little less after the step: the median of 12
+        // blocks is half-way moved with 6 blocks off, and the step is 4.5 σ of one block) and
+        // held it for six tests (25 s more): 45–75 s after the step; its size within 30 %.
+        let s = 1.2e-3;
+        let mut xs: Vec<f64> = noise(18, 240_000, 0.006).iter().map(|x| x + 9.81).collect();
+        for x in xs.iter_mut().skip(120_000) {
+            *x += s;
+        }
+        let mut det = fresh();
+        let mut raised = Vec::new();
+        for (i, &x) in xs.iter().enumerate() {
+            if let Some(e) = det.push(i as u64 * 10_000_000, x) {
+                raised.push((i as f64 / FS, e));
+            }
+        }
+        assert_eq!(raised.len(), 1, "{raised:?}");
+        let (t, e) = raised[0];
+        assert!((1245.0..=1275.0).contains(&t), "raised at {t} s");
+        assert!((e.offset / s - 1.0).abs() < 0.3, "{e:?}");
+        // The same size for 25 s (5 blocks, under half a window) and back: no alarm (with
+        // 6 blocks the 12-block median is half-way moved for 7 tests in a row, and 30 s of
+        // this size is flagged).
+        let mut xs: Vec<f64> = noise(18, 240_000, 0.006).iter().map(|x| x + 9.81).collect();
+        for x in xs.iter_mut().skip(120_000).take(2_500) {
+            *x += s;
+        }
+        let mut det = fresh();
+        assert!(run(&mut det, &xs).is_empty());
     }
 
     #[test]
