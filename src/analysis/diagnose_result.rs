@@ -95,15 +95,23 @@ pub struct Overlay {
     pub effect: Vec<f64>,
 }
 
+/// A channel's residual before and after its effects, as both diagnoses plot it
+/// ([`super::diagnose_report::residual_plots`]; not serialised).
+#[derive(Clone, Debug, Default)]
+pub struct ResidualPlots {
+    /// Welch spectrum, before and after.
+    pub spectrum_before: Option<Psd>,
+    pub spectrum_after: Option<Psd>,
+    /// Allan deviation, (tau s, deviation) per octave, before and after.
+    pub allan_before: Vec<(f64, f64)>,
+    pub allan_after: Vec<(f64, f64)>,
+}
+
 /// Plot data (not serialised).
 #[derive(Clone, Debug, Default)]
 pub struct PlotData {
-    /// Welch spectrum of the test innovations, first and final model.
-    pub spectrum_before: Option<Psd>,
-    pub spectrum_after: Option<Psd>,
-    /// Allan deviation of the test innovations, first and final model.
-    pub allan_before: Vec<(f64, f64)>,
-    pub allan_after: Vec<(f64, f64)>,
+    /// The test innovations of the first and the final model.
+    pub residual: ResidualPlots,
     /// Per iteration: the effect over the residual it explains.
     pub overlays: Vec<Overlay>,
 }
