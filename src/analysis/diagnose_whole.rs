@@ -34,7 +34,7 @@ use super::diagnose_blocks::{Blocks, GainNoise, HeldOutTest, held_out_test, step
 use super::diagnose_lines::{
     BlockLine, contribution, contribution_in_sample, line_candidates, track,
 };
-use super::diagnose_result::ResidualPlots;
+use super::diagnose_result::{DeploymentFit, ResidualPlots};
 use super::diagnose_slow::{SlowCtx, SlowTerm, lagged, select};
 use super::diagnose_wander::{WanderKind, WanderParams, classify, innovations};
 use super::quantisation::{Quantisation, quantisation};
@@ -192,9 +192,8 @@ pub struct WholeDiagnosis {
     pub wander: Option<WanderReport>,
     pub held_out: HeldOutErrors,
     /// Deployment refit: intercept, AR, innovation variance.
-    pub intercept: f64,
-    pub ar: Vec<f64>,
-    pub innovation_var: f64,
+    #[serde(flatten)]
+    pub refit: DeploymentFit,
     /// Welch spectra (first, final) of the open-loop residual and its Allan deviation (1-s means).
     #[serde(skip)]
     pub plots: ResidualPlots,
@@ -592,9 +591,11 @@ pub fn diagnose_whole(
         rejected,
         wander,
         held_out,
-        intercept: dep.c,
-        ar: ar_dep.coeffs.clone(),
-        innovation_var: ar_dep.noise_var,
+        refit: DeploymentFit {
+            intercept: dep.c,
+            ar: ar_dep.coeffs.clone(),
+            innovation_var: ar_dep.noise_var,
+        },
         plots,
     })
 }
