@@ -45,7 +45,8 @@ use super::AnalysisError;
 use super::allan_check::{AllanKind, allan_check};
 use super::changepoint::{ChangePointSettings, binary_segmentation};
 pub use super::diagnose_result::{
-    CandidateScore, ChannelDiagnosis, Findings, Iteration, Overlay, PlotData, TestMetrics,
+    CandidateScore, ChannelDiagnosis, DeploymentFit, Findings, Iteration, Overlay, PlotData,
+    ResidualPlots, TestMetrics,
 };
 use super::diagnose_terms::{Ctx, Term, decimate, effects_of, polish_structure, term_contribution};
 use super::exogenous::{Exogenous, analyse as exo_analyse, lagged_polynomial_scan};
@@ -534,10 +535,18 @@ pub fn diagnose_channel(
     let rf = ff.residuals(y, &fcols);
     let seg = (sp.test.len() / 8).clamp(256, 8192);
     let plots = PlotData {
-        spectrum_before: welch(&rb.innovation[sp.test.clone()], input.rate_hz, seg).ok(),
-        spectrum_after: welch(&rf.innovation[sp.test.clone()], input.rate_hz, seg).ok(),
-        allan_before: super::allan::oadev_octaves(&rb.innovation[sp.test.clone()], input.rate_hz),
-        allan_after: super::allan::oadev_octaves(&rf.innovation[sp.test.clone()], input.rate_hz),
+        residual: ResidualPlots {
+            spectrum_before: welch(&rb.innovation[sp.test.clone()], input.rate_hz, seg).ok(),
+            spectrum_after: welch(&rf.innovation[sp.test.clone()], input.rate_hz, seg).ok(),
+            allan_before: super::allan::oadev_octaves(
+                &rb.innovation[sp.test.clone()],
+                input.rate_hz,
+            ),
+            allan_after: super::allan::oadev_octaves(
+                &rf.innovation[sp.test.clone()],
+                input.rate_hz,
+            ),
+        },
         overlays,
     };
     Ok(ChannelDiagnosis {
@@ -550,9 +559,11 @@ pub fn diagnose_channel(
         baseline,
         baseline_findings,
         effects: effects_of(&deploy_terms, &df, input.rate_hz),
-        intercept: df.intercept,
-        ar: df.ar.coeffs.clone(),
-        innovation_var: df.ar.noise_var,
+        refit: DeploymentFit {
+            intercept: df.intercept,
+            ar: df.ar.coeffs.clone(),
+            innovation_var: df.ar.noise_var,
+        },
         iterations,
         rejected,
         final_metrics,

@@ -1,7 +1,7 @@
 //! The diagnosis report: JSON (serde), a text formatter, and the SVG plots of each channel
 //! (residual spectrum before/after, Allan deviation before/after, each effect over the residual).
 
-use super::diagnose::{ChannelDiagnosis, Findings, TestMetrics};
+use super::diagnose::{ChannelDiagnosis, Findings, ResidualPlots, TestMetrics};
 use super::line_plot::{Plot, Series, render};
 use super::spectrum::Psd;
 use crate::model::bias_model::Effect;
@@ -228,7 +228,7 @@ pub fn channel_text(c: &ChannelDiagnosis) -> String {
 }
 
 /// A log-log plot of two residual spectra, before and after (the DC bin left out).
-pub fn spectrum_plot(
+fn spectrum_plot(
     title: String,
     before: (&str, &Psd),
     after: (&str, &Psd),
@@ -253,45 +253,77 @@ pub fn spectrum_plot(
     render(&plot, 800, 480)
 }
 
-/// SVG plots of one channel: (file stem, svg text).
-pub fn channel_plots(c: &ChannelDiagnosis) -> Result<Vec<(String, String)>, String> {
+/// How a diagnosis names the residual it plots before and after its effects.
+pub struct ResidualCaptions<'a> {
+    /// Spectrum title, after "{channel}: ".
+    pub spectrum: &'a str,
+    /// Allan deviation title, after "{channel}: ".
+    pub allan: &'a str,
+    /// Legends of the residual before and after.
+    pub before: &'a str,
+    pub after: &'a str,
+    /// Also draw white noise (slope −1/2) through the first point after.
+    pub white_reference: bool,
+}
+
+/// The residual's spectrum (`{channel}_spectrum`) and Allan deviation (`{channel}_allan`) before
+/// and after the effects, each where both curves are there: (file stem, svg).
+pub fn residual_plots(
+    channel: &str,
+    p: &ResidualPlots,
+    c: &ResidualCaptions,
+) -> Result<Vec<(String, String)>, String> {
     let mut out = Vec::new();
-    let p = &c.plots;
     if let (Some(a), Some(b)) = (&p.spectrum_before, &p.spectrum_after) {
-        let title = format!("{}: residual spectrum (test, Welch)", c.channel);
-        let svg = spectrum_plot(title, ("first model", a), ("final model", b))?;
-        out.push((format!("{}_spectrum", c.channel), svg));
+        let title = format!("{channel}: {}", c.spectrum);
+        let svg = spectrum_plot(title, (c.before, a), (c.after, b))?;
+        out.push((format!("{channel}_spectrum"), svg));
     }
-    if !p.allan_before.is_empty() {
+    if let (Some(b0), Some(a0)) = (p.allan_before.first(), p.allan_after.first()) {
+        let taus = |v: &[(f64, f64)]| v.iter().map(|p| p.0).collect();
+        let curve = |v: &[(f64, f64)], label: &str| Series {
+            label: label.into(),
+            x: taus(v),
+            y: v.iter().map(|p| p.1).collect(),
+        };
+        let mut series = vec![
+            curve(&p.allan_before, c.before),
+            curve(&p.allan_after, c.after),
+        ];
+        if c.white_reference {
+            series.push(Series {
+                label: "white (slope -1/2)".into(),
+                x: taus(&p.allan_before),
+                y: p.allan_before
+                    .iter()
+                    .map(|v| a0.1 * (v.0 / b0.0).powf(-0.5))
+                    .collect(),
+            });
+        }
         let plot = Plot {
-            title: format!("{}: Allan deviation of the residual (test)", c.channel),
+            title: format!("{channel}: {}", c.allan),
             x_label: "tau (s)".into(),
             y_label: "Allan deviation".into(),
             log_x: true,
             log_y: true,
-            series: vec![
-                Series {
-                    label: "first model".into(),
-                    x: p.allan_before.iter().map(|v| v.0).collect(),
-                    y: p.allan_before.iter().map(|v| v.1).collect(),
-                },
-                Series {
-                    label: "final model".into(),
-                    x: p.allan_after.iter().map(|v| v.0).collect(),
-                    y: p.allan_after.iter().map(|v| v.1).collect(),
-                },
-                Series {
-                    label: "white (slope -1/2)".into(),
-                    x: p.allan_before.iter().map(|v| v.0).collect(),
-                    y: p.allan_before
-                        .iter()
-                        .map(|v| p.allan_after[0].1 * (v.0 / p.allan_before[0].0).powf(-0.5))
-                        .collect(),
-                },
-            ],
+            series,
         };
-        out.push((format!("{}_allan", c.channel), render(&plot, 800, 480)?));
+        out.push((format!("{channel}_allan"), render(&plot, 800, 480)?));
     }
+    Ok(out)
+}
+
+/// SVG plots of one channel: (file stem, svg text).
+pub fn channel_plots(c: &ChannelDiagnosis) -> Result<Vec<(String, String)>, String> {
+    let captions = ResidualCaptions {
+        spectrum: "residual spectrum (test, Welch)",
+        allan: "Allan deviation of the residual (test)",
+        before: "first model",
+        after: "final model",
+        white_reference: true,
+    };
+    let p = &c.plots;
+    let mut out = residual_plots(&c.channel, &p.residual, &captions)?;
     for (i, ov) in p.overlays.iter().enumerate() {
         let (fam, t, r, e) = (&ov.family, &ov.t_s, &ov.residual, &ov.effect);
         let plot = Plot {

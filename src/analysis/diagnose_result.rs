@@ -95,15 +95,35 @@ pub struct Overlay {
     pub effect: Vec<f64>,
 }
 
+/// The AR part of a diagnosis's deployment refit on the whole log: what the bias model file's
+/// channel carries besides the effects.
+#[derive(Clone, Debug, Serialize)]
+pub struct DeploymentFit {
+    /// Intercept (the bias model's `mean` when effects apply on top).
+    pub intercept: f64,
+    /// AR coefficients.
+    pub ar: Vec<f64>,
+    /// One-step innovation variance.
+    pub innovation_var: f64,
+}
+
+/// A channel's residual before and after its effects, as both diagnoses plot it
+/// ([`super::diagnose_report::residual_plots`]; not serialised).
+#[derive(Clone, Debug, Default)]
+pub struct ResidualPlots {
+    /// Welch spectrum, before and after.
+    pub spectrum_before: Option<Psd>,
+    pub spectrum_after: Option<Psd>,
+    /// Allan deviation, (tau s, deviation) per octave, before and after.
+    pub allan_before: Vec<(f64, f64)>,
+    pub allan_after: Vec<(f64, f64)>,
+}
+
 /// Plot data (not serialised).
 #[derive(Clone, Debug, Default)]
 pub struct PlotData {
-    /// Welch spectrum of the test innovations, first and final model.
-    pub spectrum_before: Option<Psd>,
-    pub spectrum_after: Option<Psd>,
-    /// Allan deviation of the test innovations, first and final model.
-    pub allan_before: Vec<(f64, f64)>,
-    pub allan_after: Vec<(f64, f64)>,
+    /// The test innovations of the first and the final model.
+    pub residual: ResidualPlots,
     /// Per iteration: the effect over the residual it explains.
     pub overlays: Vec<Overlay>,
 }
@@ -133,12 +153,9 @@ pub struct ChannelDiagnosis {
     pub final_findings: Findings,
     /// Learned effects for the bias model TOML (deployment refit on the whole log).
     pub effects: Vec<Effect>,
-    /// Intercept of the deployment refit (the bias model's `mean` when effects apply on top).
-    pub intercept: f64,
-    /// AR coefficients of the deployment refit.
-    pub ar: Vec<f64>,
-    /// One-step innovation variance of the deployment refit.
-    pub innovation_var: f64,
+    /// Intercept, AR and innovation variance of the deployment refit.
+    #[serde(flatten)]
+    pub refit: DeploymentFit,
     #[serde(skip)]
     pub plots: PlotData,
 }

@@ -34,6 +34,7 @@ use super::diagnose_blocks::{Blocks, GainNoise, HeldOutTest, held_out_test, step
 use super::diagnose_lines::{
     BlockLine, contribution, contribution_in_sample, line_candidates, track,
 };
+use super::diagnose_result::{DeploymentFit, ResidualPlots};
 use super::diagnose_slow::{SlowCtx, SlowTerm, lagged, select};
 use super::diagnose_wander::{WanderKind, WanderParams, classify, innovations};
 use super::quantisation::{Quantisation, quantisation};
@@ -191,21 +192,11 @@ pub struct WholeDiagnosis {
     pub wander: Option<WanderReport>,
     pub held_out: HeldOutErrors,
     /// Deployment refit: intercept, AR, innovation variance.
-    pub intercept: f64,
-    pub ar: Vec<f64>,
-    pub innovation_var: f64,
+    #[serde(flatten)]
+    pub refit: DeploymentFit,
     /// Welch spectra (first, final) of the open-loop residual and its Allan deviation (1-s means).
     #[serde(skip)]
-    pub plots: WholePlots,
-}
-
-/// Plot data.
-#[derive(Clone, Debug, Default)]
-pub struct WholePlots {
-    pub spectrum_before: Option<super::spectrum::Psd>,
-    pub spectrum_after: Option<super::spectrum::Psd>,
-    pub allan_before: Vec<(f64, f64)>,
-    pub allan_after: Vec<(f64, f64)>,
+    pub plots: ResidualPlots,
 }
 
 /// AR(p) of `x` with p by AIC over 1..=max (one Burg lattice).
@@ -583,7 +574,7 @@ pub fn diagnose_whole(
     let ar_dep = burg(&r_dep, ar1.order().max(1))?;
     progress("plots");
     let seg = (n / 64).clamp(256, 8192);
-    let plots = WholePlots {
+    let plots = ResidualPlots {
         spectrum_before: super::spectrum::welch(&base, fs, seg).ok(),
         spectrum_after: super::spectrum::welch(&r_dep, fs, seg).ok(),
         allan_before: super::allan::oadev_octaves(&step_means(&base, dec), 1.0 / dt),
@@ -600,9 +591,11 @@ pub fn diagnose_whole(
         rejected,
         wander,
         held_out,
-        intercept: dep.c,
-        ar: ar_dep.coeffs.clone(),
-        innovation_var: ar_dep.noise_var,
+        refit: DeploymentFit {
+            intercept: dep.c,
+            ar: ar_dep.coeffs.clone(),
+            innovation_var: ar_dep.noise_var,
+        },
         plots,
     })
 }

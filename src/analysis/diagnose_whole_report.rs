@@ -2,7 +2,7 @@
 //! the effects of the model file (`effects`), each with its span and held-out test, then every
 //! candidate not kept with its reason, so report, summary and model file agree.
 
-use super::diagnose_report::{effect_text, spectrum_plot};
+use super::diagnose_report::{ResidualCaptions, effect_text, residual_plots};
 use super::diagnose_wander::WanderKind;
 use super::diagnose_whole::WholeDiagnosis;
 use super::line_plot::{Plot, Series, render};
@@ -162,35 +162,14 @@ pub fn whole_text(d: &WholeDiagnosis) -> String {
 
 /// SVG plots of one channel: (file stem, svg).
 pub fn whole_plots(d: &WholeDiagnosis) -> Result<Vec<(String, String)>, String> {
-    let mut out = Vec::new();
-    let p = &d.plots;
-    if let (Some(a), Some(b)) = (&p.spectrum_before, &p.spectrum_after) {
-        let title = format!("{}: open-loop residual spectrum (Welch)", d.channel);
-        let svg = spectrum_plot(title, ("intercept only", a), ("with the effects", b))?;
-        out.push((format!("{}_spectrum", d.channel), svg));
-    }
-    if !p.allan_before.is_empty() && !p.allan_after.is_empty() {
-        let s = |v: &Vec<(f64, f64)>, l: &str| Series {
-            label: l.into(),
-            x: v.iter().map(|p| p.0).collect(),
-            y: v.iter().map(|p| p.1).collect(),
-        };
-        let plot = Plot {
-            title: format!(
-                "{}: Allan deviation of the open-loop residual (1-s means)",
-                d.channel
-            ),
-            x_label: "tau (s)".into(),
-            y_label: "Allan deviation".into(),
-            log_x: true,
-            log_y: true,
-            series: vec![
-                s(&p.allan_before, "intercept only"),
-                s(&p.allan_after, "with the effects"),
-            ],
-        };
-        out.push((format!("{}_allan", d.channel), render(&plot, 800, 480)?));
-    }
+    let captions = ResidualCaptions {
+        spectrum: "open-loop residual spectrum (Welch)",
+        allan: "Allan deviation of the open-loop residual (1-s means)",
+        before: "intercept only",
+        after: "with the effects",
+        white_reference: false,
+    };
+    let mut out = residual_plots(&d.channel, &d.plots, &captions)?;
     for (i, e) in d
         .effects
         .iter()

@@ -11,7 +11,7 @@ use std::path::Path;
 use anyhow::{Result, anyhow, ensure};
 
 use super::{load_span_to, parse_channels, present_channels};
-use crate::analysis::diagnose::{ChannelInput, DiagnoseSettings, diagnose_channel};
+use crate::analysis::diagnose::{ChannelInput, DeploymentFit, DiagnoseSettings, diagnose_channel};
 use crate::analysis::diagnose_report::{DiagnoseReport, channel_plots, effect_text};
 use crate::analysis::exogenous::Exogenous;
 use crate::model::bias_model::{BiasModelFile, ChannelBiasModel, Effect};
@@ -165,12 +165,9 @@ pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added>
             effects_text(&written)
         )?;
         write_plots(out_dir, channel_plots(&d).map_err(anyhow::Error::msg)?)?;
-        model.channels.push(channel_model(
-            name,
-            rate,
-            (d.intercept, &d.ar, d.innovation_var),
-            d.effects.clone(),
-        ));
+        model
+            .channels
+            .push(channel_model(name, rate, &d.refit, d.effects.clone()));
         added_all.push((
             name.to_string(),
             d.iterations.iter().map(|it| it.effect.clone()).collect(),
@@ -241,21 +238,21 @@ pub fn write_plots(out_dir: &Path, plots: Vec<(String, String)>) -> Result<()> {
     Ok(())
 }
 
-/// One channel of the model file a diagnosis writes: its Burg AR part `(mean, ar,
-/// innovation variance)` and its effects.
+/// One channel of the model file a diagnosis writes: its Burg AR part (the deployment refit)
+/// and its effects.
 pub fn channel_model(
     name: &str,
     rate: f64,
-    (mean, ar, innovation_var): (f64, &[f64], f64),
+    refit: &DeploymentFit,
     effects: Vec<Effect>,
 ) -> ChannelBiasModel {
     ChannelBiasModel {
         channel: name.to_string(),
         method: "burg".into(),
         sample_rate_hz: rate,
-        mean,
-        ar: ar.to_vec(),
-        innovation_var,
+        mean: refit.intercept,
+        ar: refit.ar.clone(),
+        innovation_var: refit.innovation_var,
         white_noise_var: 0.0,
         effects,
         ..Default::default()

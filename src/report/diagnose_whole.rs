@@ -92,12 +92,7 @@ pub fn diagnose_whole_samples(st: &Stretch, progress: &mut dyn Write) -> Result<
         })?;
         write_plots(out_dir, whole_plots(&d).map_err(anyhow::Error::msg)?)?;
         let effects: Vec<_> = d.effects.iter().map(|e| e.effect.clone()).collect();
-        let mut m = channel_model(
-            name,
-            rate,
-            (d.intercept, &d.ar, d.innovation_var),
-            effects.clone(),
-        );
+        let mut m = channel_model(name, rate, &d.refit, effects.clone());
         if let Some((ar, q, white)) = d.wander.as_ref().and_then(|w| w.bias_process(rate)) {
             m.ar = ar;
             m.innovation_var = q;
