@@ -21,7 +21,9 @@
 //! over-determined, and the column-normalised Jacobian's condition number ≤ `max_condition`),
 //! then backward elimination by leave-one-interval-out with `diagnose`'s paired z-test on each
 //! left-out interval's residual in the fit's form (its two in-plane components, whitened with
-//! the same noise model: `calib_gyro_noise`), and the bias stage's validation of the result.
+//! their modelled covariance: the fit's noise model, the accelerometer calibration's error and
+//! the error of the refit without the interval, `calib_gyro_noise`), and the bias stage's
+//! validation of the result.
 //! No LSB floor here: an interval integrates hundreds of samples, which dithers the gyro's
 //! quantisation into noise that the held-out test already sees.
 //!
@@ -38,7 +40,7 @@ use super::calib_fit::{
     scaled_condition,
 };
 use super::calib_gyro_noise::{
-    MotionNoise, MotionRates, Selected, Whitener, motion_noise, stretch_noise,
+    HeldOutWhitener, MotionNoise, MotionRates, Selected, Whitener, motion_noise, stretch_noise,
 };
 use super::calib_still::AccelStretch;
 use super::diagnose_blocks::{GainNoise, held_out_test};
@@ -255,15 +257,19 @@ fn raw_jacobian(th: &[f64; NP], ivs: &[&GyroInterval], idx: &[usize]) -> DMatrix
     j
 }
 
-/// The Jacobian of [`residuals`]: projected and whitened as they are.
-fn jacobian(th: &[f64; NP], ivs: &[&GyroInterval], idx: &[usize], w: &Whitener) -> DMatrix<f64> {
+/// The Jacobian projected on each motion's plane (2 rows per motion).
+fn projected_jacobian(th: &[f64; NP], ivs: &[&GyroInterval], idx: &[usize]) -> DMatrix<f64> {
     let j = raw_jacobian(th, ivs, idx);
-    let projected = DMatrix::from_fn(2 * ivs.len(), idx.len(), |row, c| {
+    DMatrix::from_fn(2 * ivs.len(), idx.len(), |row, c| {
         let (k, e) = (row / 2, row % 2);
         let col = ivs[k].noise.basis.column(e);
         (0..3).map(|a| col[a] * j[(3 * k + a, c)]).sum()
-    });
-    w.apply_columns(&projected)
+    })
+}
+
+/// The Jacobian of [`residuals`]: projected and whitened as they are.
+fn jacobian(th: &[f64; NP], ivs: &[&GyroInterval], idx: &[usize], w: &Whitener) -> DMatrix<f64> {
+    w.apply_columns(&projected_jacobian(th, ivs, idx))
 }
 
 /// The fit of the `active` entries of K from `start` (inactive entries stay as there), and the
@@ -336,11 +342,31 @@ fn held_out(
     Ok(out)
 }
 
-/// The stacked held-out residuals whitened with the fit's noise model over all the motions
-/// (`calib_gyro_noise`: each motion's own covariance, and consecutive motions correlated
-/// through their shared stretch), so that the held-out test's paired z sees independent,
-/// equally weighted components, as its gain's noise assumes.
-fn whitened(e: &[Vector2<f64>], w: &Whitener) -> Vec<f64> {
+/// The whitening of the held-out residuals of the model `active`
+/// (`calib_gyro_noise::HeldOutWhitener`): the fit's noise model over all the motions (each
+/// motion's own covariance, consecutive motions correlated through their shared stretch), the
+/// accelerometer calibration's error that all of them share, and each motion's share of the
+/// error of the model refitted without it (linearised at the fit on all the motions; none
+/// when nothing is fitted, K = I).
+fn held_out_whitener(
+    ivs: &[&GyroInterval],
+    active: &[bool; NP],
+) -> Result<HeldOutWhitener, AnalysisError> {
+    let sel = selected(ivs);
+    let idx: Vec<usize> = (0..NP).filter(|&i| active[i]).collect();
+    if idx.is_empty() {
+        return Ok(HeldOutWhitener::new(&sel, None));
+    }
+    let th = fit(ivs, active, nominal())?.theta;
+    Ok(HeldOutWhitener::new(
+        &sel,
+        Some(&projected_jacobian(&th, ivs, &idx)),
+    ))
+}
+
+/// The stacked held-out residuals whitened (`held_out_whitener`), so that the held-out test's
+/// paired z sees components of unit variance, as its gain's noise assumes.
+fn whitened(e: &[Vector2<f64>], w: &HeldOutWhitener) -> Vec<f64> {
     w.apply(e).iter().flat_map(|v| [v.x, v.y]).collect()
 }
 
@@ -373,8 +399,8 @@ pub struct GyroCalibration {
     /// calibration.
     pub held_out_rms_before_rad: f64,
     pub held_out_rms_after_rad: f64,
-    /// The same whitened (`calib_gyro_noise`; ≈ 1 where only the modelled noise is left): what
-    /// the held-out test compares.
+    /// The same whitened with the held-out residuals' modelled covariance (`held_out_whitener`;
+    /// ≈ 1 where only the modelled noise is left): what the held-out test compares.
     pub held_out_white_rms_before: f64,
     pub held_out_white_rms_after: f64,
     pub verdict: String,
@@ -422,8 +448,9 @@ pub fn calibrate_gyro(
     let candidates = eliminate(&mut model, alpha, |m, k, round, level| {
         let with = mask_of(m);
         let rest: Vec<usize> = m.iter().copied().filter(|&g| g != k).collect();
-        let e1 = whitened(&held_out(&ivs, &with)?, &white);
-        let e0 = whitened(&held_out(&ivs, &mask_of(&rest))?, &white);
+        let hw = held_out_whitener(&ivs, &with)?;
+        let e1 = whitened(&held_out(&ivs, &with)?, &hw);
+        let e0 = whitened(&held_out(&ivs, &mask_of(&rest))?, &hw);
         let desc = format!("gyro {} in [{}]", GROUPS[k], names(m));
         let test = held_out_test(
             "gyro calibration",
@@ -463,6 +490,7 @@ pub fn calibrate_gyro(
     } else {
         vec![]
     };
+    let after = if kept { active } else { [false; NP] };
     let e_after = if kept {
         held_out(&ivs, &active)?
     } else {
@@ -482,8 +510,8 @@ pub fn calibrate_gyro(
     Ok(GyroCalibration {
         held_out_rms_before_rad: rms_rad(&e_none),
         held_out_rms_after_rad: rms_rad(&e_after),
-        held_out_white_rms_before: rms(&whitened(&e_none, &white)),
-        held_out_white_rms_after: rms(&whitened(&e_after, &white)),
+        held_out_white_rms_before: rms(&whitened(&e_none, &held_out_whitener(&ivs, &[false; NP])?)),
+        held_out_white_rms_after: rms(&whitened(&e_after, &held_out_whitener(&ivs, &after)?)),
         intervals,
         not_identifiable,
         candidates,

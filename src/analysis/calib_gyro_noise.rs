@@ -28,9 +28,21 @@
 //! K moves by D δθ_a, D = −(JᵀJ)⁻¹Jᵀ ∂r/∂θ_a (whitened), so its covariance gains D Cov(θ_a) Dᵀ.
 //! The accelerometer fit uses each stretch's |f| (its radial noise), the directions their
 //! transverse noise: the two are independent to first order, so the terms add.
+//!
+//! The leave-one-motion-out test whitens the held-out residuals with their own covariance
+//! (`HeldOutWhitener`): e_k = y_k − J_k θ̂_{−k} carries the data's noise (the block-tridiagonal
+//! Σ), the accelerometer frame error in full (A Aᵀ: the fit leaves it out of its weights, as
+//! more motions do not average it away, but a held-out residual has it) and the error of the
+//! refit without motion k projected through that motion (J_k Cov(θ̂_{−k}) J_kᵀ, less what k's
+//! neighbours, which share its stretches, and the frame error put into both). Each motion's
+//! block is that exact linearised Var(e_k); the blocks between motions are the data's (the
+//! refits' own cross terms are left out: with them the covariance is singular, as any
+//! residual in J's column space is refitted exactly, and whitening with its pseudo-inverse
+//! would turn the held-out test into the in-sample one).
 
 use nalgebra::{
-    DMatrix, Matrix2, Matrix3, Matrix3x2, Rotation3, SMatrix, SymmetricEigen, Vector2, Vector3,
+    DMatrix, DVector, Matrix2, Matrix3, Matrix3x2, Rotation3, SMatrix, SymmetricEigen, Vector2,
+    Vector3,
 };
 
 use super::calib_fit::{Cov9, FittedCalibration, direction, nominal};
@@ -249,6 +261,102 @@ impl Whitener {
     }
 }
 
+/// The whitening of the stacked held-out residuals (the leave-one-motion-out test, module
+/// docs): the fit's block-tridiagonal noise Σ plus the accelerometer calibration's error, which
+/// every motion shares (A Aᵀ, A the projected residuals' sensitivity to it times a square root
+/// of its covariance; the fit leaves it out of its weights, as it cannot be averaged away, but
+/// a held-out residual carries it), with each motion's diagonal block replaced by its held-out
+/// residual's whole variance when a model is refitted without it (`refit_block`). Dense
+/// (2n × 2n, n ≤ a few dozen motions); L⁻¹ of its Cholesky factor, by forward substitution.
+pub(crate) struct HeldOutWhitener {
+    chol: Option<nalgebra::Cholesky<f64, nalgebra::Dyn>>,
+    /// The block whitener, used if neither the covariance nor Σ + A Aᵀ is positive definite (not
+    /// expected: Σ is, and A Aᵀ is positive semi-definite).
+    fallback: Whitener,
+}
+
+/// The covariance of motion `k`'s held-out residual e_k = y_k − J_k θ̂_{−k}: with θ̂_{−k} the
+/// generalised least squares on the others (their noise model `c` without k), e_k = M_k y,
+/// M_k = E_k − J_k P, P = (J_Tᵀ c_T⁻¹ J_T)⁻¹ J_Tᵀ c_T⁻¹, and Var(e_k) = M_k `tot` M_kᵀ with
+/// `tot` the data's whole noise (the fit's and the accelerometer frame's): its own noise, the
+/// refit's parameter error, their correlation through the neighbours' shared stretches and the
+/// frame error the refit absorbs.
+fn refit_block(
+    c: &DMatrix<f64>,
+    tot: &DMatrix<f64>,
+    j: &DMatrix<f64>,
+    k: usize,
+) -> Option<Matrix2<f64>> {
+    let m = c.nrows();
+    let keep: Vec<usize> = (0..m).filter(|&i| i / 2 != k).collect();
+    let c_t = c.select_rows(&keep).select_columns(&keep);
+    let j_t = j.select_rows(&keep);
+    let ch = c_t.cholesky()?;
+    let ci_j = ch.solve(&j_t);
+    let info = (j_t.transpose() * &ci_j).try_inverse()?;
+    let p = info * ci_j.transpose();
+    let jk = j.rows(2 * k, 2);
+    let jp = jk * p;
+    let mut mk = DMatrix::zeros(2, m);
+    mk[(0, 2 * k)] = 1.0;
+    mk[(1, 2 * k + 1)] = 1.0;
+    for (col, &i) in keep.iter().enumerate() {
+        mk[(0, i)] -= jp[(0, col)];
+        mk[(1, i)] -= jp[(1, col)];
+    }
+    let v = &mk * tot * mk.transpose();
+    let out = Matrix2::new(v[(0, 0)], v[(0, 1)], v[(1, 0)], v[(1, 1)]);
+    out.iter().all(|x| x.is_finite()).then_some(out)
+}
+
+impl HeldOutWhitener {
+    /// `refit`: the projected (unwhitened) Jacobian (2 rows per motion) of the model refitted
+    /// without each motion, whose error then enters that motion's held-out residual.
+    pub fn new(sel: &[Selected], refit: Option<&DMatrix<f64>>) -> HeldOutWhitener {
+        let n = sel.len();
+        let mut c = DMatrix::zeros(2 * n, 2 * n);
+        let mut a = DMatrix::zeros(2 * n, 9);
+        for (k, (m, _)) in sel.iter().enumerate() {
+            c.view_mut((2 * k, 2 * k), (2, 2)).copy_from(&m.own);
+            a.view_mut((2 * k, 0), (2, 9)).copy_from(&m.accel);
+            if let Some(x) = m.next.filter(|_| k + 1 < n && sel[k + 1].1) {
+                c.view_mut((2 * k, 2 * k + 2), (2, 2)).copy_from(&x);
+                c.view_mut((2 * k + 2, 2 * k), (2, 2))
+                    .copy_from(&x.transpose());
+            }
+        }
+        let tot = &c + &a * a.transpose();
+        let mut full = tot.clone();
+        if let Some(j) = refit.filter(|j| j.ncols() > 0 && n > 1) {
+            for k in 0..n {
+                if let Some(v) = refit_block(&c, &tot, j, k) {
+                    full.view_mut((2 * k, 2 * k), (2, 2)).copy_from(&v);
+                }
+            }
+        }
+        let chol_of = |m: DMatrix<f64>| m.iter().all(|v| v.is_finite()).then(|| m.cholesky());
+        let chol = chol_of(full).flatten().or_else(|| chol_of(tot).flatten());
+        HeldOutWhitener {
+            chol,
+            fallback: Whitener::new(sel),
+        }
+    }
+
+    /// L⁻¹ x for the stacked 2-vectors `x`, one per motion.
+    pub fn apply(&self, x: &[Vector2<f64>]) -> Vec<Vector2<f64>> {
+        let Some(ch) = &self.chol else {
+            return self.fallback.apply(x);
+        };
+        let v = DVector::from_iterator(2 * x.len(), x.iter().flat_map(|v| [v.x, v.y]));
+        match ch.l_dirty().solve_lower_triangular(&v) {
+            Some(w) if w.len() == v.len() => (0..x.len())
+                .map(|k| Vector2::new(w[2 * k], w[2 * k + 1]))
+                .collect(),
+            _ => self.fallback.apply(x),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -296,6 +404,76 @@ mod tests {
                 / (2.0 * h);
             assert!((d - du_df.column(c)).norm() < 1e-7, "f {c}");
         }
+    }
+
+    #[test]
+    fn a_held_out_block_is_the_classical_leave_one_out_variance_for_white_noise() {
+        // With independent white noise (Σ = I) and no frame error, leaving out block k of a
+        // linear least-squares fit gives e_k = (I − H_kk)⁻¹ r_k, so Var(e_k) = (I − H_kk)⁻¹,
+        // H = J (JᵀJ)⁻¹ Jᵀ (the hat matrix): `refit_block` (which builds M_k from the refit
+        // without k instead) must agree to rounding (entries O(1), well conditioned: 1e-10
+        // leaves room). 12 blocks of 2 rows, 5 parameters.
+        let mut rng = Rng::new(5);
+        let (n, p) = (12, 5);
+        let j = DMatrix::from_fn(2 * n, p, |_, _| rng.normal());
+        let eye = DMatrix::<f64>::identity(2 * n, 2 * n);
+        let h = &j * (j.transpose() * &j).try_inverse().unwrap() * j.transpose();
+        for k in 0..n {
+            let hk = Matrix2::new(
+                h[(2 * k, 2 * k)],
+                h[(2 * k, 2 * k + 1)],
+                h[(2 * k + 1, 2 * k)],
+                h[(2 * k + 1, 2 * k + 1)],
+            );
+            let want = (Matrix2::identity() - hk).try_inverse().unwrap();
+            let got = refit_block(&eye, &eye, &j, k).unwrap();
+            assert!((got - want).abs().max() < 1e-10, "{k}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn the_held_out_whitener_whitens_the_noise_and_the_frame_error() {
+        // Without a refit its covariance is Σ (block tridiagonal) + A Aᵀ: L⁻¹ (Σ + A Aᵀ) L⁻ᵀ = I
+        // to rounding (entries O(1); 1e-10 leaves room). The block whitener alone (the
+        // fallback) would leave A Aᵀ in and fail.
+        let mut rng = Rng::new(23);
+        let n = 6;
+        let (mut noise, shares) = chain(n, &[], &mut rng);
+        for m in &mut noise {
+            m.accel = SMatrix::<f64, 2, 9>::from_fn(|_, _| 0.5 * rng.normal());
+        }
+        let sel: Vec<Selected> = noise.iter().zip(&shares).map(|(m, s)| (m, *s)).collect();
+        let mut sigma = DMatrix::zeros(2 * n, 2 * n);
+        let mut a = DMatrix::zeros(2 * n, 9);
+        for (k, m) in noise.iter().enumerate() {
+            sigma.view_mut((2 * k, 2 * k), (2, 2)).copy_from(&m.own);
+            a.view_mut((2 * k, 0), (2, 9)).copy_from(&m.accel);
+            if k + 1 < n {
+                let c = m.next.unwrap();
+                sigma.view_mut((2 * k, 2 * k + 2), (2, 2)).copy_from(&c);
+                sigma
+                    .view_mut((2 * k + 2, 2 * k), (2, 2))
+                    .copy_from(&c.transpose());
+            }
+        }
+        let full = sigma + &a * a.transpose();
+        let w = HeldOutWhitener::new(&sel, None);
+        let cols = |m: &DMatrix<f64>| {
+            let mut out = DMatrix::zeros(m.nrows(), m.ncols());
+            for c in 0..m.ncols() {
+                let x: Vec<Vector2<f64>> = (0..n)
+                    .map(|k| Vector2::new(m[(2 * k, c)], m[(2 * k + 1, c)]))
+                    .collect();
+                for (k, v) in w.apply(&x).iter().enumerate() {
+                    out[(2 * k, c)] = v.x;
+                    out[(2 * k + 1, c)] = v.y;
+                }
+            }
+            out
+        };
+        let white = cols(&cols(&full).transpose());
+        let err = (white - DMatrix::<f64>::identity(2 * n, 2 * n)).abs().max();
+        assert!(err < 1e-10, "{err}");
     }
 
     #[test]

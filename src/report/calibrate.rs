@@ -457,7 +457,7 @@ fn gyro_text(o: &mut String, g: &GyroCalibration) {
     } else {
         let _ = writeln!(
             o,
-            "held-out RMS direction error (leave-one-motion-out, per in-plane component): {:.4e} -> {:.4e} rad; whitened by the noise model (what the test compares, ≈ 1 when only noise is left): {:.3} -> {:.3}",
+            "held-out RMS direction error (leave-one-motion-out, per in-plane component): {:.4e} -> {:.4e} rad; whitened by their modelled covariance (noise, accelerometer frame error, refit error: what the test compares, ≈ 1 when only noise is left): {:.3} -> {:.3}",
             g.held_out_rms_before_rad,
             g.held_out_rms_after_rad,
             g.held_out_white_rms_before,
