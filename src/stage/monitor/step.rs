@@ -25,6 +25,7 @@
 //! until `3W` after the step, so the step is tested at full size from `W/2` to `3W` after it.
 
 use super::learn::{Bridge, Delayed};
+use crate::stats::robust::median;
 use std::collections::VecDeque;
 
 /// One alarm of the level detector.
@@ -210,14 +211,10 @@ impl LevelDetector {
         self.scratch.clear();
         self.scratch
             .extend(self.blocks.iter().skip(from).take(n).map(|b| b.0));
-        self.scratch.sort_unstable_by(f64::total_cmp);
-        let k = self.scratch.len();
-        if k == 0 {
+        if self.scratch.is_empty() {
             0.0
-        } else if k % 2 == 1 {
-            self.scratch[k / 2]
         } else {
-            0.5 * (self.scratch[k / 2 - 1] + self.scratch[k / 2])
+            median(&mut self.scratch)
         }
     }
 
