@@ -341,9 +341,10 @@ impl fmt::Display for FitReport {
         let rate = self.sample_rate_hz;
         writeln!(
             f,
-            "ARIMA identification on {} samples ({:.0} s at {rate} Hz):",
+            "ARIMA identification on {} samples ({:.0} s at {} Hz; sigma in the channel's unit, rad/s or m/s²):",
             self.samples,
-            self.samples as f64 / rate
+            self.samples as f64 / rate,
+            super::trim_decimals(rate, 3)
         )?;
         writeln!(
             f,
