@@ -533,7 +533,9 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 let r = report::compare::bias_models(&log, &channels, skip_s, temp_exo)?;
                 print!("{r}");
                 if let Some(p) = json {
-                    std::fs::write(p.with_extension("csv"), r.to_csv())?;
+                    let csv = p.with_extension("csv");
+                    std::fs::write(&csv, r.to_csv())
+                        .with_context(|| format!("writing {}", csv.display()))?;
                     write_json(&p, &r)?;
                 }
             }

@@ -179,3 +179,35 @@ fn config_errors_name_the_config_file() {
         "{err}"
     );
 }
+
+/// A span past the log's end (or of 0 s) names the log and what was asked, not a flag the
+/// command does not have (`diagnose --from-s 1e9` and `fit --train-s 0` once said "--skip-s
+/// removes the whole log"); an output folder that cannot be made is named.
+#[test]
+fn empty_spans_and_unwritable_output_folders_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.log");
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    for args in [
+        vec!["fit", log, "--train-s", "0", "--out-dir", out],
+        vec!["diagnose", log, "--from-s", "1e9", "--out-dir", out],
+        vec!["allan", log, "--skip-s", "1e9", "--out-dir", out],
+    ] {
+        let (code, err) = run(&args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert!(
+            err.contains(log) && err.contains("no samples from"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("--skip-s"), "{args:?}: {err}");
+    }
+    // A folder under a plain file cannot be made.
+    let file = write(&dir.path().join("plain"), b"x");
+    let bad = format!("{file}/sub");
+    for cmd in ["fit", "diagnose", "allan", "calibrate"] {
+        let (code, err) = run(&[cmd, log, "--out-dir", &bad]);
+        assert_eq!(code, 1, "{cmd}: {err}");
+        assert!(err.contains(&bad), "{cmd} names the folder: {err}");
+    }
+}

@@ -75,7 +75,14 @@ pub fn load_span_to(log: &Path, skip_s: f64, span_s: Option<f64>) -> Result<(f64
         "{}: the log does not declare its sample rate",
         log.display()
     );
-    ensure!(!samples.is_empty(), "--skip-s removes the whole log");
+    // Named by what was asked, not by one command's flag: fit and compare say --skip-s,
+    // diagnose and calibrate --from-s, fit's --train-s sets the span.
+    ensure!(
+        !samples.is_empty(),
+        "{}: no samples from {skip_s} s after its start{}: the log ends before that, or the span is empty",
+        log.display(),
+        span_s.map(|s| format!(" for {s} s")).unwrap_or_default()
+    );
     Ok((rate, samples))
 }
 
