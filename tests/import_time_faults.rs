@@ -145,3 +145,36 @@ fn one_backward_step_counts_the_samples_behind_it_and_says_so() {
     );
     assert!(!text.contains("steps backwards"), "{text}");
 }
+
+/// A protocol recording's time faults are said at import as a CSV's are (a ULog whose logger
+/// dropped 662 of 2 690 samples once imported with no word of it): a MAVLink stream with 5
+/// samples missing imports with "1 gaps (5 samples missing)".
+#[test]
+fn protocol_import_reports_its_gaps() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("in.log");
+    let mut s = common::samples(1000, 31);
+    s.drain(500..505);
+    imuprep::io::log::write_log(&log, &common::descriptor(), &s).unwrap();
+    let mav = dir.path().join("in.mavlink");
+    common::run_cli(&[
+        "export",
+        log.to_str().unwrap(),
+        "-o",
+        mav.to_str().unwrap(),
+        "--to",
+        "mavlink",
+    ]);
+    let back = dir.path().join("back.log");
+    let out = common::run_cli(&[
+        "import",
+        mav.to_str().unwrap(),
+        "-o",
+        back.to_str().unwrap(),
+    ]);
+    assert!(
+        out.contains("import: 1 gaps (5 samples missing), 0 duplicate"),
+        "{out}"
+    );
+    assert!(out.contains("imported 995 samples"), "{out}");
+}
