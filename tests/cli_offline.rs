@@ -316,3 +316,22 @@ fn replay_summary_says_unknown_ranges_and_a_readable_rate() {
         "{err}"
     );
 }
+
+/// `evaluate` on the bundled drive: the gyro axes without a manoeuvre (gx, gy: only the z axis
+/// turns) say so instead of "0.00%, 0.00%, 0.00% of 0", which reads like a measured 0; gz keeps
+/// its four manoeuvres' worst values.
+#[test]
+fn evaluate_says_none_where_an_axis_has_no_manoeuvre() {
+    let out = run(&["evaluate", "--scenario", "replay/drive.toml"]);
+    let line = |ch: &str| {
+        out.lines()
+            .find(|l| l.starts_with(&format!("{ch} ")))
+            .unwrap_or_else(|| panic!("no {ch} line:\n{out}"))
+            .to_string()
+    };
+    for ch in ["gx", "gy"] {
+        assert!(line(ch).ends_with("none on this axis"), "{out}");
+    }
+    assert!(line("gz").ends_with("% of 4"), "{out}");
+    assert!(!out.contains("of 0"), "{out}");
+}
