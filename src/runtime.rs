@@ -456,9 +456,10 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
             .await
             .is_err()
         {
-            // Still blocked on its consumer: stop it, so that its counts are final.
+            // Still blocked on its consumer: stop it, so that its counts are final. A sink on
+            // a blocking thread (mcap) cannot be stopped: give it a moment, never wait for it.
             task.abort();
-            let _ = (&mut *task).await;
+            let _ = tokio::time::timeout(Duration::from_millis(200), &mut *task).await;
         }
         if *lossless {
             account_unwritten(name, stats, health.samples_out);
