@@ -30,7 +30,8 @@ enum Cmd {
         /// Config file (default: the embedded config/default.toml).
         #[arg(long)]
         config: Option<PathBuf>,
-        /// Extra outputs: stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR.
+        /// Extra outputs, repeatable: stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH,
+        /// tcp:HOST:PORT, udp:HOST:PORT, inline:PATH, pty:, mcap:PATH (a build with --features ros2).
         #[arg(long = "out")]
         out: Vec<String>,
         /// Also write the final health summary as JSON to this file.
@@ -39,13 +40,13 @@ enum Cmd {
     },
     /// Run the daemon's pipeline on a recorded log and print a health summary.
     Replay {
-        /// Recorded log (native, UBX, MAVLink or ULog; detected).
+        /// Recorded log: native, or a UBX, MAVLink, ULog or MCAP recording with --protocol (its name, or auto to detect it).
         log: PathBuf,
         /// Config file (default: the embedded config/default.toml).
         #[arg(long)]
         config: Option<PathBuf>,
         /// Outputs, repeatable: stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH,
-        /// tcp:HOST:PORT, udp:HOST:PORT, inline:PATH, pty:.
+        /// tcp:HOST:PORT, udp:HOST:PORT, inline:PATH, pty:, mcap:PATH (a build with --features ros2).
         #[arg(long = "out")]
         out: Vec<String>,
         /// Pace by sensor time at this speed factor, × real time (0 = as fast as possible).
@@ -355,11 +356,11 @@ fn load_with(
     path: &Option<PathBuf>,
     read: fn(&std::path::Path) -> Result<Config, imuprep::config::ConfigErrors>,
 ) -> Result<Config> {
-    let c = match path {
-        Some(p) => read(p),
-        None => Config::default_embedded(),
-    };
-    c.map_err(|e| anyhow::anyhow!("{e}"))
+    match path {
+        // Say which file: a config may come from a script far from the command line.
+        Some(p) => read(p).map_err(|e| anyhow::anyhow!("config {}: {e}", p.display())),
+        None => Config::default_embedded().map_err(|e| anyhow::anyhow!("{e}")),
+    }
 }
 
 /// Write `value` as JSON when a path was given.
@@ -532,7 +533,9 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 let r = report::compare::bias_models(&log, &channels, skip_s, temp_exo)?;
                 print!("{r}");
                 if let Some(p) = json {
-                    std::fs::write(p.with_extension("csv"), r.to_csv())?;
+                    let csv = p.with_extension("csv");
+                    std::fs::write(&csv, r.to_csv())
+                        .with_context(|| format!("writing {}", csv.display()))?;
                     write_json(&p, &r)?;
                 }
             }

@@ -89,15 +89,7 @@ impl Health {
             self.ended_by, self.elapsed_s
         );
         if let Some(desc) = &self.descriptor {
-            let _ = writeln!(
-                o,
-                "  sensor     : device {} at {} Hz, gyro range {} rad/s, accel range {} m/s², axes {:?}",
-                desc.device_id,
-                desc.sample_rate_hz,
-                desc.gyro_range_rad_s,
-                desc.accel_range_m_s2,
-                desc.axes
-            );
+            let _ = writeln!(o, "  sensor     : {}", sensor_text(desc));
         }
         let _ = writeln!(
             o,
@@ -148,7 +140,7 @@ impl Health {
         if d.other_messages + d.partial_samples + d.time_backwards + d.unverified > 0 {
             let _ = writeln!(
                 o,
-                "  protocol   : {} other messages ({} bytes) passed by, {} partial samples, {} time steps backwards, {} unverified",
+                "  protocol   : {} other messages ({} bytes) passed by, {} partial samples, {} samples stamped behind the latest time, {} unverified",
                 d.other_messages, d.other_bytes, d.partial_samples, d.time_backwards, d.unverified
             );
         }
@@ -456,17 +448,78 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     // Dropping each sink's sender closes its queue; the task flushes and ends.
     let mut closing: Vec<_> = sinks
         .into_iter()
-        .map(|k| (k.name, k.stats, k.task))
+        .map(|k| (k.name, k.stats, k.task, k.lossless))
         .collect();
-    for (_, _, task) in closing.iter_mut() {
+    for (name, stats, task, lossless) in closing.iter_mut() {
         // Network sinks may hold clients open; give them a moment, then stop.
-        let _ = tokio::time::timeout(Duration::from_secs(2), task).await;
+        if tokio::time::timeout(Duration::from_secs(2), &mut *task)
+            .await
+            .is_err()
+        {
+            // Still blocked on its consumer: stop it, so that its counts are final. A sink on
+            // a blocking thread (mcap) cannot be stopped: give it a moment, never wait for it.
+            task.abort();
+            let _ = tokio::time::timeout(Duration::from_millis(200), &mut *task).await;
+        }
+        if *lossless {
+            account_unwritten(name, stats, health.samples_out);
+        }
     }
     health.elapsed_s = started.elapsed().as_secs_f64();
     health.stages = pipeline.health();
     health.cleaning_stages = cleaning_stages(&pipeline);
-    health.sinks = closing.iter().map(|(n, s, _)| s.report(n)).collect();
+    health.sinks = closing.iter().map(|(n, s, _, _)| s.report(n)).collect();
     Ok(health)
+}
+
+/// The summary's sensor line: rate to 1 mHz, and a range or rate of 0 (the descriptor's
+/// "unknown") said as unknown rather than printed as a 0 that reads like a measurement.
+fn sensor_text(d: &Descriptor) -> String {
+    let known = |v: f64| v > 0.0 && v.is_finite();
+    let rate = if known(d.sample_rate_hz) {
+        format!("{} Hz", crate::report::trim_decimals(d.sample_rate_hz, 3))
+    } else {
+        "unknown rate".to_string()
+    };
+    let range = |v: f32, unit: &str| {
+        if known(f64::from(v)) {
+            format!("{} {unit}", crate::report::trim_decimals(f64::from(v), 4))
+        } else {
+            "unknown (no saturation flags)".to_string()
+        }
+    };
+    let axes = match d.axes {
+        crate::frame::AxisConvention::Frd => "FRD",
+        crate::frame::AxisConvention::Flu => "FLU",
+        crate::frame::AxisConvention::Unknown => "unknown",
+    };
+    let ranges = if known(f64::from(d.gyro_range_rad_s)) || known(f64::from(d.accel_range_m_s2)) {
+        format!(
+            "gyro range {}, accel range {}",
+            range(d.gyro_range_rad_s, "rad/s"),
+            range(d.accel_range_m_s2, "m/s²")
+        )
+    } else {
+        "ranges unknown (no saturation flags)".to_string()
+    };
+    format!("device {} at {rate}, {ranges}, axes {axes}", d.device_id)
+}
+
+/// A local sink must account for every sample published to it: written, or dropped. What
+/// its queue still held when it ended (its consumer closed, e.g. `| head`, or was still stuck
+/// when the input ended) was never written: count it as dropped, and say so.
+fn account_unwritten(name: &str, stats: &sink::SinkStats, published: u64) {
+    use std::sync::atomic::Ordering::Relaxed;
+    let done = stats.samples_out.load(Relaxed) + stats.dropped.load(Relaxed);
+    let unwritten = published.saturating_sub(done);
+    if unwritten > 0 {
+        stats.dropped.fetch_add(unwritten, Relaxed);
+        tracing::warn!(
+            sink = %name,
+            samples = unwritten,
+            "sink ended before writing everything queued to it (its consumer closed or was still stuck at the end of input): counted as dropped"
+        );
+    }
 }
 
 /// Count a batch of pipeline output and offer it to every sink.

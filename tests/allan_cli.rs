@@ -96,3 +96,22 @@ fn allan_on_one_channel_leaves_the_sensor_exports_out_and_says_why() {
     );
     assert!(d.join("bias.toml").exists() && d.join("allan.svg").exists());
 }
+
+/// A record too short for τ ≥ 10 s: the τ range's upper end keeps its decimals (it once read
+/// "3 taus 0.010..0 s" for a 0.2-s record, whose largest τ is 0.04 s).
+#[test]
+fn allan_on_a_short_record_prints_its_tau_range_as_it_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("short.log");
+    // 16 samples at 200 Hz (0.08 s): τ = 1, 2, 4 samples = 0.005 .. 0.020 s.
+    imuprep::io::log::write_log(&log, &common::descriptor(), &common::samples(16, 3)).unwrap();
+    let out = common::run_cli(&[
+        "allan",
+        log.to_str().unwrap(),
+        "--channel",
+        "gz",
+        "--out-dir",
+        dir.path().join("o").to_str().unwrap(),
+    ]);
+    assert!(out.contains("gz (rad/s): 3 taus 0.005..0.020 s"), "{out}");
+}

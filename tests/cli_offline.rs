@@ -278,3 +278,60 @@ fn fit_judges_stillness_after_the_gross_error_stage() {
     // same bench without gross errors.
     assert!(r.still.len >= 175 * 200, "{:?}", r.still);
 }
+
+/// The summary's sensor line: a descriptor's range of 0 means unknown and is said so (it once
+/// read "gyro range 0 rad/s", like a measured range), and the rate is printed to 1 mHz, not
+/// as every digit of the float ("104.26409824381754 Hz").
+#[test]
+fn replay_summary_says_unknown_ranges_and_a_readable_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("imu.csv");
+    // 300 rows every 9.591 ms (104.264 Hz); no range given to import.
+    let mut text = String::from("t,gx,gy,gz,ax,ay,az,temp\n");
+    for k in 0..300 {
+        text += &format!("{:.6},0.01,0.02,0.03,0.1,0.2,9.8,\n", k as f64 * 0.009591);
+    }
+    std::fs::write(&csv, text).unwrap();
+    let log = dir.path().join("imu.log");
+    run(&["import", csv.to_str().unwrap(), "-o", log.to_str().unwrap()]);
+    let out = std::process::Command::new(common::bin())
+        .args(["replay", log.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("sensor     : device 0 at 104.264 Hz, ranges unknown (no saturation flags), axes unknown"),
+        "{err}"
+    );
+    // The bundled drive states its ranges and axes.
+    let drive = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/drive.log");
+    let out = std::process::Command::new(common::bin())
+        .args(["replay", drive])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("at 100 Hz, gyro range 4.3633 rad/s, accel range 78.4532 m/s², axes FRD"),
+        "{err}"
+    );
+}
+
+/// `evaluate` on the bundled drive: the gyro axes without a manoeuvre (gx, gy: only the z axis
+/// turns) say so instead of "0.00%, 0.00%, 0.00% of 0", which reads like a measured 0; gz keeps
+/// its four manoeuvres' worst values.
+#[test]
+fn evaluate_says_none_where_an_axis_has_no_manoeuvre() {
+    let out = run(&["evaluate", "--scenario", "replay/drive.toml"]);
+    let line = |ch: &str| {
+        out.lines()
+            .find(|l| l.starts_with(&format!("{ch} ")))
+            .unwrap_or_else(|| panic!("no {ch} line:\n{out}"))
+            .to_string()
+    };
+    for ch in ["gx", "gy"] {
+        assert!(line(ch).ends_with("none on this axis"), "{out}");
+    }
+    assert!(line("gz").ends_with("% of 4"), "{out}");
+    assert!(!out.contains("of 0"), "{out}");
+}

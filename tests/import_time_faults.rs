@@ -110,3 +110,71 @@ fn real_recordings_time_faults() {
         assert_eq!(t.duplicates + t.backwards, 0, "{rel}: {rep}");
     }
 }
+
+/// One step back of 0.5 s (50 intervals) in a 100-Hz CSV: the 49 samples stamped before the
+/// latest time until the clock catches up are each counted, and the report must say it counts
+/// samples (it once printed "49 steps backwards" for one step). None of them is dropped.
+#[test]
+fn one_backward_step_counts_the_samples_behind_it_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("back.csv");
+    let mut f = std::fs::File::create(&p).unwrap();
+    writeln!(f, "t,gx,gy,gz,ax,ay,az,temp").unwrap();
+    // Rows 0..1000 at k/100 s, then the clock steps back 0.5 s and runs on: rows 1000..2000
+    // at (k - 50)/100 s. Rows 1000..1049 lie before row 999's time, row 1049 equals it.
+    let mut n = 0;
+    for k in 0..2000i64 {
+        let t = if k < 1000 { k } else { k - 50 };
+        writeln!(f, "{:.2},0.01,0.02,0.03,0.1,0.2,9.8,", t as f64 / 100.0).unwrap();
+        n += 1;
+    }
+    drop(f);
+    let (_, s, rep) = read_csv_report(&p, &ImportOptions::default()).unwrap();
+    assert_eq!(s.len(), n, "every row is a sample");
+    let t = rep.time;
+    // 49 rows strictly before 9.99 s (9.50 .. 9.98), and 9.99 itself again: a duplicate stamp.
+    assert_eq!(
+        (t.backwards, t.duplicates, t.restarts),
+        (49, 50, 0),
+        "{rep}"
+    );
+    let text = rep.to_string();
+    assert!(
+        text.contains("49 samples stamped behind the latest time (0 of them restarts)"),
+        "{text}"
+    );
+    assert!(!text.contains("steps backwards"), "{text}");
+}
+
+/// A protocol recording's time faults are said at import as a CSV's are (a ULog whose logger
+/// dropped 662 of 2 690 samples once imported with no word of it): a MAVLink stream with 5
+/// samples missing imports with "1 gaps (5 samples missing)".
+#[test]
+fn protocol_import_reports_its_gaps() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("in.log");
+    let mut s = common::samples(1000, 31);
+    s.drain(500..505);
+    imuprep::io::log::write_log(&log, &common::descriptor(), &s).unwrap();
+    let mav = dir.path().join("in.mavlink");
+    common::run_cli(&[
+        "export",
+        log.to_str().unwrap(),
+        "-o",
+        mav.to_str().unwrap(),
+        "--to",
+        "mavlink",
+    ]);
+    let back = dir.path().join("back.log");
+    let out = common::run_cli(&[
+        "import",
+        mav.to_str().unwrap(),
+        "-o",
+        back.to_str().unwrap(),
+    ]);
+    assert!(
+        out.contains("import: 1 gaps (5 samples missing), 0 duplicate"),
+        "{out}"
+    );
+    assert!(out.contains("imported 995 samples"), "{out}");
+}

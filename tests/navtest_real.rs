@@ -205,3 +205,24 @@ fn read_pose_attitude_is_level_and_on_course() {
     // camera's yaw against the car's axis (the offset navtest removes, 0.76° with (a)).
     assert!(worst_course < 3.0, "yaw − course up to {worst_course}°");
 }
+
+/// The whole report on the real records (static benches left out, as `--no-static`): no number
+/// prints as NaN or inf. The drive's attitude reference is a course over ground, with no tilt:
+/// its roll, pitch and tilt read "—" (they once read "roll NaN°, pitch NaN°", "tilt NaN° / NaN°").
+#[test]
+fn the_report_prints_no_nan_and_a_dash_where_there_is_no_tilt_reference() {
+    let Some(data) = real_dir("../shared/data/real") else {
+        return;
+    };
+    let cfg = imuprep::config::Config::default_embedded().unwrap();
+    let text = navtest::navtest(data, &cfg, false).to_string();
+    assert!(
+        text.contains("no tilt reference") && text.contains("roll —, pitch —, yaw "),
+        "{text}"
+    );
+    assert!(text.contains("tilt — / —."), "{text}");
+    for bad in ["NaN", "inf"] {
+        let hits: Vec<&str> = text.lines().filter(|l| l.contains(bad)).collect();
+        assert!(hits.is_empty(), "{bad} printed:\n{}", hits.join("\n"));
+    }
+}

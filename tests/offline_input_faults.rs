@@ -95,3 +95,119 @@ fn csv_with_only_a_header_fails_import() {
     assert_eq!(code, 3, "{err}");
     assert!(err.contains("no data rows"), "{err}");
 }
+
+/// A CSV or a protocol recording given to a command that reads only native logs (`fit`,
+/// `allan`, `diagnose`, `calibrate`, `compare`): the error names the way in that this command
+/// has — `imuprep import` — not only `--protocol`, which these commands do not take.
+#[test]
+fn analysis_commands_refusing_a_csv_or_a_recording_name_import_as_the_way_in() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = write(
+        &dir.path().join("imu.csv"),
+        b"t,gx,gy,gz,ax,ay,az,temp\n0,0,0,0,0,0,9.8,20\n",
+    );
+    let mav = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/reference/mavlink_stream.bin"
+    );
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    for cmd in ["fit", "allan", "diagnose", "calibrate"] {
+        let (code, err) = run(&[cmd, &csv, "--out-dir", out]);
+        assert_eq!(code, 1, "{cmd}: {err}");
+        assert!(err.contains("starts with text (a CSV?)"), "{cmd}: {err}");
+        assert!(err.contains("imuprep import"), "{cmd}: {err}");
+        let (code, err) = run(&[cmd, mav, "--out-dir", out]);
+        assert_eq!(code, 1, "{cmd}: {err}");
+        assert!(
+            err.contains("looks like a mavlink recording"),
+            "{cmd}: {err}"
+        );
+        assert!(err.contains("imuprep import"), "{cmd}: {err}");
+        assert!(!err.contains("panicked"), "{cmd}: {err}");
+    }
+    let (code, err) = run(&["compare", &csv]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("imuprep import"), "{err}");
+}
+
+/// `simulate -o` into a place that cannot be written: one error line naming the file, with
+/// the reason once (it once said "I/O error: No such file or directory (os error 2): No such
+/// file or directory (os error 2)" and named no file).
+#[test]
+fn simulate_to_an_unwritable_path_names_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let scn = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.toml");
+    let missing = dir.path().join("no/such/dir/s.log");
+    let missing = missing.to_str().unwrap();
+    let (code, err) = run(&["simulate", scn, "-o", missing]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains(missing), "names the file: {err}");
+    assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
+    let ok = dir.path().join("s.log");
+    let truth = dir.path().join("no/such/dir/t.csv");
+    let truth = truth.to_str().unwrap();
+    let (code, err) = run(&[
+        "simulate",
+        scn,
+        "-o",
+        ok.to_str().unwrap(),
+        "--truth",
+        truth,
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains(truth), "names the truth file: {err}");
+}
+
+/// A config with mistakes: the error says which file they are in.
+#[test]
+fn config_errors_name_the_config_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = write(
+        &dir.path().join("mine.toml"),
+        b"[health]\ninterval_s = -5\nbogus = 1\n",
+    );
+    let log = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/drive.log");
+    let (code, err) = run(&["replay", log, "--config", &cfg]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!("config {cfg}: 2 configuration error(s)")),
+        "{err}"
+    );
+    assert!(
+        err.contains("health.interval_s") && err.contains("bogus"),
+        "{err}"
+    );
+}
+
+/// A span past the log's end (or of 0 s) names the log and what was asked, not a flag the
+/// command does not have (`diagnose --from-s 1e9` and `fit --train-s 0` once said "--skip-s
+/// removes the whole log"); an output folder that cannot be made is named.
+#[test]
+fn empty_spans_and_unwritable_output_folders_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.log");
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    for args in [
+        vec!["fit", log, "--train-s", "0", "--out-dir", out],
+        vec!["diagnose", log, "--from-s", "1e9", "--out-dir", out],
+        vec!["allan", log, "--skip-s", "1e9", "--out-dir", out],
+    ] {
+        let (code, err) = run(&args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert!(
+            err.contains(log) && err.contains("no samples from"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("--skip-s"), "{args:?}: {err}");
+    }
+    // A folder under a plain file cannot be made.
+    let file = write(&dir.path().join("plain"), b"x");
+    let bad = format!("{file}/sub");
+    for cmd in ["fit", "diagnose", "allan", "calibrate"] {
+        let (code, err) = run(&[cmd, log, "--out-dir", &bad]);
+        assert_eq!(code, 1, "{cmd}: {err}");
+        assert!(err.contains(&bad), "{cmd} names the folder: {err}");
+    }
+}

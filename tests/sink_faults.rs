@@ -235,6 +235,10 @@ async fn stuck_consumer_never_freezes_the_run_and_health_travels_with_the_data()
     drop(reader);
     assert_eq!(health.samples_out, n as u64);
     assert!(health.sinks[0].dropped > 0, "{:?}", health.sinks[0]);
+    // Every sample published to the stuck sink is accounted for: written, or dropped — what
+    // its queue still held when the run ended (it was still stuck) included.
+    let stuck = &health.sinks[0];
+    assert_eq!(stuck.samples_out + stuck.dropped, n as u64, "{stuck:?}");
     assert_eq!(health.sinks[1].dropped, 0, "{:?}", health.sinks[1]);
 
     // JSON lines: every sample, and health records beside them. The run lasts ≥ 1 s of wall
@@ -296,7 +300,8 @@ async fn stuck_pty_inline_sink_never_freezes_the_run_and_its_drops_show_as_they_
     let pty = &health.sinks[0];
     assert!(pty.name.starts_with("pty:"), "{pty:?}");
     assert!(pty.dropped > 0, "{pty:?}");
-    assert!(pty.samples_out + pty.dropped <= n as u64, "{pty:?}");
+    // Written or dropped, nothing in between (what the queue held at the end is dropped).
+    assert_eq!(pty.samples_out + pty.dropped, n as u64, "{pty:?}");
     assert_eq!(health.sinks[1].dropped, 0, "{:?}", health.sinks[1]);
     let (samples, reports) = jsonl_samples_and_health(&jsonl);
     assert_eq!(samples, n);
@@ -307,5 +312,53 @@ async fn stuck_pty_inline_sink_never_freezes_the_run_and_its_drops_show_as_they_
             .any(|r| r["sink_dropped"].as_u64() > Some(0)),
         "the pty's drops must show in the health published during the run ({} reports)",
         reports.len()
+    );
+}
+
+/// `imuprep replay LOG --out stdout:csv | head -c 100`: the consumer closes its end early. The
+/// summary must still account for every sample — written or dropped — and say so (before, the
+/// queue's contents at the close were in neither count: 145 out + 0 dropped of 29 982).
+#[test]
+fn stdout_closed_by_its_consumer_counts_every_unwritten_sample_as_dropped() {
+    use std::io::Read;
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("in.log");
+    let n = 20_000;
+    imuprep::io::log::write_log(&log, &common::descriptor(), &common::samples(n, 21)).unwrap();
+    let summary = dir.path().join("summary.json");
+    let mut child = Command::new(common::bin())
+        .arg("replay")
+        .arg(&log)
+        .args(["--out", "stdout:csv", "--summary-json"])
+        .arg(&summary)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = child.stdout.take().unwrap();
+    let mut first = [0u8; 100];
+    out.read_exact(&mut first).unwrap();
+    drop(out); // like `head -c 100`: the pipe's read end closes
+    let res = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(res.status.success(), "{err}");
+    let h: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    assert_eq!(h["samples_out"], n as u64);
+    let s = &h["sinks"][0];
+    let (written, dropped) = (
+        s["samples_out"].as_u64().unwrap(),
+        s["dropped"].as_u64().unwrap(),
+    );
+    assert_eq!(written + dropped, n as u64, "{s}");
+    assert!(
+        dropped > 0,
+        "a closed stdout cannot have taken all {n}: {s}"
+    );
+    assert!(
+        err.contains("counted as dropped"),
+        "the loss is said: {err}"
     );
 }

@@ -236,12 +236,17 @@ impl fmt::Display for AllanReport {
             );
             writeln!(
                 f,
-                "\n{} ({}): {} taus {:.3}..{:.0} s; {} passes{}; model error floor {:.1} %",
+                "\n{} ({}): {} taus {:.3}..{} s; {} passes{}; model error floor {:.1} %",
                 ch.channel,
                 if ch.gyro { "rad/s" } else { "m/s^2" },
                 fit.points.len(),
                 t0,
-                t1,
+                // Whole seconds from 10 s up; below, a short record's 0.04 s must not read "0".
+                if t1 < 10.0 {
+                    format!("{t1:.3}")
+                } else {
+                    format!("{t1:.0}")
+                },
                 fit.passes,
                 if fit.converged {
                     ""

@@ -226,18 +226,33 @@ pub fn encode_log_header(d: &Descriptor, buf: &mut BytesMut) {
 pub enum LogHeaderError {
     #[error("file is too short to hold a log header ({0} bytes, need {LOG_HEADER_LEN})")]
     TooShort(usize),
+    /// Every command reads a log, but only `replay` and `export` take `--protocol`: the message
+    /// names the way in for both (and says when the file starts with text, as a CSV does).
     #[error(
-        "not an imuprep log: wrong magic {0:02x?} (expected \"IMUPLOG\\0\"); a UBX, MAVLink, ULog or MCAP recording needs --protocol auto (or its name)"
+        "not an imuprep log: wrong magic {magic:02x?} (expected \"IMUPLOG\\0\"){text}; a CSV, UBX, MAVLink, ULog or MCAP recording converts into a log with `imuprep import FILE -o OUT.log`, and replay and export read a UBX, MAVLink, ULog or MCAP recording directly with --protocol auto (or its name)",
+        magic = .0,
+        text = starts_with_text(.0)
     )]
     BadMagic([u8; 8]),
     /// Not a native log, and the first bytes decode as another protocol (the native protocol
     /// is the default, so a sensor recording would otherwise fail with no way out named).
     #[error(
-        "not an imuprep log (magic {1:02x?}): it looks like a {0} recording, pass --protocol {0} (or --protocol auto)"
+        "not an imuprep log (magic {1:02x?}): it looks like a {0} recording, pass --protocol {0} (or --protocol auto) to replay or export it, or convert it for any command with `imuprep import FILE -o OUT.log`"
     )]
     LooksLike(Protocol, [u8; 8]),
     #[error("unsupported log version {0} (this build reads version {LOG_VERSION})")]
     BadVersion(u16),
+}
+
+/// ", it starts with text (a CSV?)" when the first bytes are printable ASCII, else nothing.
+fn starts_with_text(m: &[u8; 8]) -> &'static str {
+    if m.iter()
+        .all(|b| b.is_ascii_graphic() || matches!(b, b' ' | b'\t' | b'\r' | b'\n'))
+    {
+        ", it starts with text (a CSV?)"
+    } else {
+        ""
+    }
 }
 
 /// Check the 12-byte log file header.

@@ -26,11 +26,16 @@ pub fn write_sim_log(
     truth: Option<&Path>,
 ) -> Result<SimLogSummary, SimError> {
     let mut sim = Simulator::new(scn, seed)?;
+    // Name the file in an I/O error (a bare "No such file or directory" names nothing).
+    fn at(p: &Path) -> impl FnOnce(std::io::Error) -> std::io::Error + '_ {
+        move |e| std::io::Error::new(e.kind(), format!("{}: {e}", p.display()))
+    }
     let mut tw = match truth {
-        Some(p) => Some(TruthWriter::create(p, &sim.truth_header())?),
+        Some(p) => Some(TruthWriter::create(p, &sim.truth_header()).map_err(at(p))?),
         None => None,
     };
-    let out = std::io::BufWriter::with_capacity(1 << 16, std::fs::File::create(log)?);
+    let out =
+        std::io::BufWriter::with_capacity(1 << 16, std::fs::File::create(log).map_err(at(log))?);
     let mut lw = LogWriter::new(out, &descriptor(&sim));
     let mut sum = SimLogSummary::default();
     while let Some(r) = sim.next_record() {
@@ -47,16 +52,16 @@ pub fn write_sim_log(
             }
         };
         for _ in 0..copies {
-            lw.sample(&r.sample)?;
+            lw.sample(&r.sample).map_err(at(log))?;
             sum.frames += 1;
         }
         if let Some(w) = tw.as_mut() {
-            w.write_row(&r.truth)?;
+            w.write_row(&r.truth).map_err(at(truth.unwrap_or(log)))?;
         }
     }
-    sum.bytes = lw.finish()?.1;
+    sum.bytes = lw.finish().map_err(at(log))?.1;
     if let Some(w) = tw {
-        w.finish()?;
+        w.finish().map_err(at(truth.unwrap_or(log)))?;
     }
     Ok(sum)
 }

@@ -46,6 +46,8 @@ pub struct TimeFaults {
     pub gaps: u64,
     pub missing: u64,
     pub duplicates: u64,
+    /// Samples stamped behind the latest time stamp so far (restarts included): one step back
+    /// of k intervals puts the next k samples behind it, so this counts samples, not steps.
     pub backwards: u64,
     pub restarts: u64,
 }
@@ -61,7 +63,7 @@ impl std::fmt::Display for TimeFaults {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "time: {:.3} Hz nominal from the {} interval ({:.3} ms; median {:.3} ms, mean {:.3} ms){}; {} gaps ({} samples missing), {} duplicate time stamps, {} steps backwards ({} restarts)",
+            "time: {:.3} Hz nominal from the {} interval ({:.3} ms; median {:.3} ms, mean {:.3} ms){}; {} gaps ({} samples missing), {} duplicate time stamps, {} samples stamped behind the latest time ({} of them restarts)",
             self.nominal_rate_hz,
             if self.bursty {
                 "mean"

@@ -72,11 +72,12 @@ pub fn import(
         let mut d = f.descriptor.unwrap_or_default();
         d.gyro_range_rad_s = o.gyro_range_rad_s;
         d.accel_range_m_s2 = o.accel_range_m_s2;
+        let timing = Some(protocol_faults(&f.stats));
         (
             d,
             f.samples,
             Some(format!("{} input: {}", f.protocol, f.found)),
-            None,
+            timing,
         )
     };
     csvio::write_log(output, &d, &samples)?;
@@ -89,6 +90,25 @@ pub fn import(
         duration_s: samples.last().map_or(0.0, |s| s.t_s() - samples[0].t_s()),
         sample_rate_hz: d.sample_rate_hz,
     })
+}
+
+/// A protocol input's time and frame faults, said at import as a CSV's are (they are flagged on
+/// the samples and counted again on replay; a ULog whose logger dropped a quarter of its
+/// samples must not import in silence).
+fn protocol_faults(s: &crate::frame::DecoderStats) -> String {
+    let mut t = format!(
+        "{} gaps ({} samples missing), {} duplicate time stamps or sequence numbers, {} samples stamped behind the latest time, {} restarts",
+        s.gaps, s.missing_frames, s.duplicates, s.time_backwards, s.seq_restarts
+    );
+    let frame_faults =
+        s.crc_errors + s.header_errors + s.bad_length + s.truncated + s.garbage_bytes;
+    if frame_faults > 0 {
+        t += &format!(
+            "; {} CRC errors, {} header errors, {} bad lengths, {} truncated frames, {} garbage bytes",
+            s.crc_errors, s.header_errors, s.bad_length, s.truncated, s.garbage_bytes
+        );
+    }
+    t
 }
 
 impl fmt::Display for ImportReport {

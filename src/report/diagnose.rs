@@ -8,7 +8,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use anyhow::{Result, anyhow, ensure};
+use anyhow::{Context, Result, anyhow, ensure};
 
 use super::{load_span_to, parse_channels, present_channels};
 use crate::analysis::diagnose::{ChannelInput, DeploymentFit, DiagnoseSettings, diagnose_channel};
@@ -216,7 +216,8 @@ pub fn prepare(st: &Stretch, progress: &mut dyn Write) -> Result<Prepared> {
         })
         .collect();
     let temp: Option<Vec<f64>> = samples.iter().map(|s| s.temp_c).collect();
-    std::fs::create_dir_all(out_dir.join("plots"))?;
+    let plots = out_dir.join("plots");
+    std::fs::create_dir_all(&plots).with_context(|| format!("creating {}", plots.display()))?;
     let source = format!(
         "{} [{from_s} s .. +{:.1} s at {rate} Hz]",
         log.display(),
@@ -233,7 +234,8 @@ pub fn prepare(st: &Stretch, progress: &mut dyn Write) -> Result<Prepared> {
 /// Each `(stem, svg)` plot into `out_dir/plots/stem.svg`.
 pub fn write_plots(out_dir: &Path, plots: Vec<(String, String)>) -> Result<()> {
     for (stem, svg) in plots {
-        std::fs::write(out_dir.join("plots").join(format!("{stem}.svg")), svg)?;
+        let p = out_dir.join("plots").join(format!("{stem}.svg"));
+        std::fs::write(&p, svg).with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(())
 }
@@ -267,11 +269,15 @@ pub fn write_outputs(
     model: &BiasModelFile,
     progress: &mut dyn Write,
 ) -> Result<()> {
-    std::fs::write(out_dir.join("report.txt"), text)?;
-    std::fs::write(out_dir.join("report.json"), json)?;
-    std::fs::write(
-        out_dir.join("bias.toml"),
-        model.to_toml_string().map_err(|e| anyhow!(e.to_string()))?,
+    let write = |name: &str, text: &str| {
+        let p = out_dir.join(name);
+        std::fs::write(&p, text).with_context(|| format!("writing {}", p.display()))
+    };
+    write("report.txt", text)?;
+    write("report.json", json)?;
+    write(
+        "bias.toml",
+        &model.to_toml_string().map_err(|e| anyhow!(e.to_string()))?,
     )?;
     writeln!(
         progress,

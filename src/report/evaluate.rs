@@ -338,7 +338,7 @@ impl std::fmt::Display for EvaluateReport {
         for r in &self.channels {
             writeln!(
                 f,
-                "{:<3} {:>14.3e} {:>14.3e} {:>8.2} {:>14.3e} {:>14.3e} {:>8.1}%  {:.2}%, {:.2}%, {:.2}% of {}",
+                "{:<3} {:>14.3e} {:>14.3e} {:>8.2} {:>14.3e} {:>14.3e} {:>8.1}%  {}",
                 r.channel,
                 r.pipeline.rms_1s_mean_error,
                 r.baseline.rms_1s_mean_error,
@@ -346,10 +346,18 @@ impl std::fmt::Display for EvaluateReport {
                 r.pipeline.rms_60s_drift_rad,
                 r.baseline.rms_60s_drift_rad,
                 100.0 * r.drift_reduction,
-                100.0 * r.worst_attenuation,
-                100.0 * r.worst_abs_change,
-                100.0 * r.worst_stage_removed,
-                r.manoeuvres
+                // With no manoeuvre on the axis there is no worst one: not "0.00%".
+                if r.manoeuvres == 0 {
+                    "none on this axis".to_string()
+                } else {
+                    format!(
+                        "{:.2}%, {:.2}%, {:.2}% of {}",
+                        100.0 * r.worst_attenuation,
+                        100.0 * r.worst_abs_change,
+                        100.0 * r.worst_stage_removed,
+                        r.manoeuvres
+                    )
+                }
             )?;
         }
         if let Some(d) = &self.static_drift {

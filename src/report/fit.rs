@@ -6,7 +6,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Result, anyhow, ensure};
+use anyhow::{Context, Result, anyhow, ensure};
 use serde::Serialize;
 
 use super::{load_span_to, present_channels};
@@ -158,7 +158,7 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
     // Only the training span is read.
     let (rate, samples) = load_span_to(log, o.skip_s, Some(o.train_s))?;
     let n = ((o.train_s * rate).round() as usize).min(samples.len());
-    std::fs::create_dir_all(out_dir)?;
+    std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let series = |c: usize| -> Vec<f64> { samples[..n].iter().map(|s| s.channel(c)).collect() };
     let (present, absent) =
         present_channels(log, &samples[..n], &(0..N_CHANNELS).collect::<Vec<_>>())?;
@@ -188,7 +188,8 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
     std::fs::write(
         &arima_path,
         header.clone() + &file.to_toml_string().map_err(|e| anyhow!("{e}"))?,
-    )?;
+    )
+    .with_context(|| format!("writing {}", arima_path.display()))?;
 
     // The bias model describes the sensor's bias, not the vehicle's motion: fit it only where
     // the sensor was still (a model fitted on motion takes the motion's mean and dynamics for
@@ -242,7 +243,7 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
         text += &format!("# imuprep fit: {why}\n");
     }
     text += &bias.to_toml_string().map_err(|e| anyhow!(e.to_string()))?;
-    std::fs::write(&bias_path, text)?;
+    std::fs::write(&bias_path, text).with_context(|| format!("writing {}", bias_path.display()))?;
     Ok(FitReport {
         samples: n,
         sample_rate_hz: rate,
@@ -341,9 +342,10 @@ impl fmt::Display for FitReport {
         let rate = self.sample_rate_hz;
         writeln!(
             f,
-            "ARIMA identification on {} samples ({:.0} s at {rate} Hz):",
+            "ARIMA identification on {} samples ({:.0} s at {} Hz; sigma in the channel's unit, rad/s or m/s²):",
             self.samples,
-            self.samples as f64 / rate
+            self.samples as f64 / rate,
+            super::trim_decimals(rate, 3)
         )?;
         writeln!(
             f,

@@ -24,6 +24,17 @@ use anyhow::{Context, Result, ensure};
 
 use crate::sample::Sample;
 
+/// `v` with at most `places` decimals, trailing zeros dropped (100 → "100", 104.26409 →
+/// "104.264" at 3): a rate or range for people, not the float's every digit.
+pub fn trim_decimals(v: f64, places: usize) -> String {
+    let s = format!("{v:.places$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 /// Exit status of an offline command whose input decoded to nothing or was mostly garbage.
 pub const INPUT_PROBLEM_EXIT: u8 = 3;
 
@@ -64,7 +75,14 @@ pub fn load_span_to(log: &Path, skip_s: f64, span_s: Option<f64>) -> Result<(f64
         "{}: the log does not declare its sample rate",
         log.display()
     );
-    ensure!(!samples.is_empty(), "--skip-s removes the whole log");
+    // Named by what was asked, not by one command's flag: fit and compare say --skip-s,
+    // diagnose and calibrate --from-s, fit's --train-s sets the span.
+    ensure!(
+        !samples.is_empty(),
+        "{}: no samples from {skip_s} s after its start{}: the log ends before that, or the span is empty",
+        log.display(),
+        span_s.map(|s| format!(" for {s} s")).unwrap_or_default()
+    );
     Ok((rate, samples))
 }
 

@@ -78,7 +78,8 @@ pub enum SimError {
     /// The scenario parsed but some values are invalid; all problems are listed.
     #[error("invalid scenario ({} problem(s)):\n{}", .0.len(), .0.iter().map(|i| format!("  {i}")).collect::<Vec<_>>().join("\n"))]
     Invalid(Vec<Issue>),
-    #[error("I/O error: {0}")]
+    /// Reading or writing a file; the message names the file where it is known.
+    #[error(transparent)]
     Io(#[from] std::io::Error),
 }
 

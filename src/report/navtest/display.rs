@@ -43,20 +43,27 @@ fn att_ref_table(f: &mut fmt::Formatter<'_>, name: &str, a: &AttRefReport) -> fm
         }
         AttRefSource::None => "none".into(),
     };
+    // Without a tilt reference (a course over ground) roll, pitch and tilt have no value: a
+    // dash, not "NaN°".
+    let deg = |x: f64, signed: bool| match (x.is_nan(), signed) {
+        (true, _) => "—".to_string(),
+        (false, true) => format!("{x:+.2}°"),
+        (false, false) => format!("{x:.2}°"),
+    };
     writeln!(
         f,
         "\n#### {name}: heading and tilt against an independent reference\n\n{what}. \
          Constant removed (median of the GNSS-aided raw filter − reference over {} epochs from \
-         the first outage on): roll {:+.2}°, pitch {:+.2}°, yaw {:+.2}°. The aided filter itself \
-         then differs by heading {:.2}° median / {:.2}° p95, tilt {:.2}° / {:.2}°.\n",
+         the first outage on): roll {}, pitch {}, yaw {}. The aided filter itself \
+         then differs by heading {} median / {} p95, tilt {} / {}.\n",
         a.epochs,
-        a.offset_deg[0],
-        a.offset_deg[1],
-        a.offset_deg[2],
-        a.aided_heading_deg[0],
-        a.aided_heading_deg[1],
-        a.aided_tilt_deg[0],
-        a.aided_tilt_deg[1]
+        deg(a.offset_deg[0], true),
+        deg(a.offset_deg[1], true),
+        deg(a.offset_deg[2], true),
+        deg(a.aided_heading_deg[0], false),
+        deg(a.aided_heading_deg[1], false),
+        deg(a.aided_tilt_deg[0], false),
+        deg(a.aided_tilt_deg[1], false)
     )?;
     writeln!(
         f,
