@@ -472,18 +472,29 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     Ok(health)
 }
 
+/// `v` with at most `places` decimals, trailing zeros dropped (100 → "100", 104.26409 →
+/// "104.264" at 3): a rate or range for people, not the float's every digit.
+pub fn trim_decimals(v: f64, places: usize) -> String {
+    let s = format!("{v:.places$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 /// The summary's sensor line: rate to 1 mHz, and a range or rate of 0 (the descriptor's
 /// "unknown") said as unknown rather than printed as a 0 that reads like a measurement.
 fn sensor_text(d: &Descriptor) -> String {
     let known = |v: f64| v > 0.0 && v.is_finite();
     let rate = if known(d.sample_rate_hz) {
-        format!("{} Hz", crate::report::trim_decimals(d.sample_rate_hz, 3))
+        format!("{} Hz", trim_decimals(d.sample_rate_hz, 3))
     } else {
         "unknown rate".to_string()
     };
     let range = |v: f32, unit: &str| {
         if known(f64::from(v)) {
-            format!("{} {unit}", crate::report::trim_decimals(f64::from(v), 4))
+            format!("{} {unit}", trim_decimals(f64::from(v), 4))
         } else {
             "unknown (no saturation flags)".to_string()
         }

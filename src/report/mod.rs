@@ -24,17 +24,6 @@ use anyhow::{Context, Result, ensure};
 
 use crate::sample::Sample;
 
-/// `v` with at most `places` decimals, trailing zeros dropped (100 → "100", 104.26409 →
-/// "104.264" at 3): a rate or range for people, not the float's every digit.
-pub fn trim_decimals(v: f64, places: usize) -> String {
-    let s = format!("{v:.places$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
-}
-
 /// Exit status of an offline command whose input decoded to nothing or was mostly garbage.
 pub const INPUT_PROBLEM_EXIT: u8 = 3;
 
