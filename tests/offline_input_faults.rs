@@ -211,3 +211,26 @@ fn empty_spans_and_unwritable_output_folders_are_named() {
         assert!(err.contains(&bad), "{cmd} names the folder: {err}");
     }
 }
+
+/// A stretch too short for every channel (1 s of the bundled bench: 100 samples, where the
+/// whole-log loop needs 20 000 and the paper split its three spans) fails with the input-problem
+/// status and writes no report or `bias.toml`: an empty model file would read as "nothing found".
+#[test]
+fn diagnose_with_no_channel_diagnosable_fails_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.log");
+    for extra in [None, Some("--paper-split")] {
+        let out = dir.path().join(format!("out{}", extra.is_some()));
+        let out_s = out.to_str().unwrap();
+        let mut args = vec!["diagnose", log, "--to-s", "1", "--out-dir", out_s];
+        args.extend(extra);
+        let (code, err) = run(&args);
+        assert_eq!(code, 3, "{args:?}: {err}");
+        assert!(
+            err.contains("no channel of") && err.contains(log),
+            "{args:?}: {err}"
+        );
+        assert!(!out.join("bias.toml").exists(), "{args:?}");
+        assert!(!out.join("report.txt").exists(), "{args:?}");
+    }
+}

@@ -61,6 +61,19 @@ pub fn diagnose(
     run(&stretch, progress)
 }
 
+/// Fails with [`super::InputProblem`] when no channel could be diagnosed (each said why above):
+/// an empty report and a `bias.toml` without channels would read as a model that found nothing.
+pub fn none_diagnosed(log: &Path, none: bool) -> Result<()> {
+    if none {
+        return Err(super::InputProblem(format!(
+            "no channel of {} could be diagnosed (why: the lines above); nothing written",
+            log.display()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
 /// One stretch of a log to diagnose: its samples (cut to the stretch that starts `from_s` into
 /// `log`) at `rate` Hz, the channels asked for, the output folder.
 pub struct Stretch<'a> {
@@ -174,6 +187,7 @@ pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added>
         ));
         report.channels.push(d);
     }
+    none_diagnosed(st.log, model.channels.is_empty())?;
     let json = report.to_json().map_err(|e| anyhow!(e.to_string()))?;
     write_outputs(out_dir, &report.to_text(), &json, &model, progress)?;
     Ok(added_all)

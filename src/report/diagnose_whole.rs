@@ -104,6 +104,7 @@ pub fn diagnose_whole_samples(st: &Stretch, progress: &mut dyn Write) -> Result<
         report.channels.push(d);
     }
     bar.finish_and_clear();
+    super::diagnose::none_diagnosed(st.log, model.channels.is_empty())?;
     let json = serde_json::to_string_pretty(&report).map_err(|e| anyhow!(e.to_string()))?;
     write_outputs(out_dir, &report.to_text(), &json, &model, progress)?;
     Ok(added_all)
