@@ -583,15 +583,25 @@ impl std::fmt::Display for AuditReport {
         for t in missed {
             writeln!(
                 f,
-                "  MISSED {} {}: {} = {:.4} (limit {} {})",
+                "  MISSED {} {}: {} = {} (limit {} {})",
                 t.recording,
                 t.channel,
                 t.target,
-                t.measured,
+                four_figures(t.measured),
                 if t.at_most { "≤" } else { "≥" },
                 t.limit
             )?;
         }
         Ok(())
+    }
+}
+
+/// A measured value to four significant figures: fixed below 1e-2 would print a rate of
+/// 1.17e-4 as 0.0001, which reads as meeting a limit of 1e-4.
+fn four_figures(v: f64) -> String {
+    if v != 0.0 && v.abs() < 1e-2 {
+        format!("{v:.3e}")
+    } else {
+        format!("{v:.4}")
     }
 }
