@@ -1,5 +1,5 @@
 //! `imuprep allan`: the Allan report of a static recording
-//! ([`crate::analysis::allan_report`]) and its exports in a folder.
+//! ([`crate::analysis::allan::report`]) and its exports in a folder.
 
 use std::fmt;
 use std::path::Path;
@@ -7,8 +7,8 @@ use std::path::Path;
 use anyhow::Result;
 
 use super::{load_span, parse_channels, present_channels};
-use crate::analysis::allan_report::{AllanReport, allan_report};
-use crate::analysis::{allan_export, allan_terms::FitSettings};
+use crate::analysis::allan::report::{AllanReport, allan_report};
+use crate::analysis::allan::{export, terms::FitSettings};
 
 /// The report and the names of the files written beside it.
 pub struct AllanRun {
@@ -27,7 +27,7 @@ pub fn allan(log: &Path, channels: &[String], skip_s: f64, out_dir: &Path) -> Re
     let source = log.display().to_string();
     let mut report = allan_report(&source, &samples, rate, &chans, &FitSettings::default())?;
     report.skipped.extend(absent);
-    let written = allan_export::write_outputs(&report, out_dir).map_err(anyhow::Error::msg)?;
+    let written = export::write_outputs(&report, out_dir).map_err(anyhow::Error::msg)?;
     let written = written
         .iter()
         .filter_map(|p| Some(p.file_name()?.to_str()?.to_string()))

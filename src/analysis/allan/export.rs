@@ -32,8 +32,8 @@
 //!   for gyro channels; for accelerometers it would be ignored, so it is not written);
 //! * R (rate ramp) has no place in the format: not exported.
 
-use super::allan_report::{AllanReport, ChannelAllan, G0_M_S2};
-use super::allan_terms::{Resolution, Term};
+use super::report::{AllanReport, ChannelAllan, G0_M_S2};
+use super::terms::{Resolution, Term};
 use crate::model::bias_model::{ArOf, BiasModelFile, ChannelBiasModel, Effect};
 use serde::Serialize;
 use std::fmt::Write;
@@ -347,7 +347,7 @@ bias model (ar_of = bias: Gauss-Markov from B, white noise from N and Q, RRW fro
             "report.json",
             serde_json::to_string_pretty(report).map_err(|e| e.to_string())?,
         ),
-        ("allan.svg", super::allan_plot::allan_svg(report)?),
+        ("allan.svg", super::plot::allan_svg(report)?),
         (
             "bias.toml",
             model.to_toml_string().map_err(|e| e.to_string())?,
