@@ -10,11 +10,11 @@
 //!   command writes (report text and JSON, SVG plot, Kalibr / GNSS_IMU / bias-model exports)
 //!   rendered to memory. Reading the replay log is not included.
 use criterion::{Criterion, criterion_group, criterion_main};
+use imuprep::analysis::allan::export::{bias_model, gnss_imu_config, kalibr_yaml};
 use imuprep::analysis::allan::overlapping_adev;
-use imuprep::analysis::allan_export::{bias_model, gnss_imu_config, kalibr_yaml};
-use imuprep::analysis::allan_plot::allan_svg;
-use imuprep::analysis::allan_report::allan_report;
-use imuprep::analysis::allan_terms::FitSettings;
+use imuprep::analysis::allan::plot::allan_svg;
+use imuprep::analysis::allan::report::allan_report;
+use imuprep::analysis::allan::terms::FitSettings;
 use imuprep::io::csv::{ImportOptions, read_csv};
 use imuprep::rng::Rng;
 use imuprep::sample::Sample;

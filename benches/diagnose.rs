@@ -9,8 +9,8 @@
 //! Without ../shared both run on a seeded synthetic series of the same size (white noise, a
 //! Gauss-Markov wander and a 0.57 Hz line), and say so.
 use criterion::{Criterion, criterion_group, criterion_main};
-use imuprep::analysis::diagnose::{ChannelInput, DiagnoseSettings, diagnose_channel};
-use imuprep::analysis::diagnose_whole::{WholeSettings, diagnose_whole};
+use imuprep::analysis::diagnose::paper_split::{ChannelInput, DiagnoseSettings, diagnose_channel};
+use imuprep::analysis::diagnose::whole::{WholeSettings, diagnose_whole};
 use imuprep::io::csv::{ImportOptions, read_csv};
 use imuprep::report::diagnose::exogenous;
 use imuprep::rng::Rng;

@@ -9,8 +9,8 @@
 //! converted to rad/s and m/s² (g = 9.80665). The ADIS16405 file is decompressed into /tmp only.
 //! Time is sample index / mean rate (the MPU6050's host timestamps are bursty).
 
-use imuprep::analysis::diagnose::{ChannelInput, DiagnoseSettings, diagnose_channel};
-use imuprep::analysis::diagnose_report::{DiagnoseReport, channel_plots, effect_text};
+use imuprep::analysis::diagnose::paper_split::{ChannelInput, DiagnoseSettings, diagnose_channel};
+use imuprep::analysis::diagnose::report::{DiagnoseReport, channel_plots, effect_text};
 use imuprep::analysis::exogenous::Exogenous;
 use std::path::{Path, PathBuf};
 

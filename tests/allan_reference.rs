@@ -5,8 +5,8 @@
 //! Target (issue 15): every term within 10 % of the reference. Skips visibly without
 //! ../shared.
 
-use imuprep::analysis::allan_report::{AllanReport, allan_report};
-use imuprep::analysis::allan_terms::{FitSettings, Resolution, Term};
+use imuprep::analysis::allan::report::{AllanReport, allan_report};
+use imuprep::analysis::allan::terms::{FitSettings, Resolution, Term};
 use imuprep::io::csv::{ImportOptions, read_csv, read_log, write_log};
 use serde_json::Value;
 use std::path::PathBuf;

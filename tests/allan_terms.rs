@@ -9,12 +9,12 @@
 //! 3 %), so a correct fit fails it with a seed only rarely and a wrong constant (a factor √2,
 //! √3, 0.664, ...) fails it always.
 
-use imuprep::analysis::allan::overlapping_adev;
-use imuprep::analysis::allan_export::{
+use imuprep::analysis::allan::export::{
     FLICKER_FLOOR, bias_model, gm_allan_var, gnss_imu_config, kalibr_yaml, sensor_noise,
 };
-use imuprep::analysis::allan_report::allan_report;
-use imuprep::analysis::allan_terms::{FitSettings, Resolution, Term, TermFit, fit_terms};
+use imuprep::analysis::allan::overlapping_adev;
+use imuprep::analysis::allan::report::allan_report;
+use imuprep::analysis::allan::terms::{FitSettings, Resolution, Term, TermFit, fit_terms};
 use imuprep::model::bias_model::{ArOf, BiasModelFile, Effect};
 use imuprep::model::bias_state_space::state_space_from_model;
 use imuprep::rng::Rng;

@@ -5,8 +5,8 @@
 mod common;
 
 use common::{descriptor, real_data, run_cli, skipped};
-use imuprep::analysis::calib_gyro::{calibrate_gyro, gyro_intervals};
-use imuprep::analysis::calib_still::{StillSettings, still_stretches};
+use imuprep::analysis::calib::gyro::{calibrate_gyro, gyro_intervals};
+use imuprep::analysis::calib::still::{StillSettings, still_stretches};
 use imuprep::config::Config;
 use imuprep::io::log::write_log;
 use imuprep::rng::Rng;

@@ -1,4 +1,4 @@
-//! What each part of the gyro fit's noise model (`analysis::calib_gyro_noise`) does to its σ,
+//! What each part of the gyro fit's noise model (`analysis::calib::gyro_noise`) does to its σ,
 //! on 40 seeds of `replay/tumble.toml` (docs/calibrate.md, "The gyro's σ"): the RMS and the
 //! largest |z| of z = (fitted − truth)/σ over the 9 entries × 40 seeds, with the model's parts
 //! switched off one at a time; and the residuals at the true K against the model. About 12
@@ -8,11 +8,11 @@
 //! cargo test --release --test calibrate_sigma -- --ignored --nocapture
 //! ```
 
-use imuprep::analysis::calib_fit::{CalibSettings, calibrate_accel};
-use imuprep::analysis::calib_gyro::{
+use imuprep::analysis::calib::fit::{CalibSettings, calibrate_accel};
+use imuprep::analysis::calib::gyro::{
     GyroCalibration, GyroInterval, NoiseParts, calibrate_gyro, gyro_intervals,
 };
-use imuprep::analysis::calib_still::{StillSettings, still_stretches};
+use imuprep::analysis::calib::still::{StillSettings, still_stretches};
 use imuprep::sim::Simulator;
 use imuprep::sim::scenario::Scenario;
 use imuprep::stage::bias::settings::CalibrationSettings;

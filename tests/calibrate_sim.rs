@@ -20,7 +20,7 @@ const SEEDS: [u64; 5] = [20240617, 1, 2, 3, 4];
 /// Per-parameter tolerance in units of the fit's own σ. 18 parameters × 5 seeds = 90 checks;
 /// |z| > 4 has probability 6.3e-5 for a normal z, so honest σ pass all 90 with 99.4 %
 /// probability, while σ too small by 1.15× (the gyro's before its noise model,
-/// `calib_gyro_noise`) would fail one of the 45 gyro checks with ~2 % probability, by 1.5× about
+/// `calib::gyro_noise`) would fail one of the 45 gyro checks with ~2 % probability, by 1.5× about
 /// one check in 130. Over 40 seeds (`tests/reference/calibrate_tumble_z.py 1 41`) the RMS z is
 /// 0.99 (accelerometer) and 1.00 (gyro), the largest |z| 3.24 and 3.22; over these 5 the
 /// largest is 3.22 (gyro, seed 1).

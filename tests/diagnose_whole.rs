@@ -334,7 +334,7 @@ fn clean_logs_get_no_effects_over_50_seeds() {
     // z = 4.1, 40 % of the held-out MSE of the 1-s means removed, and it lowers the SSE of all
     // five contiguous spans when fitted on the other four: the wander's slow excursion on this
     // seed follows the warm-up over the whole record). Before the contiguous-span check
-    // (`diagnose_slow::FOLDS`) there were 3 (seeds 22 gy, 34 az, 49 gz). The target is missed by
+    // (`diagnose::slow::FOLDS`) there were 3 (seeds 22 gy, 34 az, 49 gz). The target is missed by
     // one; this bound guards against it getting worse and the family check against any other
     // kind of false finding. A two-component wander does not remove it: on 300 s the likelihood
     // does not ask for a second component, and the term's likelihood ratio against a wander of

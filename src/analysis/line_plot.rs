@@ -1,6 +1,6 @@
 //! Line plots of the diagnosis reports (residual spectra, Allan deviations, effect overlays,
 //! line tracks): linear or log axes, a title, axis labels and a legend, drawn with `plotters`'
-//! SVG backend in the style of [`super::allan_plot`].
+//! SVG backend in the style of [`super::allan::plot`].
 //!
 //! Axis ranges: a log axis spans the whole decades around the data; a linear axis is widened to
 //! multiples of the "nice" step 1, 2 or 5 × 10^k that gives about six ticks (Heckbert 1990,
@@ -33,7 +33,7 @@ pub struct Plot {
     pub series: Vec<Series>,
 }
 
-/// The plots' colours (matplotlib's "tab10" and a grey), by name; shared with `allan_plot.rs`.
+/// The plots' colours (matplotlib's "tab10" and a grey), by name; shared with `allan/plot.rs`.
 pub(super) mod palette {
     use plotters::style::RGBColor;
     pub const BLUE: RGBColor = RGBColor(31, 119, 180);

@@ -1,31 +1,14 @@
 //! Offline analyses of recorded sensor series: noise characterisation and model comparison.
+//!
+//! One folder per method that takes several files ([`allan`], [`calib`], [`diagnose`]); a method
+//! of one file stands at this level (spectrum, change points, wavelets, ...).
 
 pub mod allan;
-pub mod allan_check;
-pub mod allan_export;
-pub mod allan_plot;
-pub mod allan_report;
-pub mod allan_terms;
 pub mod bias_compare;
-pub mod calib_course;
-pub mod calib_fit;
-pub mod calib_gyro;
-mod calib_gyro_noise;
-pub mod calib_still;
-#[cfg(test)]
-mod calib_tests;
+pub mod calib;
 pub mod changepoint;
 pub mod detectors;
 pub mod diagnose;
-pub mod diagnose_blocks;
-pub mod diagnose_lines;
-pub mod diagnose_report;
-pub mod diagnose_result;
-pub mod diagnose_slow;
-mod diagnose_terms;
-pub mod diagnose_wander;
-pub mod diagnose_whole;
-pub mod diagnose_whole_report;
 pub mod exogenous;
 pub mod gauss_markov;
 pub mod joint_model;

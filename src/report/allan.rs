@@ -1,14 +1,15 @@
 //! `imuprep allan`: the Allan report of a static recording
-//! ([`crate::analysis::allan_report`]) and its exports in a folder.
+//! ([`crate::analysis::allan::report`]) and its exports in a folder.
 
-use std::fmt;
+use std::fmt::{self, Write};
 use std::path::Path;
 
 use anyhow::Result;
 
 use super::{load_span, parse_channels, present_channels};
-use crate::analysis::allan_report::{AllanReport, allan_report};
-use crate::analysis::{allan_export, allan_terms::FitSettings};
+use crate::analysis::allan::plot::allan_svg;
+use crate::analysis::allan::report::{AllanReport, allan_report};
+use crate::analysis::allan::{export, terms::FitSettings};
 
 /// The report and the names of the files written beside it.
 pub struct AllanRun {
@@ -27,7 +28,7 @@ pub fn allan(log: &Path, channels: &[String], skip_s: f64, out_dir: &Path) -> Re
     let source = log.display().to_string();
     let mut report = allan_report(&source, &samples, rate, &chans, &FitSettings::default())?;
     report.skipped.extend(absent);
-    let written = allan_export::write_outputs(&report, out_dir).map_err(anyhow::Error::msg)?;
+    let written = write_outputs(&report, out_dir).map_err(anyhow::Error::msg)?;
     let written = written
         .iter()
         .filter_map(|p| Some(p.file_name()?.to_str()?.to_string()))
@@ -56,4 +57,74 @@ impl fmt::Display for AllanRun {
         }
         Ok(())
     }
+}
+
+/// Write the report (text and JSON), the plot and the three exports into `dir` (created if
+/// needed). Without both gyro and accelerometer channels the two per-sensor exports are left
+/// out. Returns the paths written.
+fn write_outputs(
+    report: &AllanReport,
+    dir: &std::path::Path,
+) -> Result<Vec<std::path::PathBuf>, String> {
+    let io = |p: &std::path::Path, e: std::io::Error| format!("writing {}: {e}", p.display());
+    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+    let (model, notes) = export::bias_model(report);
+    let mut text = report.to_string();
+    text.push_str(
+        "
+bias model (ar_of = bias: Gauss-Markov from B, white noise from N and Q, RRW from K):
+",
+    );
+    for n in &notes {
+        let _ = writeln!(
+            text,
+            "  {}: T_c {:.1} s, sigma_GM {:.3e}{}{}{}{}",
+            n.channel,
+            n.tc_s,
+            n.sigma_gm,
+            if n.b_is_bound {
+                " (from the upper bound of B)"
+            } else {
+                ""
+            },
+            if n.n_is_bound {
+                ", N from its upper bound"
+            } else {
+                ""
+            },
+            n.rrw_q_per_s.map_or(String::new(), |q| format!(
+                ", rate_random_walk q_per_s {q:.3e}"
+            )),
+            if n.ramp_dropped {
+                "; the rate ramp has no place in the format"
+            } else {
+                ""
+            },
+        );
+    }
+    let mut files: Vec<(&str, String)> = vec![
+        ("report.txt", text),
+        (
+            "report.json",
+            serde_json::to_string_pretty(report).map_err(|e| e.to_string())?,
+        ),
+        ("allan.svg", allan_svg(report)?),
+        (
+            "bias.toml",
+            model.to_toml_string().map_err(|e| e.to_string())?,
+        ),
+    ];
+    if let Some(y) = export::kalibr_yaml(report) {
+        files.push(("imu.yaml", y));
+    }
+    if let Some(c) = export::gnss_imu_config(report) {
+        files.push(("gnss_imu_config.txt", c));
+    }
+    let mut written = Vec::new();
+    for (name, body) in files {
+        let p = dir.join(name);
+        std::fs::write(&p, body).map_err(|e| io(&p, e))?;
+        written.push(p);
+    }
+    Ok(written)
 }

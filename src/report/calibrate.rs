@@ -1,5 +1,5 @@
 //! `imuprep calibrate LOG`: the accelerometer triad's bias, scale factor and misalignment from
-//! the still stretches of a moving recording (`analysis::calib_still`, `analysis::calib_fit`),
+//! the still stretches of a moving recording (`analysis::calib::still`, `analysis::calib::fit`),
 //! each kept only where held-out attitudes say so. Writes `D/report.txt`, `D/report.json` and,
 //! when something was kept, `D/calibration.toml`: a `[bias.settings.accel]` section that
 //! `replay`/`run --config D/calibration.toml` lays over the defaults (a user config changes only
@@ -12,12 +12,12 @@ use anyhow::{Context, Result, ensure};
 use serde::Serialize;
 
 use super::{load_span_to, present_channels};
-use crate::analysis::calib_course::{CourseEpoch, CourseScale, CourseSettings, course_scale};
-use crate::analysis::calib_fit::{
+use crate::analysis::calib::course::{CourseEpoch, CourseScale, CourseSettings, course_scale};
+use crate::analysis::calib::fit::{
     AccelCalibration, CalibSettings, Candidate, NotIdentifiable, calibrate_accel,
 };
-use crate::analysis::calib_gyro::{GyroCalibration, calibrate_gyro, gyro_intervals};
-use crate::analysis::calib_still::{StillSettings, still_stretches};
+use crate::analysis::calib::gyro::{GyroCalibration, calibrate_gyro, gyro_intervals};
+use crate::analysis::calib::still::{StillSettings, still_stretches};
 use crate::analysis::quantisation::quantisation;
 use crate::sample::Sample;
 
@@ -33,7 +33,7 @@ pub struct CalibrateOptions {
     /// Output directory.
     pub out_dir: PathBuf,
     /// An RTKLIB `.pos` solution with velocities on the log's clock (GPST): also fit the gyro's
-    /// scale about the vertical from the turns of a drive (`analysis::calib_course`).
+    /// scale about the vertical from the turns of a drive (`analysis::calib::course`).
     pub gnss: Option<PathBuf>,
 }
 

@@ -1,8 +1,9 @@
 //! `imuprep diagnose`: by default the whole-log diagnosis
-//! ([`crate::analysis::diagnose_whole::diagnose_whole`]: effects chosen on interleaved selection
+//! ([`crate::analysis::diagnose::whole::diagnose_whole`]: effects chosen on interleaved selection
 //! blocks, scored on the held-out blocks between them, one model for the whole recording);
 //! with `--paper-split` the close-the-loop iteration of issue 6
-//! ([`crate::analysis::diagnose::diagnose_channel`]: 3 min train, 3 min validation, the rest test).
+//! ([`crate::analysis::diagnose::paper_split::diagnose_channel`]: 3 min train, 3 min validation,
+//! the rest test).
 //! Either writes one report, plots and one bias model into a folder.
 
 use std::io::Write;
@@ -11,8 +12,10 @@ use std::path::Path;
 use anyhow::{Context, Result, anyhow, ensure};
 
 use super::{load_span_to, parse_channels, present_channels};
-use crate::analysis::diagnose::{ChannelInput, DeploymentFit, DiagnoseSettings, diagnose_channel};
-use crate::analysis::diagnose_report::{DiagnoseReport, channel_plots, effect_text};
+use crate::analysis::diagnose::paper_split::{
+    ChannelInput, DeploymentFit, DiagnoseSettings, diagnose_channel,
+};
+use crate::analysis::diagnose::report::{DiagnoseReport, channel_plots, effect_text};
 use crate::analysis::exogenous::Exogenous;
 use crate::model::bias_model::{BiasModelFile, ChannelBiasModel, Effect};
 use crate::sample::{CHANNEL_NAMES, Sample};

@@ -12,8 +12,8 @@ use super::diagnose::{
     Added, Stretch, channel_input, channel_model, effects_text, others_of, prepare, write_outputs,
     write_plots,
 };
-use crate::analysis::diagnose_whole::{WholeDiagnosis, WholeSettings, diagnose_whole};
-use crate::analysis::diagnose_whole_report::{effect_lines, whole_plots, whole_text};
+use crate::analysis::diagnose::whole::{WholeDiagnosis, WholeSettings, diagnose_whole};
+use crate::analysis::diagnose::whole_report::{effect_lines, whole_plots, whole_text};
 use crate::model::bias_model::{ArOf, BiasModelFile};
 use crate::sample::CHANNEL_NAMES;
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Reference values for tests/allan_reference.rs: allantools' overlapping Allan deviation of every
 channel of a log, and the IEEE-952 terms derived from it by the method `imuprep allan` documents in
-src/analysis/allan_terms.rs -- written here independently on top of allantools (oadev,
+src/analysis/allan/terms.rs -- written here independently on top of allantools (oadev,
 edf_greenhall, confidence_interval) and scipy (nnls, brentq):
 
   sigma^2(tau) = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2,

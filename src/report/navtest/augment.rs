@@ -5,8 +5,8 @@
 use serde::Serialize;
 
 use super::setup::{RecordSpec, mount};
-use crate::analysis::allan_export::{self, BiasModelNote};
-use crate::analysis::{allan_report, allan_terms::FitSettings};
+use crate::analysis::allan::export::BiasModelNote;
+use crate::analysis::allan::{self, terms::FitSettings};
 use crate::nav::eskf::*;
 use crate::nav::pos::PosEpoch;
 use crate::sample::Sample;
@@ -25,7 +25,7 @@ pub struct AugmentationSource {
     /// IMU channels whose part was refused, and why (they keep the random walk only).
     pub refused: Refused,
     /// Variant (e)'s process noise from the same Allan report: N and K of the gyros and of
-    /// the accelerometers, the largest over each sensor's axes (`allan_export::sensor_noise`,
+    /// the accelerometers, the largest over each sensor's axes (`allan::export::sensor_noise`,
     /// the values `imuprep allan` exports for Kalibr and for GNSS_IMU's config), with the
     /// channels whose N or K is only an upper bound (not resolved by the stretch).
     pub noise: Option<(ImuNoise, Vec<String>)>,
@@ -33,10 +33,10 @@ pub struct AugmentationSource {
 
 /// The process noise a filter gets from `allan` (see [`AugmentationSource::noise`]).
 fn noise_from_allan(
-    rep: &crate::analysis::allan_report::AllanReport,
+    rep: &crate::analysis::allan::report::AllanReport,
 ) -> Option<(ImuNoise, Vec<String>)> {
-    let g = allan_export::sensor_noise(rep, true)?;
-    let a = allan_export::sensor_noise(rep, false)?;
+    let g = allan::export::sensor_noise(rep, true)?;
+    let a = allan::export::sensor_noise(rep, false)?;
     let mut bounds: Vec<String> = vec![];
     for (what, b) in [
         ("N", &g.noise_density_bounds),
@@ -61,7 +61,7 @@ fn noise_from_allan(
 pub type Refused = Vec<(String, String)>;
 
 /// The filter's Gauss–Markov parts from per-IMU-channel notes (gx gy gz ax ay az) of
-/// `allan_export::bias_model`: each channel's part checked ([`GaussMarkov::check`]; refused
+/// `allan::export::bias_model`: each channel's part checked ([`GaussMarkov::check`]; refused
 /// ones listed, their axis keeps the random walk), then mapped to the body axis it is closest
 /// to under `mount` (IMU → body; an axis permutation with signs plus a few degrees).
 pub fn augmentation_from_notes(
@@ -169,7 +169,7 @@ pub fn augmentation_from_allan(
         (from_s * rate) as usize,
         ((to_s * rate) as usize).min(samples.len()),
     );
-    let rep = allan_report::allan_report(
+    let rep = allan::report::allan_report(
         &spec.name,
         &samples[i0..i1],
         rate,
@@ -177,7 +177,7 @@ pub fn augmentation_from_allan(
         &FitSettings::default(),
     )
     .map_err(|e| e.to_string())?;
-    let (_, notes) = allan_export::bias_model(&rep);
+    let (_, notes) = allan::export::bias_model(&rep);
     let (augmentation, refused) = augmentation_from_notes(&notes, &mount(spec))?;
     Ok(AugmentationSource {
         still_from_s: from_s,

@@ -5,7 +5,7 @@
 //! scored on the outages outside that stretch, beside (a) and (b) on the same outages), and
 //! (d) the raw IMU
 //! with the filter's bias process augmented by a first-order Gauss–Markov part per axis whose σ
-//! and correlation time come from imuprep's Allan terms ([`crate::analysis::allan_export::bias_model`])
+//! and correlation time come from imuprep's Allan terms ([`crate::analysis::allan::export::bias_model`])
 //! of the recording's longest still stretch (the random-walk part keeps the reference's density;
 //! an implausible part falls back to it, [`augment`]); the do-no-harm check (b) ≤ (a) per cell
 //! with the outages behind every miss ([`harm`]); the error budget of the 30-s outages

@@ -19,7 +19,7 @@
 //!    the lag maximising R² of d on (T_lag − T0, (T_lag − T0)²) (`exogenous`); g-sensitivity — the
 //!    specific-force components. A rate random walk (a tracked random-walk level) is offered
 //!    only when no deterministic candidate passes and the Allan deviation of e shows excess power
-//!    rising (+½) or flat (`allan_check`): in the one-step metric it competes with every slow
+//!    rising (+½) or flat (`allan::check`): in the one-step metric it competes with every slow
 //!    effect, so it is the explanation of last resort, tested alone at α.
 //! 3. Score each candidate by the FOS criterion on validation: Q = (SSE₀ − SSE₁)/N_val, the
 //!    reduction of the one-step squared error when the candidate's terms are added and the model
@@ -41,18 +41,18 @@
 //! (structure re-polished there too: line frequencies, temperature lag, step times) — the test
 //! numbers never see it; the parameters gain the test part's data.
 
-use super::AnalysisError;
-use super::allan_check::{AllanKind, allan_check};
-use super::changepoint::{ChangePointSettings, binary_segmentation};
-pub use super::diagnose_result::{
+pub use super::result::{
     CandidateScore, ChannelDiagnosis, DeploymentFit, Findings, Iteration, Overlay, PlotData,
     ResidualPlots, TestMetrics,
 };
-use super::diagnose_terms::{Ctx, Term, decimate, effects_of, polish_structure, term_contribution};
-use super::exogenous::{Exogenous, analyse as exo_analyse, lagged_polynomial_scan};
-use super::joint_model::{JointFit, mse};
-use super::quantisation::{quantisation, saturation};
-use super::spectrum::{PeakSettings, find_peaks, periodogram, refine_line, welch};
+use super::terms::{Ctx, Term, decimate, effects_of, polish_structure, term_contribution};
+use crate::analysis::AnalysisError;
+use crate::analysis::allan::check::{AllanKind, allan_check};
+use crate::analysis::changepoint::{ChangePointSettings, binary_segmentation};
+use crate::analysis::exogenous::{Exogenous, analyse as exo_analyse, lagged_polynomial_scan};
+use crate::analysis::joint_model::{JointFit, mse};
+use crate::analysis::quantisation::{quantisation, saturation};
+use crate::analysis::spectrum::{PeakSettings, find_peaks, periodogram, refine_line, welch};
 use crate::stats::acf::whiteness;
 use crate::stats::special::chi2_sf;
 use crate::stats::{NumError, check_series};
@@ -112,10 +112,10 @@ impl DiagnoseSettings {
     pub fn validate(&self) -> Result<(), AnalysisError> {
         let f = self.short_log_fractions;
         if !(self.train_s > 0.0 && self.validation_s > 0.0 && self.min_test_s > 0.0)
-            || f.iter().any(|v| !super::is_pos(*v))
+            || f.iter().any(|v| !crate::analysis::is_pos(*v))
             || (f.iter().sum::<f64>() - 1.0).abs() > 1e-9
             || self.max_ar_order == 0
-            || !super::in_open_unit(self.alpha)
+            || !crate::analysis::in_open_unit(self.alpha)
             || self.ljung_box_lags == 0
         {
             return Err(AnalysisError::bad("diagnose settings out of range"));
@@ -303,7 +303,7 @@ pub fn diagnose_channel(
     s.validate()?;
     let y = input.values;
     check_series(y, 1)?;
-    if !super::is_pos(input.rate_hz) {
+    if !crate::analysis::is_pos(input.rate_hz) {
         return Err(AnalysisError::bad("rate_hz must be > 0"));
     }
     let n = y.len();
@@ -538,11 +538,11 @@ pub fn diagnose_channel(
         residual: ResidualPlots {
             spectrum_before: welch(&rb.innovation[sp.test.clone()], input.rate_hz, seg).ok(),
             spectrum_after: welch(&rf.innovation[sp.test.clone()], input.rate_hz, seg).ok(),
-            allan_before: super::allan::oadev_octaves(
+            allan_before: crate::analysis::allan::oadev_octaves(
                 &rb.innovation[sp.test.clone()],
                 input.rate_hz,
             ),
-            allan_after: super::allan::oadev_octaves(
+            allan_after: crate::analysis::allan::oadev_octaves(
                 &rf.innovation[sp.test.clone()],
                 input.rate_hz,
             ),
@@ -573,5 +573,5 @@ pub fn diagnose_channel(
 }
 
 #[cfg(test)]
-#[path = "diagnose_tests.rs"]
+#[path = "tests.rs"]
 mod tests;

@@ -13,8 +13,8 @@
 //!   s_ex ≤ −¼ → other short-term colour (e.g. a line or an under-fitted correlation).
 //! For a rate random walk, K² = 3 σ²_ex(τ)/τ is averaged over the excess region.
 
-use super::AnalysisError;
-use super::allan::oadev_octaves;
+use super::oadev_octaves;
+use crate::analysis::AnalysisError;
 use crate::stats::allan_edf::edf_white;
 use crate::stats::check_series;
 use crate::stats::special::chi2_sf;
@@ -71,7 +71,7 @@ pub fn allan_check(
     alpha: f64,
 ) -> Result<AllanFinding, AnalysisError> {
     check_series(residual, 64)?;
-    if !super::is_pos(rate_hz) || !super::in_open_unit(alpha) {
+    if !crate::analysis::is_pos(rate_hz) || !crate::analysis::in_open_unit(alpha) {
         return Err(AnalysisError::bad("allan_check: rate or alpha"));
     }
     let n = residual.len();

@@ -1,16 +1,16 @@
 //! `imuprep allan`: per channel, the overlapping Allan deviation at octave τ with Greenhall–Riley
-//! confidence bands ([`super::allan`], [`crate::stats::allan_edf`]) and the IEEE-952 terms fitted to it
-//! ([`super::allan_terms`]); the report a person reads and the JSON a tool reads. The exports
-//! (Kalibr `imu.yaml`, GNSS_IMU config values, bias model TOML) are in [`super::allan_export`],
-//! the plot in [`super::allan_plot`].
+//! confidence bands ([`crate::analysis::allan`], [`crate::stats::allan_edf`]) and the IEEE-952
+//! terms fitted to it ([`super::terms`]); the report a person reads and the JSON a tool reads.
+//! The exports (Kalibr `imu.yaml`, GNSS_IMU config values, bias model TOML) are in
+//! [`super::export`], the plot in [`super::plot`].
 //!
 //! The Allan variance assumes samples equally spaced at the log's declared rate; the report
 //! counts time-stamp intervals that break that (gaps) so a reader can judge, but does not
 //! resample (a host-time-stamped log's jitter is not a sensor gap).
 
-use super::AnalysisError;
-use super::allan::{AllanReadings, overlapping_adev};
-use super::allan_terms::{FitSettings, Resolution, Term, TermFit, fit_terms};
+use super::terms::{FitSettings, Resolution, Term, TermFit, fit_terms};
+use super::{AllanReadings, overlapping_adev};
+use crate::analysis::AnalysisError;
 use crate::sample::{CHANNEL_NAMES, Sample};
 use crate::stats::NumError;
 use serde::Serialize;
@@ -30,7 +30,8 @@ pub struct ChannelAllan {
     pub mean: f64,
     /// Curve, bands and terms.
     pub fit: TermFit,
-    /// The older slope-line readings of the same curve (cross-check; see [`super::allan`]).
+    /// The older slope-line readings of the same curve (cross-check; see
+    /// [`crate::analysis::allan`]).
     pub slope_line: Option<AllanReadings>,
 }
 

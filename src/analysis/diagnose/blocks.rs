@@ -18,7 +18,7 @@
 //! through a tracked wander gains only in its transient), and G > 0 is implied: nothing that
 //! worsens held-out error passes.
 
-use super::AnalysisError;
+use crate::analysis::AnalysisError;
 use crate::stats::NumError;
 use crate::stats::special::normal_sf;
 use serde::Serialize;

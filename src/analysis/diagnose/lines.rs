@@ -20,8 +20,8 @@
 //! sample is used, and a phase that wandered between them shrinks the prediction instead of
 //! inventing one.
 
-use super::diagnose_blocks::Blocks;
-use super::spectrum::PairSums;
+use super::blocks::Blocks;
+use crate::analysis::spectrum::PairSums;
 use crate::stats::special::chi2_sf;
 use rustfft::{FftPlanner, num_complex::Complex};
 use serde::Serialize;

@@ -1,6 +1,6 @@
 //! Slow effects over the whole log — bias steps, temperature, g-sensitivity — chosen on the
 //! decimated series (1-s means) with a Gauss–Markov / random-walk wander as the stochastic part
-//! (`diagnose_wander`), by rounds of "all candidates in, then backward elimination" ([`select`]).
+//! (`diagnose::wander`), by rounds of "all candidates in, then backward elimination" ([`select`]).
 //!
 //!   z_k = c + Σ β_j x_{j,k} + g_k + v_k
 //!
@@ -18,7 +18,7 @@
 //! form) with the lag of best fit; g-sensitivity when the specific force varies.
 //!
 //! **Test**: a term's one-step errors on the held-out points against those of the model without
-//! it, both under the same wander (`diagnose_blocks::held_out_test`; see [`select`]).
+//! it, both under the same wander (`diagnose::blocks::held_out_test`; see [`select`]).
 //! Also not kept: a step smaller than one LSB, a temperature term whose whole effect over the
 //! range seen is smaller than one LSB (the quantisation floor).
 //!
@@ -44,9 +44,9 @@
 //! held-out z = 3.5) puts the "after" level where part of the record is not. (g-sensitivity is not
 //! span-checked: its column is the measured specific force; not tried.)
 
-use super::changepoint::{ChangePointSettings, binary_segmentation};
-use super::diagnose_blocks::{GainNoise, HeldOutTest, held_out_test};
-use super::diagnose_wander::{WanderFit, WanderParams, fit as wander_fit, innovations};
+use super::blocks::{GainNoise, HeldOutTest, held_out_test};
+use super::wander::{WanderFit, WanderParams, fit as wander_fit, innovations};
+use crate::analysis::changepoint::{ChangePointSettings, binary_segmentation};
 use nalgebra::{DMatrix, DVector};
 
 /// A slow term.

@@ -49,8 +49,8 @@
 //! coefficient whose line stays under the upper confidence limit at every measured τ,
 //! `min_i hiᵢ / sqrt(fⱼ(τᵢ))`.
 
-use super::AnalysisError;
-use super::allan::AllanResult;
+use super::AllanResult;
+use crate::analysis::AnalysisError;
 use crate::stats::NumError;
 use crate::stats::allan_edf::{NoiseType, chi2_interval, edf_oadev};
 use nalgebra::{DMatrix, DVector};
@@ -494,10 +494,10 @@ pub fn fit_terms(
     n_samples: usize,
     settings: &FitSettings,
 ) -> Result<TermFit, AnalysisError> {
-    if !super::is_pos(rate_hz) || !rate_hz.is_finite() {
+    if !crate::analysis::is_pos(rate_hz) || !rate_hz.is_finite() {
         return Err(AnalysisError::bad("allan terms: rate_hz must be > 0"));
     }
-    if !super::in_open_unit(settings.confidence) {
+    if !crate::analysis::in_open_unit(settings.confidence) {
         return Err(AnalysisError::bad("allan terms: confidence in (0, 1)"));
     }
     let keep: Vec<usize> = (0..curve.adev.len())

@@ -1,13 +1,13 @@
-//! What the `--paper-split` diagnose loop ([`super::diagnose::diagnose_channel`]) returns: per
+//! What the `--paper-split` diagnose loop ([`super::paper_split::diagnose_channel`]) returns: per
 //! channel the split, the first and final models' test metrics and residual findings, every
 //! effect added with its score and test, and the plot data.
 
-use super::allan_check::AllanFinding;
-use super::changepoint::ChangePoint;
-use super::diagnose::Split;
-use super::exogenous::ExogenousReport;
-use super::quantisation::{Quantisation, Saturation};
-use super::spectrum::{Psd, SpectralPeak};
+use super::paper_split::Split;
+use crate::analysis::allan::check::AllanFinding;
+use crate::analysis::changepoint::ChangePoint;
+use crate::analysis::exogenous::ExogenousReport;
+use crate::analysis::quantisation::{Quantisation, Saturation};
+use crate::analysis::spectrum::{Psd, SpectralPeak};
 use crate::model::bias_model::Effect;
 use crate::stats::acf::Whiteness;
 use serde::Serialize;
@@ -108,7 +108,7 @@ pub struct DeploymentFit {
 }
 
 /// A channel's residual before and after its effects, as both diagnoses plot it
-/// ([`super::diagnose_report::residual_plots`]; not serialised).
+/// ([`super::report::residual_plots`]; not serialised).
 #[derive(Clone, Debug, Default)]
 pub struct ResidualPlots {
     /// Welch spectrum, before and after.

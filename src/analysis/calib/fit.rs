@@ -31,7 +31,7 @@
 //! 2. *Held out*, backward elimination (as `diagnose`'s slow terms): each round tests every
 //!    group of the model against the model without it, by leave-one-attitude-group-out — each
 //!    group's mean residual predicted by the model fitted on the other groups — with the paired
-//!    z-test of `diagnose` (`diagnose_blocks::held_out_test`: z = G / (2σ̂√Σδ²), G the drop in
+//!    z-test of `diagnose` (`diagnose::blocks::held_out_test`: z = G / (2σ̂√Σδ²), G the drop in
 //!    the sum of squared held-out errors that the group brings, δ the per-group differences,
 //!    σ̂ the RMS held-out error with it) at α / (groups in the model). The weakest group that
 //!    fails is removed and the round repeats, until every group left passes. Backward, not
@@ -46,9 +46,9 @@
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, Vector3};
 use serde::Serialize;
 
-use super::AnalysisError;
-use super::calib_still::{AccelStretch, AttitudeSpread, attitude_groups, attitude_spread};
-use super::diagnose_blocks::{GainNoise, HeldOutTest, held_out_test};
+use super::still::{AccelStretch, AttitudeSpread, attitude_groups, attitude_spread};
+use crate::analysis::AnalysisError;
+use crate::analysis::diagnose::blocks::{GainNoise, HeldOutTest, held_out_test};
 use crate::stage::bias::settings::CalibrationSettings;
 
 /// Parameter groups, in θ order: 0..3 bias, 3..6 scale, 6..9 misalignment.
@@ -416,7 +416,7 @@ pub struct FittedCalibration {
     pub scale_sd: [f64; 3],
     pub misalignment_sd_rad: [f64; 3],
     /// θ (bias, scale, L below the diagonal) and its covariance, for what the gyro fit takes
-    /// from this calibration (`calib_gyro_noise`).
+    /// from this calibration (`calib::gyro_noise`).
     #[serde(skip)]
     pub(crate) theta: [f64; NP],
     #[serde(skip)]

@@ -17,33 +17,33 @@
 //! rotations differ make K identifiable.
 //!
 //! Groups: scale (K's diagonal) and misalignment (the six entries off it), with the tests of
-//! `calib_fit`: identifiable (2(n − 1) ≥ p + 2 for n intervals, so a fit without one interval is
+//! `calib::fit`: identifiable (2(n − 1) ≥ p + 2 for n intervals, so a fit without one interval is
 //! over-determined, and the column-normalised Jacobian's condition number ≤ `max_condition`),
 //! then backward elimination by leave-one-interval-out with `diagnose`'s paired z-test on each
 //! left-out interval's residual in the fit's form (its two in-plane components, whitened with
 //! their modelled covariance: the fit's noise model, the accelerometer calibration's error and
-//! the error of the refit without the interval, `calib_gyro_noise`), and the bias stage's
+//! the error of the refit without the interval, `calib::gyro_noise`), and the bias stage's
 //! validation of the result.
 //! No LSB floor here: an interval integrates hundreds of samples, which dithers the gyro's
 //! quantisation into noise that the held-out test already sees.
 //!
 //! The fit is generalised least squares over the residuals' modelled noise, and K's σ include
-//! the accelerometer calibration's error (`calib_gyro_noise`): consecutive motions share a still
+//! the accelerometer calibration's error (`calib::gyro_noise`): consecutive motions share a still
 //! stretch, and every direction goes through the accelerometer calibration.
 
 use nalgebra::{DMatrix, Matrix3, Rotation3, Vector2, Vector3};
 use serde::Serialize;
 
-use super::AnalysisError;
-use super::calib_fit::{
+use super::fit::{
     Candidate, Fit, FittedCalibration, NotIdentifiable, eliminate, levenberg_marquardt, rms,
     scaled_condition,
 };
-use super::calib_gyro_noise::{
+use super::gyro_noise::{
     HeldOutWhitener, MotionNoise, MotionRates, Selected, Whitener, motion_noise, stretch_noise,
 };
-use super::calib_still::AccelStretch;
-use super::diagnose_blocks::{GainNoise, held_out_test};
+use super::still::AccelStretch;
+use crate::analysis::AnalysisError;
+use crate::analysis::diagnose::blocks::{GainNoise, held_out_test};
 use crate::sample::Sample;
 use crate::stage::bias::settings::CalibrationSettings;
 
@@ -90,17 +90,17 @@ pub struct GyroInterval {
     /// The two still stretches it joins (indices into the stretches given): consecutive
     /// motions share one.
     pub stretches: [usize; 2],
-    /// The modelled 1-σ of each of its residual's two components, rad (`calib_gyro_noise`).
+    /// The modelled 1-σ of each of its residual's two components, rad (`calib::gyro_noise`).
     pub noise_sd_rad: f64,
     /// Bias-free raw rate and time step of each sample (not serialised).
     #[serde(skip)]
     pub rates: Vec<(Vector3<f64>, f64)>,
-    /// Its residual's noise (`calib_gyro_noise`).
+    /// Its residual's noise (`calib::gyro_noise`).
     #[serde(skip)]
     pub(crate) noise: MotionNoise,
 }
 
-/// Parts of the gyro fit's noise model (`calib_gyro_noise`), to switch off one by one and see
+/// Parts of the gyro fit's noise model (`calib::gyro_noise`), to switch off one by one and see
 /// what each does to the σ (`tests/calibrate_sigma.rs`); `calibrate` uses them all.
 #[derive(Clone, Copy, Debug)]
 pub struct NoiseParts {
@@ -275,7 +275,7 @@ fn jacobian(th: &[f64; NP], ivs: &[&GyroInterval], idx: &[usize], w: &Whitener) 
 /// The fit of the `active` entries of K from `start` (inactive entries stay as there), and the
 /// covariance of K from the residuals alone.
 ///
-/// Generalised least squares (`calib_gyro_noise`): each residual u1 − ΔRᵀu0 is a difference of
+/// Generalised least squares (`calib::gyro_noise`): each residual u1 − ΔRᵀu0 is a difference of
 /// two unit vectors, so to first order it lies in the plane orthogonal to u1 (2 degrees of
 /// freedom per motion, not 3); the two components there are whitened with the modelled
 /// block-tridiagonal covariance of consecutive motions, which share a still stretch. The
@@ -293,7 +293,7 @@ fn fit(ivs: &[&GyroInterval], active: &[bool; NP], start: [f64; NP]) -> Result<F
 }
 
 /// `fit`'s covariance (over all of `ivs`, whose whitener is `w`) plus what the accelerometer
-/// calibration's error adds through the directions (`calib_gyro_noise`): D Cov(θ_a) Dᵀ,
+/// calibration's error adds through the directions (`calib::gyro_noise`): D Cov(θ_a) Dᵀ,
 /// D = (JᵀJ)⁻¹Jᵀ ∂r/∂θ_a, all whitened.
 fn covariance(ivs: &[&GyroInterval], active: &[bool; NP], f: &Fit, w: &Whitener) -> Fit {
     let idx: Vec<usize> = (0..NP).filter(|&i| active[i]).collect();
@@ -343,7 +343,7 @@ fn held_out(
 }
 
 /// The whitening of the held-out residuals of the model `active`
-/// (`calib_gyro_noise::HeldOutWhitener`): the fit's noise model over all the motions (each
+/// (`calib::gyro_noise::HeldOutWhitener`): the fit's noise model over all the motions (each
 /// motion's own covariance, consecutive motions correlated through their shared stretch), the
 /// accelerometer calibration's error that all of them share, and each motion's share of the
 /// error of the model refitted without it (linearised at the fit on all the motions; none
@@ -384,7 +384,7 @@ pub struct FittedGyro {
     /// rad off it): the residuals' own, with the accelerometer calibration's error added.
     pub k_sd: [f64; NP],
     /// The whitened residuals' variance over their degrees of freedom: ≈ 1 when the modelled
-    /// noise (`calib_gyro_noise`) is the residuals' real noise; the σ are scaled by it.
+    /// noise (`calib::gyro_noise`) is the residuals' real noise; the σ are scaled by it.
     pub noise_ratio: f64,
 }
 

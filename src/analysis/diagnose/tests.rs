@@ -31,7 +31,7 @@ fn run_on(log: &SynthLog, y: &[f64]) -> ChannelDiagnosis {
 fn run_and_check_power(log: &SynthLog, open_loop_too: bool) -> ChannelDiagnosis {
     let d = run_on(log, &log.y);
     let twin = run_on(log, &log.clean_twin());
-    let text = crate::analysis::diagnose_report::channel_text(&d);
+    let text = crate::analysis::diagnose::report::channel_text(&d);
     assert!(
         twin.iterations.is_empty(),
         "clean twin got effects: {:?}",
@@ -168,7 +168,7 @@ fn rate_random_walk_is_found_and_named() {
         families(&d),
         ["rate_random_walk"],
         "{}",
-        crate::analysis::diagnose_report::channel_text(&d)
+        crate::analysis::diagnose::report::channel_text(&d)
     );
     let Effect::RateRandomWalk { q_per_s } = d.effects[0] else {
         panic!()
@@ -199,7 +199,7 @@ fn two_undeclared_effects_are_both_found_in_order_of_size() {
         families(&d),
         ["vibration_line", "bias_step"],
         "{}",
-        crate::analysis::diagnose_report::channel_text(&d)
+        crate::analysis::diagnose::report::channel_text(&d)
     );
     // Each iteration's gain is ordered the same way.
     assert!(d.iterations[0].score.q > d.iterations[1].score.q);
@@ -276,14 +276,14 @@ fn report_serialises_with_contract_effects_and_renders_plots() {
     s.line = Some((23.4567, 1.0, 0.0));
     let log = generate(&s);
     let d = run_on(&log, &log.y);
-    let rep = crate::analysis::diagnose_report::DiagnoseReport {
+    let rep = crate::analysis::diagnose::report::DiagnoseReport {
         source: "synthetic".into(),
         channels: vec![d],
     };
     let json = rep.to_json().unwrap();
     assert!(json.contains("\"kind\": \"vibration_line\""), "{json}");
     assert!(rep.to_text().contains("vibration line f = 23.45"));
-    let plots = crate::analysis::diagnose_report::channel_plots(&rep.channels[0]).unwrap();
+    let plots = crate::analysis::diagnose::report::channel_plots(&rep.channels[0]).unwrap();
     let names: Vec<&str> = plots.iter().map(|p| p.0.as_str()).collect();
     assert_eq!(
         names,
@@ -315,7 +315,7 @@ fn temperature_coefficient_spread_over_seeds() {
         else {
             panic!(
                 "seed {seed}: no temperature effect\n{}",
-                crate::analysis::diagnose_report::channel_text(&d)
+                crate::analysis::diagnose::report::channel_text(&d)
             )
         };
         let e1 = (c1_per_c + 2.0 * c2_per_c2 * (30.0 - t0_c)) / 0.2 - 1.0;

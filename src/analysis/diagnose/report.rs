@@ -1,9 +1,9 @@
 //! The diagnosis report: JSON (serde), a text formatter, and the SVG plots of each channel
 //! (residual spectrum before/after, Allan deviation before/after, each effect over the residual).
 
-use super::diagnose::{ChannelDiagnosis, Findings, ResidualPlots, TestMetrics};
-use super::line_plot::{Plot, Series, render};
-use super::spectrum::Psd;
+use super::paper_split::{ChannelDiagnosis, Findings, ResidualPlots, TestMetrics};
+use crate::analysis::line_plot::{Plot, Series, render};
+use crate::analysis::spectrum::Psd;
 use crate::model::bias_model::Effect;
 use serde::Serialize;
 use std::fmt::Write;

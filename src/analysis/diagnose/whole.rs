@@ -1,17 +1,17 @@
 //! `diagnose` over the whole recording, one model (issue 17): lines, slow effects and wander
 //! chosen on the selection blocks, scored on the held-out blocks that interleave with them
-//! (`diagnose_blocks`), then refitted on the whole log for the model file.
+//! (`diagnose::blocks`), then refitted on the whole log for the model file.
 //!
 //! Order, per channel:
-//! 1. **Lines** (`diagnose_lines`): candidates from the selection blocks' averaged spectrum; each
+//! 1. **Lines** (`diagnose::lines`): candidates from the selection blocks' averaged spectrum; each
 //!    tracked block by block, scored on held-out blocks by its prediction from the neighbouring
 //!    selection blocks (open-loop error at the full rate; its noise is the local level near the
 //!    line).
-//! 2. **Slow effects** (`diagnose_slow`) on 1-s means of what the lines leave: steps,
+//! 2. **Slow effects** (`diagnose::slow`) on 1-s means of what the lines leave: steps,
 //!    temperature, g-sensitivity, all candidates in then backward elimination, with a GM/RW wander
 //!    as the stochastic part
 //!    (one-step errors of the decimated series on held-out points).
-//! 3. **Wander** (`diagnose_wander`): Gauss–Markov, random walk or undecided; a random walk that
+//! 3. **Wander** (`diagnose::wander`): Gauss–Markov, random walk or undecided; a random walk that
 //!    passes the held-out test (wander predictor vs none) is written as the rate-random-walk
 //!    effect; a Gauss–Markov wander that passes it is written as the channel's bias process
 //!    (`ar_of = "bias"`: AR(1) with φ = e^{−1/(τ fs)}, stationary σ², the rest of the residual's
@@ -28,16 +28,14 @@
 //! Cost: a handful of passes over the full-rate series (FFTs of the selection blocks, 10 phasor
 //! passes per candidate line and one AR lattice) and everything slow on the decimated series.
 
-use super::AnalysisError;
-use super::diagnose::ChannelInput;
-use super::diagnose_blocks::{Blocks, GainNoise, HeldOutTest, held_out_test, step_means};
-use super::diagnose_lines::{
-    BlockLine, contribution, contribution_in_sample, line_candidates, track,
-};
-use super::diagnose_result::{DeploymentFit, ResidualPlots};
-use super::diagnose_slow::{SlowCtx, SlowTerm, lagged, select};
-use super::diagnose_wander::{WanderKind, WanderParams, classify, innovations};
-use super::quantisation::{Quantisation, quantisation};
+use super::blocks::{Blocks, GainNoise, HeldOutTest, held_out_test, step_means};
+use super::lines::{BlockLine, contribution, contribution_in_sample, line_candidates, track};
+use super::paper_split::ChannelInput;
+use super::result::{DeploymentFit, ResidualPlots};
+use super::slow::{SlowCtx, SlowTerm, lagged, select};
+use super::wander::{WanderKind, WanderParams, classify, innovations};
+use crate::analysis::AnalysisError;
+use crate::analysis::quantisation::{Quantisation, quantisation};
 use crate::model::bias_model::Effect;
 use crate::model::{ArFit, burg, burg_orders};
 use crate::stats::check_series;
@@ -274,7 +272,7 @@ pub fn diagnose_whole(
     let y = input.values;
     let fs = input.rate_hz;
     check_series(y, 1)?;
-    if !super::is_pos(fs) || !super::in_open_unit(s.alpha) {
+    if !crate::analysis::is_pos(fs) || !crate::analysis::in_open_unit(s.alpha) {
         return Err(AnalysisError::bad("rate_hz > 0 and alpha in (0, 1)"));
     }
     let n = y.len();
@@ -404,7 +402,7 @@ pub fn diagnose_whole(
             s.alpha,
             GainNoise {
                 min_var: 0.0,
-                hac_lags: super::diagnose_slow::HAC_LAGS,
+                hac_lags: super::slow::HAC_LAGS,
             },
         );
         let gm = wf.gm;
@@ -575,10 +573,10 @@ pub fn diagnose_whole(
     progress("plots");
     let seg = (n / 64).clamp(256, 8192);
     let plots = ResidualPlots {
-        spectrum_before: super::spectrum::welch(&base, fs, seg).ok(),
-        spectrum_after: super::spectrum::welch(&r_dep, fs, seg).ok(),
-        allan_before: super::allan::oadev_octaves(&step_means(&base, dec), 1.0 / dt),
-        allan_after: super::allan::oadev_octaves(&step_means(&r_dep, dec), 1.0 / dt),
+        spectrum_before: crate::analysis::spectrum::welch(&base, fs, seg).ok(),
+        spectrum_after: crate::analysis::spectrum::welch(&r_dep, fs, seg).ok(),
+        allan_before: crate::analysis::allan::oadev_octaves(&step_means(&base, dec), 1.0 / dt),
+        allan_after: crate::analysis::allan::oadev_octaves(&step_means(&r_dep, dec), 1.0 / dt),
     };
     Ok(WholeDiagnosis {
         channel: input.name.into(),
@@ -600,10 +598,7 @@ pub fn diagnose_whole(
     })
 }
 
-fn ctx_all_fit(
-    ctx: &SlowCtx,
-    terms: &[SlowTerm],
-) -> Result<super::diagnose_slow::SlowFit, AnalysisError> {
+fn ctx_all_fit(ctx: &SlowCtx, terms: &[SlowTerm]) -> Result<super::slow::SlowFit, AnalysisError> {
     ctx.fit(terms, true)
         .ok_or_else(|| AnalysisError::singular("slow model refit on the whole log"))
 }

@@ -3,9 +3,9 @@
 //! (dashed) and the line of every resolved term (thin). Drawn with `plotters`' SVG backend
 //! (default features off: no font files, the SVG names the font and the viewer renders it).
 
-use super::allan_report::{AllanReport, ChannelAllan};
-use super::allan_terms::Term;
-use super::line_plot::palette::{BLUE, BROWN, GREEN, ORANGE, PURPLE, RED};
+use super::report::{AllanReport, ChannelAllan};
+use super::terms::Term;
+use crate::analysis::line_plot::palette::{BLUE, BROWN, GREEN, ORANGE, PURPLE, RED};
 use plotters::prelude::*;
 
 const TERM_COLORS: [RGBColor; 5] = [PURPLE, GREEN, ORANGE, RED, BROWN];

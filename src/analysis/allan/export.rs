@@ -32,8 +32,8 @@
 //!   for gyro channels; for accelerometers it would be ignored, so it is not written);
 //! * R (rate ramp) has no place in the format: not exported.
 
-use super::allan_report::{AllanReport, ChannelAllan, G0_M_S2};
-use super::allan_terms::{Resolution, Term};
+use super::report::{AllanReport, ChannelAllan, G0_M_S2};
+use super::terms::{Resolution, Term};
 use crate::model::bias_model::{ArOf, BiasModelFile, ChannelBiasModel, Effect};
 use serde::Serialize;
 use std::fmt::Write;
@@ -296,76 +296,6 @@ pub fn bias_model(report: &AllanReport) -> (BiasModelFile, Vec<BiasModelNote>) {
         });
     }
     (file, notes)
-}
-
-/// Write the report (text and JSON), the plot and the three exports into `dir` (created if
-/// needed). Without both gyro and accelerometer channels the two per-sensor exports are left
-/// out. Returns the paths written.
-pub fn write_outputs(
-    report: &AllanReport,
-    dir: &std::path::Path,
-) -> Result<Vec<std::path::PathBuf>, String> {
-    let io = |p: &std::path::Path, e: std::io::Error| format!("writing {}: {e}", p.display());
-    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
-    let (model, notes) = bias_model(report);
-    let mut text = report.to_string();
-    text.push_str(
-        "
-bias model (ar_of = bias: Gauss-Markov from B, white noise from N and Q, RRW from K):
-",
-    );
-    for n in &notes {
-        let _ = writeln!(
-            text,
-            "  {}: T_c {:.1} s, sigma_GM {:.3e}{}{}{}{}",
-            n.channel,
-            n.tc_s,
-            n.sigma_gm,
-            if n.b_is_bound {
-                " (from the upper bound of B)"
-            } else {
-                ""
-            },
-            if n.n_is_bound {
-                ", N from its upper bound"
-            } else {
-                ""
-            },
-            n.rrw_q_per_s.map_or(String::new(), |q| format!(
-                ", rate_random_walk q_per_s {q:.3e}"
-            )),
-            if n.ramp_dropped {
-                "; the rate ramp has no place in the format"
-            } else {
-                ""
-            },
-        );
-    }
-    let mut files: Vec<(&str, String)> = vec![
-        ("report.txt", text),
-        (
-            "report.json",
-            serde_json::to_string_pretty(report).map_err(|e| e.to_string())?,
-        ),
-        ("allan.svg", super::allan_plot::allan_svg(report)?),
-        (
-            "bias.toml",
-            model.to_toml_string().map_err(|e| e.to_string())?,
-        ),
-    ];
-    if let Some(y) = kalibr_yaml(report) {
-        files.push(("imu.yaml", y));
-    }
-    if let Some(c) = gnss_imu_config(report) {
-        files.push(("gnss_imu_config.txt", c));
-    }
-    let mut written = Vec::new();
-    for (name, body) in files {
-        let p = dir.join(name);
-        std::fs::write(&p, body).map_err(|e| io(&p, e))?;
-        written.push(p);
-    }
-    Ok(written)
 }
 
 #[cfg(test)]

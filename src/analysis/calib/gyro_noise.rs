@@ -1,4 +1,4 @@
-//! The noise of the gyro fit's residuals (`calib_gyro`), so that its σ cover the error
+//! The noise of the gyro fit's residuals (`calib::gyro`), so that its σ cover the error
 //! (issue 17: a published σ must cover the error).
 //!
 //! A motion's residual r_k = u_{k+1} − ΔR_kᵀ u_k (rotations through K = I here: the model is
@@ -45,8 +45,8 @@ use nalgebra::{
     Vector3,
 };
 
-use super::calib_fit::{Cov9, FittedCalibration, direction, nominal};
-use super::calib_still::{AccelStretch, mean_var};
+use super::fit::{Cov9, FittedCalibration, direction, nominal};
+use super::still::{AccelStretch, mean_var};
 use crate::sample::Sample;
 
 /// Smallest per-sample variances used, (m/s²)² and (rad/s)²: a stretch whose samples are all one
@@ -380,7 +380,7 @@ mod tests {
 
     #[test]
     fn the_direction_derivatives_match_finite_differences() {
-        // ∂u/∂θ_a and ∂u/∂f of `calib_fit::direction`, which carry the accelerometer's noise and
+        // ∂u/∂θ_a and ∂u/∂f of `calib::fit::direction`, which carry the accelerometer's noise and
         // its calibration's error into the gyro's σ, against central differences (step 1e-6;
         // the second-order error is ~1e-12 relative, the tolerance 1e-7 leaves rounding room).
         let th = [0.1, -0.2, 0.25, 1.012, 0.992, 1.005, 0.006, -0.0075, 0.006];

@@ -1,13 +1,13 @@
-//! The terms the close-the-loop iteration ([`super::diagnose`]) adds, how each becomes regressor
+//! The terms the close-the-loop iteration ([`super::paper_split`]) adds, how each becomes regressor
 //! columns of the joint model, the effects a fitted model yields, and the re-polishing of a term's
 //! structure (line frequency, temperature lag, step time) on more data.
 
-use super::AnalysisError;
-use super::diagnose::DiagnoseSettings;
-use super::diagnose::Split;
-use super::exogenous::{Exogenous, lagged_polynomial_scan};
-use super::joint_model::{JointFit, LevelSpec, fit as joint_fit, fit_orders, mse};
-use super::spectrum::refine_line;
+use super::paper_split::DiagnoseSettings;
+use super::paper_split::Split;
+use crate::analysis::AnalysisError;
+use crate::analysis::exogenous::{Exogenous, lagged_polynomial_scan};
+use crate::analysis::joint_model::{JointFit, LevelSpec, fit as joint_fit, fit_orders, mse};
+use crate::analysis::spectrum::refine_line;
 use crate::model::bias_model::Effect;
 use std::f64::consts::PI;
 use std::ops::Range;

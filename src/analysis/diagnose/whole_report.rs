@@ -1,11 +1,11 @@
-//! Text and plots of the whole-log diagnosis ([`super::diagnose_whole`]). The text lists exactly
+//! Text and plots of the whole-log diagnosis ([`super::whole`]). The text lists exactly
 //! the effects of the model file (`effects`), each with its span and held-out test, then every
 //! candidate not kept with its reason, so report, summary and model file agree.
 
-use super::diagnose_report::{ResidualCaptions, effect_text, residual_plots};
-use super::diagnose_wander::WanderKind;
-use super::diagnose_whole::WholeDiagnosis;
-use super::line_plot::{Plot, Series, render};
+use super::report::{ResidualCaptions, effect_text, residual_plots};
+use super::wander::WanderKind;
+use super::whole::WholeDiagnosis;
+use crate::analysis::line_plot::{Plot, Series, render};
 use std::fmt::Write;
 
 /// One line per kept effect: "family: parameters [span]".

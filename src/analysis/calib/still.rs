@@ -11,7 +11,7 @@
 //! ```
 //!
 //! with f̄_k the stretch's mean specific force (m/s²), A = diag(scale)·N and b the triad's
-//! calibration (`analysis::calib_fit`).
+//! calibration (`analysis::calib::fit`).
 //!
 //! **Which samples are still** is the bias stage's own detector (`stage::bias::stillness`, its
 //! default settings): windows whose gyro and accelerometer spread sit within a factor of the

@@ -1,12 +1,12 @@
-//! Tests of the still-stretch calibration (`calib_still`, `calib_fit`) on generated data with
+//! Tests of the still-stretch calibration (`calib::still`, `calib::fit`) on generated data with
 //! known truth: still stretches at chosen attitudes with seeded white noise (the simulator has
 //! no multi-attitude motion profile), and a static bench for the stretch finder (a tumbling
 //! record end to end: `tests/calibrate.rs`).
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::calib_fit::{AccelCalibration, CalibSettings, calibrate_accel, condition};
-use super::calib_still::{AccelStretch, StillSettings, still_stretches};
+use super::fit::{AccelCalibration, CalibSettings, calibrate_accel, condition};
+use super::still::{AccelStretch, StillSettings, still_stretches};
 use crate::rng::Rng;
 use crate::sample::Sample;
 

@@ -25,6 +25,16 @@
 //!
 //! Units: `adev` has the units of y (rad/s or m/s^2); `N_c` in y * sqrt(s) (rad/sqrt(s),
 //! m/s/sqrt(s)); `B` in y; `K` in y / sqrt(s).
+//!
+//! The IEEE-952 terms with their intervals are fitted in [`terms`], gathered per channel in
+//! [`report`], exported in [`export`] and plotted in [`plot`]; [`check`] reads the deviation of a
+//! model's residual.
+
+pub mod check;
+pub mod export;
+pub mod plot;
+pub mod report;
+pub mod terms;
 
 use serde::{Deserialize, Serialize};
 
