@@ -199,6 +199,46 @@ pub struct ChannelGate {
     pub counters: ChannelCounters,
     warm: Vec<f64>,
     pub model: Option<ArimaChannelModel>,
+    /// The step of the grid the warm-up's values lie on (the channel's LSB), 0 when they lie on
+    /// none (or the model came from a file): see [`grid_step`] and [`ChannelGate::resolution`].
+    resolution: f64,
+}
+
+/// Share of a quantised channel's non-zero successive differences that must be whole multiples
+/// of its smallest one: a quantised sensor's are all (its gross errors too); a non-quantised
+/// channel's nearly none are.
+const GRID_SHARE: f64 = 0.99;
+
+/// Warm-up samples before the grid is trusted: with fewer, the smallest difference seen may
+/// still be a multiple of the LSB (a floor too high).
+const GRID_MIN_SAMPLES: usize = 100;
+
+/// The quantisation step of `x` (its LSB): the smallest non-zero |successive difference|, when
+/// at least `GRID_SHARE` of the non-zero differences are whole multiples of it (within 1 % of a
+/// step: values printed in decimal carry rounding far below that); else 0.
+pub fn grid_step(x: &[f64]) -> f64 {
+    let diffs = || {
+        x.windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .filter(|d| d.is_finite() && *d > 0.0)
+    };
+    let q = diffs().fold(f64::INFINITY, f64::min);
+    if !q.is_finite() {
+        return 0.0;
+    }
+    let (mut n, mut on) = (0usize, 0usize);
+    for d in diffs() {
+        n += 1;
+        let m = d / q;
+        if (m - m.round()).abs() <= 0.01 {
+            on += 1;
+        }
+    }
+    if on as f64 >= GRID_SHARE * n as f64 {
+        q
+    } else {
+        0.0
+    }
 }
 
 /// `E[min(Z², c²)]` for Z ~ N(0, 1).
@@ -284,6 +324,7 @@ impl ChannelGate {
             n_preds: 0,
             counters: ChannelCounters::default(),
             warm: Vec::new(),
+            resolution: 0.0,
             model: None,
         }
     }
@@ -360,6 +401,21 @@ impl ChannelGate {
         Ok(())
     }
 
+    /// The channel's quantisation step: the warm-up's [`grid_step`], and during the warm-up that
+    /// of the samples so far (from `GRID_MIN_SAMPLES` on; before, 0). Called only when an event
+    /// is judged.
+    pub fn resolution(&self) -> f64 {
+        if self.mode == Mode::WarmingUp {
+            if self.warm.len() >= GRID_MIN_SAMPLES {
+                grid_step(&self.warm)
+            } else {
+                0.0
+            }
+        } else {
+            self.resolution
+        }
+    }
+
     /// One warm-up sample (finite, plausible, unsaturated ones are kept); at `needed` samples
     /// the channel identifies its model and activates. Returns true when it activated.
     pub fn warm_push(
@@ -378,6 +434,7 @@ impl ChannelGate {
             return false;
         }
         let raw = std::mem::take(&mut self.warm);
+        self.resolution = grid_step(&raw);
         // Hampel (half-width 10, k = 4): strips spikes and runs ≤ 10 before identification.
         let cleaned = hampel(&raw, 10, 4.0)
             .map(|r| r.corrected)
@@ -642,5 +699,25 @@ mod tests {
         assert!((huber_beta(40.0) - 1.0).abs() < 1e-14);
         assert!(huber_beta(0.0).abs() < 1e-15);
         assert!((huber_beta(2.5) - 0.9775599834528068).abs() < 1e-12);
+    }
+
+    #[test]
+    fn grid_step_finds_a_quantised_channels_lsb_and_no_other() {
+        // The ADIS16405's accelerometer LSB (3.33 mg) in m/s², on seeded white noise of 1 LSB:
+        // every difference is a whole number of steps, the smallest one step.
+        let lsb = 0.00333 * 9.80665;
+        let noise = crate::rng::normal_vec(2000, 3);
+        let q: Vec<f64> = noise.iter().map(|v| v.round() * lsb + 9.8).collect();
+        let g = grid_step(&q);
+        assert!((g / lsb - 1.0).abs() < 1e-9, "{g}");
+        // Unquantised noise lies on no grid; nor does a constant (no difference at all).
+        assert_eq!(grid_step(&noise), 0.0);
+        assert_eq!(grid_step(&[1.0; 50]), 0.0);
+        // 2 % off-grid values (a processed stretch) are more than GRID_SHARE allows.
+        let mut m = q.clone();
+        for v in m.iter_mut().step_by(50) {
+            *v += 0.37 * lsb;
+        }
+        assert_eq!(grid_step(&m), 0.0);
     }
 }

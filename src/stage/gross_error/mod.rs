@@ -324,6 +324,14 @@ impl GrossErrorStage {
         }
     }
 
+    /// Floor of the confirmation's scale σ̂: `min_sigma`, and no lower than the channel's own
+    /// quantisation noise, LSB/√12 (a flat quantised context has no roughness, but a one-LSB
+    /// toggle in it is the sensor's resolution, not a break: 3.5 σ̂ at this floor).
+    fn sigma_floor(&self, c: usize) -> f64 {
+        self.min_sigma(c)
+            .max(self.ch[c].gate.resolution() / 12f64.sqrt())
+    }
+
     fn plausible(&self, c: usize) -> f64 {
         if c < 3 {
             self.s.plausible_gyro_rad_s
