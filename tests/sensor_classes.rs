@@ -643,4 +643,25 @@ fn the_misses_have_the_causes_the_docs_give() {
         eprintln!("{name} rate/4, warm-ups in samples only: engaged {e:?}");
         assert!(e.is_some_and(|t| t > 60.0), "{name}: {e:?}");
     }
+    // Each bound alone: the ADIS16405 needs both (the gross-error bound alone: no
+    // 12-s still stretch before 106.3 s; the bias bound alone: 2000 samples, 80.0 s); the
+    // MPU6050 the gross-error bound (alone: 30.5 s, as with both).
+    let name = "adis16405_static/adis_16405_imu1.csv.gz";
+    let (desc, raw) = load(name);
+    let (d, x) = transform(name, &desc, &raw, Transform::Decimate(4), 0).unwrap();
+    for keys in [
+        "[bias.settings.warmup]\nstill_max_s = 3600.0\n",
+        "[gross_error.settings]\nwarmup_max_s = 3600.0\n",
+    ] {
+        let e = first_engaged_s(&run_config(&default_with(keys), &d, &x).unwrap());
+        eprintln!("{name} rate/4, with {keys:?} (that bound off): engaged {e:?}");
+        assert!(e.is_some_and(|t| t > 60.0), "{name} {keys}: {e:?}");
+    }
+    let name = "mpu6050_static_10min_temp/mpu6050_static.csv";
+    let (desc, raw) = load(name);
+    let (d, x) = transform(name, &desc, &raw, Transform::Decimate(4), 0).unwrap();
+    let cfg = default_with("[bias.settings.warmup]\nstill_max_s = 3600.0\n");
+    let e = first_engaged_s(&run_config(&cfg, &d, &x).unwrap());
+    eprintln!("{name} rate/4, the gross-error bound alone: engaged {e:?}");
+    assert!(e.is_some_and(|t| t <= 60.0), "{name}: {e:?}");
 }
