@@ -110,7 +110,7 @@ pub struct WarmupSettings {
     pub still_samples: usize,
     /// ... or fewer: a stretch spanning this long at the nominal rate is enough, s (default 4:
     /// 300 samples at ≥ 75 Hz come first; at 25 Hz 100 samples, R to ±14 %), never fewer than
-    /// [`MIN_STILL_SAMPLES`].
+    /// [`MIN_STILL_SAMPLES`]. Raise it with `still_samples`: it bounds a larger count too.
     pub still_max_s: f64,
     /// Time constant of the bias estimate, s: the random walk's variance per second is
     /// R/(T² fs), so the estimate follows bias changes slower than T and averages away noise

@@ -76,7 +76,8 @@ pub struct GrossErrorSettings {
     pub warmup_samples: usize,
     /// The warm-up also ends once its samples span this long, from their own time stamps, if it
     /// has the identification's minimum by then (s; default 30: 2000 samples at ≥ 66.7 Hz end
-    /// first, so nothing changes at ≥ 100 Hz; a 25-Hz sensor identifies on 750).
+    /// first, so nothing changes at ≥ 100 Hz; a 25-Hz sensor identifies on 750). Raise it with
+    /// `warmup_samples`: it bounds a larger count too.
     pub warmup_max_s: f64,
     /// Floor of the tracked gyro scales (rad/s; default 1e-4).
     pub min_sigma_gyro_rad_s: f64,
