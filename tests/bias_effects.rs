@@ -316,8 +316,10 @@ fn warm_up_identifies_a_model_at_the_first_stop_then_removes_the_bias() {
     // 8-s stops of this drive leave ~6.5 s of STILL), flagged WARMING_UP until then, with the
     // stretch's running mean removed as a provisional bias from its first second on.
     let settings = BiasSettings {
+        // 500 samples = 5 s at 100 Hz: the time bound (default 4 s) raised with the count.
         warmup: imuprep::stage::bias::settings::WarmupSettings {
             still_samples: 500,
+            still_max_s: 5.0,
             ..Default::default()
         },
         ..BiasSettings::default()

@@ -74,6 +74,33 @@ pub struct TargetRow {
     pub met: bool,
 }
 
+impl TargetRow {
+    /// A target row, `met` when `measured` is on the right side of `limit`.
+    pub fn new(
+        recording: &str,
+        channel: &str,
+        target: &str,
+        measured: f64,
+        limit: f64,
+        at_most: bool,
+    ) -> TargetRow {
+        let met = if at_most {
+            measured <= limit
+        } else {
+            measured >= limit
+        };
+        TargetRow {
+            recording: recording.to_string(),
+            channel: channel.to_string(),
+            target: target.to_string(),
+            measured,
+            limit,
+            at_most,
+            met,
+        }
+    }
+}
+
 /// Per-channel figures of the default run.
 #[derive(Debug, Clone, Serialize)]
 pub struct ChannelFigures {
@@ -236,43 +263,41 @@ pub fn classify(samples: &[Sample], rate_hz: f64) -> Class {
     }
 }
 
-/// Audit one recording (already loaded) with `cfg`'s pipeline. `seed` drives every injection.
-pub fn audit_recording(
+/// The do-no-harm figures of one run of a pipeline: per channel, and for the bias stage.
+#[derive(Debug, Clone, Serialize)]
+pub struct HarmScore {
+    pub channels: Vec<ChannelFigures>,
+    pub bias_engaged_share: f64,
+    pub bias_first_engaged_s: Option<f64>,
+    pub still_share: f64,
+    pub onsets: usize,
+    pub onset_worst_move_3sigma: f64,
+    /// Replacements and invented angle per channel, the bias across motion onsets, and on a
+    /// static recording bias engagement and Allan deviation (module docs), in that order.
+    pub targets: Vec<TargetRow>,
+}
+
+/// Score `out`, the pipeline's output for `raw` (same samples, same order), against the
+/// do-no-harm targets of a `class` recording sampled at `rate` Hz; what `audit_recording`
+/// measures before its injections.
+pub fn score_harm(
     name: &str,
-    path: &Path,
-    desc: &Descriptor,
+    class: Class,
+    rate: f64,
     raw: &[Sample],
-    seed: u64,
-    cfg: &Config,
-) -> Result<RecordingAudit, String> {
-    let n = raw.len();
-    if n < 3 * SCORE_FROM {
-        return Err(format!("{n} samples: too short to audit"));
-    }
-    let rate = if desc.sample_rate_hz > 0.0 {
-        desc.sample_rate_hz
+    out: &[Sample],
+) -> HarmScore {
+    let n = raw.len().min(out.len());
+    let duration_s = if n > 0 {
+        raw[n - 1].t_s() - raw[0].t_s()
     } else {
-        100.0
+        0.0
     };
-    let duration_s = raw[n - 1].t_s() - raw[0].t_s();
-    let class = classify(raw, rate);
-    let out = run_config(cfg, desc, raw)?;
     let mut targets = Vec::new();
     let mut target = |channel: &str, what: &str, measured: f64, limit: f64, at_most: bool| {
-        let met = if at_most {
-            measured <= limit
-        } else {
-            measured >= limit
-        };
-        targets.push(TargetRow {
-            recording: name.to_string(),
-            channel: channel.to_string(),
-            target: what.to_string(),
-            measured,
-            limit,
-            at_most,
-            met,
-        });
+        targets.push(TargetRow::new(
+            name, channel, what, measured, limit, at_most,
+        ));
     };
 
     // Replacements, suspects, invented angle.
@@ -434,6 +459,53 @@ pub fn audit_recording(
             }
         }
     }
+
+    HarmScore {
+        channels,
+        bias_engaged_share,
+        bias_first_engaged_s,
+        still_share,
+        onsets,
+        onset_worst_move_3sigma: worst_onset,
+        targets,
+    }
+}
+
+/// Audit one recording (already loaded) with `cfg`'s pipeline. `seed` drives every injection.
+pub fn audit_recording(
+    name: &str,
+    path: &Path,
+    desc: &Descriptor,
+    raw: &[Sample],
+    seed: u64,
+    cfg: &Config,
+) -> Result<RecordingAudit, String> {
+    let n = raw.len();
+    if n < 3 * SCORE_FROM {
+        return Err(format!("{n} samples: too short to audit"));
+    }
+    let rate = if desc.sample_rate_hz > 0.0 {
+        desc.sample_rate_hz
+    } else {
+        100.0
+    };
+    let duration_s = raw[n - 1].t_s() - raw[0].t_s();
+    let class = classify(raw, rate);
+    let out = run_config(cfg, desc, raw)?;
+    let HarmScore {
+        channels,
+        bias_engaged_share,
+        bias_first_engaged_s,
+        still_share,
+        onsets,
+        onset_worst_move_3sigma: worst_onset,
+        mut targets,
+    } = score_harm(name, class, rate, raw, &out);
+    let mut target = |channel: &str, what: &str, measured: f64, limit: f64, at_most: bool| {
+        targets.push(TargetRow::new(
+            name, channel, what, measured, limit, at_most,
+        ));
+    };
 
     // Injections.
     let mut injected_f1 = None;

@@ -61,7 +61,8 @@
 //! was subtracted, or a step re-anchored the estimate), `NON_FINITE`.
 //!
 //! **Warm-up.** A gyro channel without a model collects the first contiguous still stretch of
-//! `warmup.still_samples` (into a buffer allocated at construction) and measures the sensor's
+//! `warmup.still_samples`, or `warmup.still_max_s` of them if fewer (at least
+//! `MIN_STILL_SAMPLES`; into a buffer allocated at construction) and measures the sensor's
 //! own white-noise variance R on it (about a fitted line, so drift is not counted as noise). Its
 //! filter is then a random-walk bias under that noise, the walk's variance R/(T² fs) per second
 //! for the time constant T = `warmup.time_constant_s`: a first-order low-pass whose complement
@@ -337,7 +338,7 @@ impl BiasStage {
                         let var = (st.warm_sumsq / n - m * m).max(0.0);
                         st.provisional = Some((m, (var / n).sqrt()));
                     }
-                    if buf.len() >= self.warmup.still_samples {
+                    if buf.len() >= self.warmup.still_samples_at(self.fs) {
                         self.finish_warmup(c);
                     }
                 }

@@ -108,6 +108,10 @@ pub struct WarmupSettings {
     /// line, so a drifting bias does not count as noise) is the white-noise variance R, samples.
     /// Default 300 (3 s at 100 Hz: R to ±8 %).
     pub still_samples: usize,
+    /// ... or fewer: a stretch spanning this long at the nominal rate is enough, s (default 4:
+    /// 300 samples at ≥ 75 Hz come first; at 25 Hz 100 samples, R to ±14 %), never fewer than
+    /// [`MIN_STILL_SAMPLES`]. Raise it with `still_samples`: it bounds a larger count too.
+    pub still_max_s: f64,
     /// Time constant of the bias estimate, s: the random walk's variance per second is
     /// R/(T² fs), so the estimate follows bias changes slower than T and averages away noise
     /// faster than T. Its steady state is a first-order low-pass, so the output's Allan deviation
@@ -116,10 +120,28 @@ pub struct WarmupSettings {
     pub time_constant_s: f64,
 }
 
+/// Fewest still samples the warm-up measures R on, whatever `still_max_s` says (and the floor of
+/// `still_samples`): R about a fitted line has n − 2 degrees of freedom, ±√(2/18) = ±33 % at 20.
+pub const MIN_STILL_SAMPLES: usize = 20;
+
+impl WarmupSettings {
+    /// The still stretch the warm-up measures R on at `fs` Hz, samples: `still_samples`, or
+    /// `still_max_s` of them if fewer, never fewer than [`MIN_STILL_SAMPLES`].
+    pub fn still_samples_at(&self, fs: f64) -> usize {
+        let in_time = (self.still_max_s * fs).ceil();
+        if in_time.is_finite() && in_time < self.still_samples as f64 {
+            (in_time as usize).max(MIN_STILL_SAMPLES)
+        } else {
+            self.still_samples
+        }
+    }
+}
+
 impl Default for WarmupSettings {
     fn default() -> Self {
         WarmupSettings {
             still_samples: 300,
+            still_max_s: 4.0,
             time_constant_s: 60.0,
         }
     }
@@ -228,10 +250,16 @@ impl BiasSettings {
         // Cross-key checks run only on keys that passed their own: one mistake, one message.
         let stillness_ok = e.len() == n_before;
         let fs_ok = fs.is_finite() && fs > 0.0 && fs <= 100_000.0;
-        if self.warmup.still_samples < 20 || self.warmup.still_samples > 1_000_000 {
+        if self.warmup.still_samples < MIN_STILL_SAMPLES || self.warmup.still_samples > 1_000_000 {
             e.push(format!(
-                "warmup.still_samples: must be in 20..=1000000 (got {})",
+                "warmup.still_samples: must be in {MIN_STILL_SAMPLES}..=1000000 (got {})",
                 self.warmup.still_samples
+            ));
+        }
+        let m = self.warmup.still_max_s;
+        if !(m.is_finite() && (1.0..=3600.0).contains(&m)) {
+            e.push(format!(
+                "warmup.still_max_s: must be in [1, 3600] s (got {m})"
             ));
         }
         let t = self.warmup.time_constant_s;
@@ -304,6 +332,21 @@ impl BiasSettings {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn the_still_stretch_is_bounded_in_time_but_never_below_the_minimum() {
+        let w = WarmupSettings::default();
+        assert_eq!((w.still_samples, w.still_max_s), (300, 4.0));
+        // ≥ 75 Hz: the 300 samples come first (the MPU6050's 99.32 Hz too).
+        for fs in [250.0, 104.0, 100.0, 99.32, 75.0] {
+            assert_eq!(w.still_samples_at(fs), 300, "{fs}");
+        }
+        // 50 and 25 Hz: 4 s of samples; 2 Hz: the minimum, not 8.
+        assert_eq!(w.still_samples_at(50.0), 200);
+        assert_eq!(w.still_samples_at(25.0), 100);
+        assert_eq!(w.still_samples_at(2.0), MIN_STILL_SAMPLES);
+    }
+
     use super::*;
 
     #[test]

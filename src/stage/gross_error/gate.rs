@@ -37,9 +37,10 @@
 //! predictions (h grows, the gate widens by r_h); longer gaps reset, and the next good sample
 //! re-seeds the history.
 //!
-//! **No model.** A channel without a fitted model collects `warmup_samples` finite samples,
-//! cleans them with a Hampel filter, and identifies its ARIMA model once (the only allocation
-//! after construction); a failed identification falls back to white noise about the median.
+//! **No model.** A channel without a fitted model collects `warmup_samples` finite samples (or
+//! fewer: see [`WarmupLimits`]), cleans them with a Hampel filter, and identifies its ARIMA model
+//! once (the only allocation after construction); a failed identification falls back to white
+//! noise about the median.
 
 // `!(v > 0.0)` is used on purpose: unlike `v <= 0.0` it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -62,9 +63,46 @@ const GAUSS_TAIL3: f64 = 0.002_699_796;
 /// Tail adaptation: no widening until the tracked share beyond 3σ is this many times Gaussian.
 const TAIL_DEAD_ZONE: f64 = 2.0;
 
+/// When a channel's warm-up ends: at `samples` kept samples, or once they span `max_span_ns`
+/// of their own time (a low-rate sensor identifies within a bounded time), but never on fewer
+/// than `min_samples`.
+///
+/// The time is the sum of the intervals between successive kept samples, except an interval
+/// that ends in a gap (a sample flagged [`flags::GAP`](crate::sample::flags::GAP) since the last
+/// kept one): no samples came in it, so it is no warm-up time. The gap is the source's own
+/// judgement, the one the stage bridges or resets on: from a sequence jump on the wire, and on
+/// imported recordings from the time stamps (`io::timing`: beyond 1.5 nominal intervals, or 10
+/// mean intervals for bursty host stamps). A gap rule of a few *median* intervals, learned here,
+/// would fail on bursty stamps: the MPU6050 log's median interval is 2.0 ms against a mean of
+/// 10.1 ms (pauses of 150–300 ms between bursts), so nearly all its time would fall in "gaps".
+/// Stale repeats never reach the gate, and their time counts in the next interval; time stamps
+/// that do not advance count no time, and the count of samples decides.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WarmupLimits {
+    pub samples: usize,
+    pub max_span_ns: u64,
+    /// The identification's own minimum (`IdentifySettings::min_len`: 120 with the default
+    /// orders): its long AR needs n/10 ≥ 2 max(p, q) (20 (p_max + q_max + 1)), its ACF/PACF and
+    /// Ljung–Box 2 × 20 lags + 2, and the Hampel filter before it (half-width 10) 21 samples;
+    /// the ADF's Schwert lag at 120 samples is 13, well inside. Fewer, and `identify` refuses
+    /// the series (a white-noise fallback, no model at all).
+    pub min_samples: usize,
+}
+
+impl WarmupLimits {
+    pub fn new(s: &GrossErrorSettings) -> Self {
+        WarmupLimits {
+            samples: s.warmup_samples,
+            max_span_ns: (s.warmup_max_s * 1e9).round() as u64,
+            min_samples: s.identify.min_len().min(s.warmup_samples),
+        }
+    }
+}
+
 /// Constants of the gate derived once from the settings.
 #[derive(Debug, Clone, Copy)]
 pub struct GateParams {
+    pub warmup: WarmupLimits,
     k2: f64,
     jump_k2: f64,
     run_k2: f64,
@@ -87,6 +125,7 @@ pub struct GateParams {
 impl GateParams {
     pub fn new(s: &GrossErrorSettings) -> Self {
         GateParams {
+            warmup: WarmupLimits::new(s),
             k2: s.k * s.k,
             jump_k2: s.jump_k * s.jump_k,
             run_k2: s.run_k * s.run_k,
@@ -198,7 +237,52 @@ pub struct ChannelGate {
     n_preds: usize,
     pub counters: ChannelCounters,
     warm: Vec<f64>,
+    /// Warm-up time counted so far (ns; see [`WarmupLimits`]), the time stamp of the last kept
+    /// warm-up sample, and whether a gap came since.
+    warm_span_ns: u64,
+    warm_last_t: Option<u64>,
+    warm_gap: bool,
     pub model: Option<ArimaChannelModel>,
+    /// The step of the grid the warm-up's values lie on (the channel's LSB), 0 when they lie on
+    /// none (or the model came from a file): see [`grid_step`] and [`ChannelGate::resolution`].
+    resolution: f64,
+}
+
+/// Share of a quantised channel's non-zero successive differences that must be whole multiples
+/// of its smallest one: a quantised sensor's are all (its gross errors too); a non-quantised
+/// channel's nearly none are.
+const GRID_SHARE: f64 = 0.99;
+
+/// Warm-up samples before the grid is trusted: with fewer, the smallest difference seen may
+/// still be a multiple of the LSB (a floor too high).
+const GRID_MIN_SAMPLES: usize = 100;
+
+/// The quantisation step of `x` (its LSB): the smallest non-zero |successive difference|, when
+/// at least `GRID_SHARE` of the non-zero differences are whole multiples of it (within 1 % of a
+/// step: values printed in decimal carry rounding far below that); else 0.
+pub fn grid_step(x: &[f64]) -> f64 {
+    let diffs = || {
+        x.windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .filter(|d| d.is_finite() && *d > 0.0)
+    };
+    let q = diffs().fold(f64::INFINITY, f64::min);
+    if !q.is_finite() {
+        return 0.0;
+    }
+    let (mut n, mut on) = (0usize, 0usize);
+    for d in diffs() {
+        n += 1;
+        let m = d / q;
+        if (m - m.round()).abs() <= 0.01 {
+            on += 1;
+        }
+    }
+    if on as f64 >= GRID_SHARE * n as f64 {
+        q
+    } else {
+        0.0
+    }
 }
 
 /// `E[min(Z², c²)]` for Z ~ N(0, 1).
@@ -284,6 +368,10 @@ impl ChannelGate {
             n_preds: 0,
             counters: ChannelCounters::default(),
             warm: Vec::new(),
+            warm_span_ns: 0,
+            warm_last_t: None,
+            warm_gap: false,
+            resolution: 0.0,
             model: None,
         }
     }
@@ -360,24 +448,58 @@ impl ChannelGate {
         Ok(())
     }
 
-    /// One warm-up sample (finite, plausible, unsaturated ones are kept); at `needed` samples
-    /// the channel identifies its model and activates. Returns true when it activated.
+    /// The channel's quantisation step: the warm-up's [`grid_step`], and during the warm-up that
+    /// of the samples so far (from `GRID_MIN_SAMPLES` on; before, 0). Called only when an event
+    /// is judged.
+    pub fn resolution(&self) -> f64 {
+        if self.mode == Mode::WarmingUp {
+            if self.warm.len() >= GRID_MIN_SAMPLES {
+                grid_step(&self.warm)
+            } else {
+                0.0
+            }
+        } else {
+            self.resolution
+        }
+    }
+
+    /// Warm-up time counted so far, s (see [`WarmupLimits`]).
+    pub fn warmup_span_s(&self) -> f64 {
+        self.warm_span_ns as f64 * 1e-9
+    }
+
+    /// One warm-up sample at time `t_ns` (`gap`: flagged [`flags::GAP`](crate::sample::flags::GAP);
+    /// finite, plausible, unsaturated values are kept); at `p.warmup.samples` kept samples, or
+    /// once they span `p.warmup.max_span_ns` with at least `p.warmup.min_samples` of them, the
+    /// channel identifies its model and activates. Returns true when it activated.
     pub fn warm_push(
         &mut self,
         p: &GateParams,
         v: Option<f64>,
-        needed: usize,
+        t_ns: u64,
+        gap: bool,
         id: &crate::model::arima::IdentifySettings,
         name: &str,
     ) -> bool {
         self.counters.warmup += 1;
+        self.warm_gap |= gap;
         if let Some(v) = v {
             self.warm.push(v); // within the reserved capacity: no allocation
+            if let Some(last) = self.warm_last_t
+                && !self.warm_gap
+            {
+                self.warm_span_ns += t_ns.saturating_sub(last);
+            }
+            self.warm_last_t = Some(t_ns);
+            self.warm_gap = false;
         }
-        if self.warm.len() < needed {
+        let w = &p.warmup;
+        let n = self.warm.len();
+        if n < w.samples && (n < w.min_samples || self.warm_span_ns < w.max_span_ns) {
             return false;
         }
         let raw = std::mem::take(&mut self.warm);
+        self.resolution = grid_step(&raw);
         // Hampel (half-width 10, k = 4): strips spikes and runs ≤ 10 before identification.
         let cleaned = hampel(&raw, 10, 4.0)
             .map(|r| r.corrected)
@@ -642,5 +764,77 @@ mod tests {
         assert!((huber_beta(40.0) - 1.0).abs() < 1e-14);
         assert!(huber_beta(0.0).abs() < 1e-15);
         assert!((huber_beta(2.5) - 0.9775599834528068).abs() < 1e-12);
+    }
+
+    /// The index of the sample on which a default channel fed seeded white noise every
+    /// `period_ns` activates (`gap`: before sample i the clock jumps by that many ns more and
+    /// the sample is flagged GAP), and the gate after it.
+    fn activation(period_ns: u64, gap: Option<(usize, u64)>) -> (usize, ChannelGate) {
+        let s = GrossErrorSettings::default();
+        let p = GateParams::new(&s);
+        let mut g = ChannelGate::new(true, 1e-4);
+        g.reserve_warmup(s.warmup_samples);
+        let x = crate::rng::normal_vec(s.warmup_samples, 7);
+        let mut t = 0;
+        for (i, &v) in x.iter().enumerate() {
+            let jump = gap.filter(|&(at, _)| at == i).map(|(_, ns)| ns);
+            t += period_ns + jump.unwrap_or(0);
+            if g.warm_push(&p, Some(0.01 * v), t, jump.is_some(), &s.identify, "gz") {
+                return (i, g);
+            }
+        }
+        panic!("never activated");
+    }
+
+    #[test]
+    fn the_warm_up_ends_at_warmup_max_s_of_its_own_time_but_never_below_the_minimum() {
+        let s = GrossErrorSettings::default();
+        assert_eq!((s.warmup_samples, s.warmup_max_s), (2000, 30.0));
+        // The minimum is the identification's own (20 (p_max + q_max + 1) = 120 by default).
+        assert_eq!(WarmupLimits::new(&s).min_samples, 120);
+        // 100 Hz: 2000 samples (19.99 s) come first, as before the time bound.
+        let (i, g) = activation(10_000_000, None);
+        assert_eq!(i, 1999);
+        assert_eq!(g.mode, Mode::Active);
+        // 25 Hz: on the sample at which the kept samples span 30 s (750 intervals of 40 ms:
+        // the 751st sample), not at 2000 (80 s); and on an identified model, not the fallback.
+        let (i, g) = activation(40_000_000, None);
+        assert_eq!(i, 750);
+        assert!(
+            (g.warmup_span_s() - 30.0).abs() < 1e-9,
+            "{}",
+            g.warmup_span_s()
+        );
+        assert_eq!((g.mode, g.counters.fallback_models), (Mode::Active, 0));
+        assert_eq!(g.counters.warmup, 751);
+        // 2 Hz: 30 s is spanned at the 61st sample, but the channel waits for the 120 the
+        // identification needs.
+        let (i, g) = activation(500_000_000, None);
+        assert_eq!(i, 119);
+        assert_eq!(g.counters.fallback_models, 0);
+        // 25 Hz with a 100-s gap before sample 100: the gap is no warm-up time (else the
+        // channel would have activated on it), so 30 s of samples still take 751 samples.
+        let (i, _) = activation(40_000_000, Some((100, 100_000_000_000)));
+        assert_eq!(i, 751);
+    }
+
+    #[test]
+    fn grid_step_finds_a_quantised_channels_lsb_and_no_other() {
+        // The ADIS16405's accelerometer LSB (3.33 mg) in m/s², on seeded white noise of 1 LSB:
+        // every difference is a whole number of steps, the smallest one step.
+        let lsb = 0.00333 * 9.80665;
+        let noise = crate::rng::normal_vec(2000, 3);
+        let q: Vec<f64> = noise.iter().map(|v| v.round() * lsb + 9.8).collect();
+        let g = grid_step(&q);
+        assert!((g / lsb - 1.0).abs() < 1e-9, "{g}");
+        // Unquantised noise lies on no grid; nor does a constant (no difference at all).
+        assert_eq!(grid_step(&noise), 0.0);
+        assert_eq!(grid_step(&[1.0; 50]), 0.0);
+        // 2 % off-grid values (a processed stretch) are more than GRID_SHARE allows.
+        let mut m = q.clone();
+        for v in m.iter_mut().step_by(50) {
+            *v += 0.37 * lsb;
+        }
+        assert_eq!(grid_step(&m), 0.0);
     }
 }

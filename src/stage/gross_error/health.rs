@@ -12,7 +12,8 @@ use crate::sample::{CHANNEL_NAMES, N_CHANNELS};
 pub enum GateState {
     /// Switched off by `enabled`: values pass untouched.
     Disabled,
-    /// Collecting `warmup_samples` to identify its model; a robust jump test guards meanwhile.
+    /// Collecting `warmup_samples` (or `warmup_max_s` of them) to identify its model; a robust
+    /// jump test guards meanwhile.
     WarmingUp,
     /// Gating on its ARIMA model.
     Active,

@@ -4,8 +4,9 @@
 //! 1. **Candidates** (`gate.rs`): a sample the channel's ARIMA forecast did not expect by more
 //!    than k tracked σ (with a jump test, run hysteresis, `max_run`, level changes), or a bad
 //!    value (non-finite, beyond any MEMS range, saturated). Without a model a channel identifies
-//!    one from its first `warmup_samples`; meanwhile a robust jump test on the raw increments
-//!    makes the candidates, so warm-up is guarded too.
+//!    one from its first `warmup_samples` (fewer once they span `warmup_max_s`, never fewer than
+//!    the identification needs: `gate::WarmupLimits`); meanwhile a robust jump test on the raw
+//!    increments makes the candidates, so warm-up is guarded too.
 //! 2. **Confirmation** (`confirm.rs`): an event (successive candidates of one channel) is held
 //!    until `post_samples` samples after it have arrived; it is a gross error only if it breaks
 //!    the signal around it by more than `confirm_k` times that signal's own roughness, and it is
@@ -324,6 +325,14 @@ impl GrossErrorStage {
         }
     }
 
+    /// Floor of the confirmation's scale σ̂: `min_sigma`, and no lower than the channel's own
+    /// quantisation noise, LSB/√12 (a flat quantised context has no roughness, but a one-LSB
+    /// toggle in it is the sensor's resolution, not a break: 3.5 σ̂ at this floor).
+    fn sigma_floor(&self, c: usize) -> f64 {
+        self.min_sigma(c)
+            .max(self.ch[c].gate.resolution() / 12f64.sqrt())
+    }
+
     fn plausible(&self, c: usize) -> f64 {
         if c < 3 {
             self.s.plausible_gyro_rad_s
@@ -375,7 +384,7 @@ impl GrossErrorStage {
             let jumped = usable && self.ch[c].guard.candidate(v, self.s.k, self.s.max_run);
             let outcome = if was_warm {
                 warming = true;
-                self.warm_step(c, v, usable, jumped)
+                self.warm_step(c, s, usable, jumped)
             } else {
                 self.ch[c].gate.gate(&self.p, v, bad, saturated, jumped)
             };
@@ -436,7 +445,8 @@ impl GrossErrorStage {
 
     /// Warm-up of channel `c`: feed the identification buffer; the jump guard alone makes the
     /// candidates (`jumped`), and bad values are candidates too.
-    fn warm_step(&mut self, c: usize, v: f64, usable: bool, jumped: bool) -> Outcome {
+    fn warm_step(&mut self, c: usize, s: &Sample, usable: bool, jumped: bool) -> Outcome {
+        let v = s.channel(c);
         let ch = &mut self.ch[c];
         let candidate = !usable || jumped;
         if !candidate && ch.guard.run() > 0 {
@@ -445,7 +455,8 @@ impl GrossErrorStage {
         ch.gate.warm_push(
             &self.p,
             usable.then_some(v),
-            self.s.warmup_samples,
+            s.t_ns,
+            s.has(flags::GAP),
             &self.s.identify,
             CHANNEL_NAMES[c],
         );

@@ -74,6 +74,11 @@ pub struct GrossErrorSettings {
     pub trend_beta: f64,
     /// Warm-up length for channels without a model (samples; default 2000).
     pub warmup_samples: usize,
+    /// The warm-up also ends once its samples span this long, from their own time stamps, if it
+    /// has the identification's minimum by then (s; default 30: 2000 samples at ≥ 66.7 Hz end
+    /// first, so nothing changes at ≥ 100 Hz; a 25-Hz sensor identifies on 750). Raise it with
+    /// `warmup_samples`: it bounds a larger count too.
+    pub warmup_max_s: f64,
     /// Floor of the tracked gyro scales (rad/s; default 1e-4).
     pub min_sigma_gyro_rad_s: f64,
     /// Floor of the tracked accelerometer scales (m/s²; default 1e-3).
@@ -141,6 +146,7 @@ impl Default for GrossErrorSettings {
             level_alpha: 0.2,
             trend_beta: 0.1,
             warmup_samples: 2000,
+            warmup_max_s: 30.0,
             min_sigma_gyro_rad_s: 1e-4,
             min_sigma_accel_m_s2: 1e-3,
             bridge_max_missing: 4,
@@ -251,6 +257,12 @@ impl GrossErrorSettings {
             if !pos(v) {
                 e.push(format!("{name} = {v} must be > 0"));
             }
+        }
+        if !(self.warmup_max_s.is_finite() && (1.0..=3600.0).contains(&self.warmup_max_s)) {
+            e.push(format!(
+                "warmup_max_s = {} must be in [1, 3600] s",
+                self.warmup_max_s
+            ));
         }
         if self.lookahead_samples > MAX_LOOKAHEAD {
             e.push(format!(

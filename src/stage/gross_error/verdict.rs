@@ -67,7 +67,7 @@ impl GrossErrorStage {
                 &event[..m],
                 &post[..n_post],
                 self.s.edge_k,
-                self.min_sigma(c),
+                self.sigma_floor(c),
             )
         } else {
             (0, m)
@@ -93,7 +93,7 @@ impl GrossErrorStage {
                 before,
                 &event[lead..keep],
                 &after[..n_after],
-                self.min_sigma(c),
+                self.sigma_floor(c),
                 self.s.run_fit_side,
                 &mut interp,
             )
