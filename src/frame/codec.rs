@@ -287,11 +287,19 @@ impl Decoder for FrameDecoder {
             if buf.is_empty() {
                 return Ok(None);
             }
-            // What is left cannot complete: a truncated frame (or a lone sync byte). Step past
-            // its first byte in case a complete frame hides inside it.
+            // What is left cannot complete: a truncated frame (or a lone sync byte). With no
+            // other sync word in it, it is that one frame's bytes, counted as the truncated
+            // frame only (not also as a resync and garbage); else step past its first byte in
+            // case a complete frame hides inside it.
             if buf.len() >= 2 && buf[..2] == SYNC {
                 self.stats.truncated += 1;
-                self.fault_skip(buf);
+                if buf[1..].windows(2).any(|w| w == SYNC) {
+                    self.fault_skip(buf);
+                } else {
+                    let n = buf.len();
+                    self.skip(buf, n);
+                    return Ok(None);
+                }
             } else {
                 self.stats.garbage_bytes += buf.len() as u64;
                 let n = buf.len();
@@ -540,6 +548,8 @@ mod tests {
         let (got, st) = decode_all(cut, 16);
         assert_eq!(got.len(), 2);
         assert_eq!(st.truncated, 1);
+        // Its bytes are the truncated frame's, not also a resync and garbage.
+        assert_eq!((st.resyncs, st.garbage_bytes), (0, 0));
     }
 
     #[test]
