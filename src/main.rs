@@ -50,7 +50,7 @@ enum Cmd {
         #[arg(long = "out")]
         out: Vec<String>,
         /// Pace by sensor time at this speed factor, × real time (0 = as fast as possible).
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
         speed: f64,
         /// Also write the final health summary as JSON to this file.
         #[arg(long)]
@@ -81,16 +81,16 @@ enum Cmd {
         #[arg(long, value_enum)]
         time_unit: Option<TimeUnit>,
         /// Ignore the time column; time = row index / RATE (Hz).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         rate: Option<f64>,
         /// Start the log at t = 0 (subtract the first time stamp).
         #[arg(long)]
         rebase_time: bool,
         /// Gyro full-scale range, deg/s (enables saturation flags on replay).
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
         gyro_range_dps: f64,
         /// Accelerometer full-scale range, g.
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
         accel_range_g: f64,
     },
     /// Simulate a MEMS IMU (scenario TOML, see docs/scenario.md) into a replay log + truth sidecar.
@@ -104,7 +104,7 @@ enum Cmd {
         #[arg(long)]
         truth: Option<PathBuf>,
         /// Seed (default: the scenario's `seed`, else 0). Same seed → same bytes.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         seed: Option<u64>,
         /// Override a scenario key, repeatable: --set errors.gross.rate_per_sample=2e-3
         #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -120,10 +120,10 @@ enum Cmd {
         #[arg(long, default_value = "models")]
         out_dir: PathBuf,
         /// Data used for identification, s (the paper's training span).
-        #[arg(long, default_value_t = 180.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 180.0)]
         train_s: f64,
         /// Skip this much at the start (start-up transients), s.
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
         skip_s: f64,
         /// Fitting method of the bias model. `fos`: fast orthogonal search over a constant and
         /// lags 1..=L (CP degree 1, the linear model the online Kalman filter can run),
@@ -133,14 +133,14 @@ enum Cmd {
         /// AR order of the bias model (for `fos`: the largest lag L). Default 64 for the AR
         /// methods: the bias stage splits the fitted signal spectrum into a slow bias and white
         /// noise, which a short AR cannot describe; default 10 (the paper's L) for `fos`.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         bias_order: Option<usize>,
         /// Shortest still stretch, seconds, the bias model may be fitted on. The bias model
         /// describes the sensor's bias, so it is fitted only on the longest still stretch of the
         /// training span (the bias stage's own stillness test, on the span after the gross-error
         /// stage with the ARIMA models just identified); without one this long, bias.toml
         /// holds no channel models and the stage learns each gyro's bias at warm-up.
-        #[arg(long, default_value_t = 60.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 60.0)]
         min_still_s: f64,
     },
     /// Score the configured pipeline against a calibration-only baseline on a simulated scenario
@@ -150,7 +150,7 @@ enum Cmd {
         #[arg(long)]
         scenario: PathBuf,
         /// Seed (default: the scenario's `seed`, else 0).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         seed: Option<u64>,
         /// Config whose pipeline is scored (default: embedded).
         #[arg(long)]
@@ -174,10 +174,10 @@ enum Cmd {
         #[arg(long = "channel")]
         channels: Vec<String>,
         /// Analyse only from this time, s from the start of the log...
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
         from_s: f64,
         /// ...to this time, s (default: the end). Use it to pick a still stretch of a moving log.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         to_s: Option<f64>,
         /// Output directory: report.txt, report.json, bias.toml, plots/*.svg.
         #[arg(long, default_value = "diagnose-out")]
@@ -198,13 +198,13 @@ enum Cmd {
         /// Recorded log.
         log: PathBuf,
         /// Analyse only from this time, s from the start of the log...
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
         from_s: f64,
         /// ...to this time, s (default: the end).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         to_s: Option<f64>,
         /// Local gravity, m/s² (the common scale of the three axes is relative to it).
-        #[arg(long, default_value_t = 9.80665)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 9.80665)]
         gravity: f64,
         /// Output directory.
         #[arg(long, default_value = "calibrate-out")]
@@ -229,7 +229,7 @@ enum Cmd {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
         /// Seed of the simulation (default: the scenario's `seed`, else 0).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         seed: Option<u64>,
         /// Config whose [gross_error.settings] the online stage uses (default: embedded).
         #[arg(long)]
@@ -238,7 +238,7 @@ enum Cmd {
         #[arg(long = "channel")]
         channels: Vec<String>,
         /// Skip this much at the start (start-up transients), s.
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
         skip_s: f64,
         /// Use the temperature channel as an exogenous FOS input.
         #[arg(long)]
@@ -255,7 +255,7 @@ enum Cmd {
         #[arg(default_value = "../shared/data/real")]
         dir: PathBuf,
         /// Seed of every injection.
-        #[arg(long, default_value_t = 12)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 12)]
         seed: u64,
         /// Audit this config's pipeline instead of the embedded default.
         #[arg(long)]
@@ -274,7 +274,7 @@ enum Cmd {
         #[arg(long = "channel")]
         channels: Vec<String>,
         /// Skip this many seconds at the start (start-up transients), s.
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
         skip_s: f64,
         /// Output directory: report.txt/.json, allan.svg, imu.yaml (densities in rad/s/sqrt(Hz),
         /// m/s^2/sqrt(Hz); random walks in rad/s^2/sqrt(Hz), m/s^3/sqrt(Hz)), gnss_imu_config.txt

@@ -190,7 +190,6 @@ fn empty_spans_and_unwritable_output_folders_are_named() {
     let out = dir.path().join("out");
     let out = out.to_str().unwrap();
     for args in [
-        vec!["fit", log, "--train-s", "0", "--out-dir", out],
         vec!["diagnose", log, "--from-s", "1e9", "--out-dir", out],
         vec!["allan", log, "--skip-s", "1e9", "--out-dir", out],
     ] {
@@ -202,6 +201,33 @@ fn empty_spans_and_unwritable_output_folders_are_named() {
         );
         assert!(!err.contains("--skip-s"), "{args:?}: {err}");
     }
+    // A span asked with a negative start or no length is said as such (a value after the flag,
+    // negative numbers included, reaches this check instead of clap's "unexpected argument").
+    for args in [
+        vec!["fit", log, "--train-s", "0", "--out-dir", out],
+        vec!["fit", log, "--train-s", "-5", "--out-dir", out],
+        vec!["diagnose", log, "--from-s", "-5", "--out-dir", out],
+        vec![
+            "diagnose",
+            log,
+            "--from-s",
+            "10",
+            "--to-s",
+            "5",
+            "--out-dir",
+            out,
+        ],
+    ] {
+        let (code, err) = run(&args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert!(
+            err.contains(log) && err.contains("a span must start at ≥ 0 s"),
+            "{args:?}: {err}"
+        );
+    }
+    let (code, err) = run(&["replay", log, "--speed", "-1"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--speed must be ≥ 0"), "{err}");
     // A folder under a plain file cannot be made.
     let file = write(&dir.path().join("plain"), b"x");
     let bad = format!("{file}/sub");

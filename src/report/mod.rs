@@ -57,6 +57,14 @@ pub fn load_span(log: &Path, skip_s: f64) -> Result<(f64, Vec<Sample>)> {
 /// Samples of a log after `skip_s`, at most `span_s` seconds of them (streamed: the rest of the
 /// file is not read), with the log's sample rate.
 pub fn load_span_to(log: &Path, skip_s: f64, span_s: Option<f64>) -> Result<(f64, Vec<Sample>)> {
+    // A negative start or a span of no length is a mistake in what was asked, said as such
+    // (not as a log that "ends before that").
+    ensure!(
+        skip_s.is_finite() && skip_s >= 0.0 && span_s.is_none_or(|s| s.is_finite() && s > 0.0),
+        "{}: a span must start at ≥ 0 s into the log and last > 0 s (asked: from {skip_s} s{})",
+        log.display(),
+        span_s.map(|s| format!(" for {s} s")).unwrap_or_default()
+    );
     let (desc, samples, _) = crate::io::csv::read_log_span(log, skip_s, span_s)?;
     let rate = desc.map(|d| d.sample_rate_hz).unwrap_or(0.0);
     ensure!(
