@@ -34,7 +34,7 @@ use crate::sample::Sample;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-use tokio::sync::mpsc;
+use tokio::sync::{mpsc, watch};
 use tokio::task::JoinHandle;
 
 mod inline;
@@ -81,6 +81,12 @@ pub struct SinkHandle {
     pub stall: Duration,
     /// Set while the sink is stuck (dropping instead of waiting).
     stuck: AtomicBool,
+    /// Local sinks of an offline replay at speed 0: wait without a stall limit (back-pressure),
+    /// until this says the run is stopping (a signal); see the module docs and
+    /// [`SinkHandle::wait_without_limit`]. `None`: the stall rule.
+    backpressure: Option<watch::Receiver<bool>>,
+    /// Set while a back-pressured sink has been waited for beyond its stall time (warned once).
+    waiting: AtomicBool,
     /// Inline sinks: samples and carriers dropped since the last item that got through, not
     /// yet told to the writer (a [`SinkItem::Skip`] goes ahead of the next item).
     skip_samples: AtomicU64,
@@ -89,6 +95,21 @@ pub struct SinkHandle {
 }
 
 impl SinkHandle {
+    /// Back-pressure instead of the stall rule (offline replays at speed 0): a full queue is
+    /// waited for without limit, with a warning once the wait passes the stall time, until
+    /// `stop` turns true (SIGINT/SIGTERM); from then on what the sink cannot take is dropped,
+    /// counted. Network sinks keep their rule (never waited for): this does nothing to them.
+    pub fn wait_without_limit(&mut self, stop: watch::Receiver<bool>) {
+        if self.lossless {
+            self.backpressure = Some(stop);
+        }
+    }
+
+    /// True when this sink is waited for without a stall limit (see [`Self::wait_without_limit`]).
+    pub fn waits_without_limit(&self) -> bool {
+        self.backpressure.is_some()
+    }
+
     /// Offer an item. Network sinks: dropped (and counted) when the queue is full. Local sinks
     /// (inline ones included): waited for up to `stall`, then dropped while the sink is stuck
     /// (see the module docs).
@@ -97,6 +118,13 @@ impl SinkHandle {
             Put::Sent | Put::Closed => return,
             Put::Full(item) => *item,
         };
+        if let Some(stop) = &self.backpressure {
+            match self.put_until_stopped(item, stop.clone()).await {
+                Put::Sent | Put::Closed => {}
+                Put::Full(item) => self.dropped(*item),
+            }
+            return;
+        }
         if self.lossless && self.stuck.load(Relaxed) && self.tx.capacity() * 2 >= SINK_QUEUE {
             self.stuck.store(false, Relaxed);
             tracing::info!(sink = %self.name, "sink caught up; no longer dropping");
@@ -176,6 +204,52 @@ impl SinkHandle {
             Ok(()) => Put::Sent,
             Err(mpsc::error::SendTimeoutError::Timeout(item)) => Put::Full(Box::new(item)),
             Err(mpsc::error::SendTimeoutError::Closed(_)) => Put::Closed,
+        }
+    }
+
+    /// Queue `item` (after the pending skip marker), waiting as long as it takes, until `stop`
+    /// turns true: then the item is handed back (to be dropped, counted). A wait past the stall
+    /// time is warned about once, until the queue has drained to half again.
+    async fn put_until_stopped(&self, item: SinkItem, mut stop: watch::Receiver<bool>) -> Put {
+        if self.waiting.load(Relaxed) && self.tx.capacity() * 2 >= SINK_QUEUE {
+            self.waiting.store(false, Relaxed);
+            tracing::info!(sink = %self.name, "sink caught up");
+        }
+        // Resolves once the run is stopping; never if the runtime has gone (no stop can come).
+        let stopping = async move {
+            if stop.wait_for(|s| *s).await.is_err() {
+                std::future::pending::<()>().await;
+            }
+        };
+        tokio::pin!(stopping);
+        loop {
+            // `reserve` keeps the item here while waiting, so a stop loses nothing uncounted.
+            let permit = tokio::select! {
+                biased;
+                () = &mut stopping => return Put::Full(Box::new(item)),
+                r = tokio::time::timeout(self.stall, self.tx.reserve()) => match r {
+                    Ok(Ok(permit)) => permit,
+                    Ok(Err(_)) => return Put::Closed,
+                    Err(_) => {
+                        if !self.waiting.swap(true, Relaxed) {
+                            tracing::warn!(
+                                sink = %self.name,
+                                "waiting for sink {}: its consumer has taken nothing for {:.1} s; the replay waits for it, nothing is dropped (Ctrl-C stops)",
+                                self.name,
+                                self.stall.as_secs_f64()
+                            );
+                        }
+                        continue;
+                    }
+                },
+            };
+            if let Some(skip) = self.pending_skip() {
+                permit.send(skip);
+                self.skip_sent();
+                continue;
+            }
+            permit.send(item);
+            return Put::Sent;
         }
     }
 
@@ -317,6 +391,8 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
         task,
         stall: DEFAULT_STALL,
         stuck: AtomicBool::new(false),
+        backpressure: None,
+        waiting: AtomicBool::new(false),
         skip_samples: AtomicU64::new(0),
         skip_carriers: AtomicU64::new(0),
         skip_protocol: Mutex::new(None),
