@@ -1,18 +1,32 @@
 //! Sinks: stdout, file, TCP server, UDP, inline (the input's own protocol to a serial device,
 //! file or pseudo-terminal). Each runs as its own task behind a bounded queue.
 //!
-//! The runtime hands every sink the same `Arc` batch and never waits long for any of them:
+//! The runtime hands every sink the same `Arc` batch. How long it waits for a sink depends on
+//! the source:
+//!
+//! * Live runs (serial, stdin) and paced replays (`--speed` > 0, standing in for a live
+//!   sensor): never long for any sink — the stall rule of the items below.
+//! * An offline replay (a recorded regular file at `--speed 0`, see
+//!   [`crate::runtime::offline_replay`]): the source is a file and can wait, so local sinks
+//!   apply back-pressure — a full queue is waited for without limit
+//!   ([`SinkHandle::wait_without_limit`]) and nothing is dropped. A wait past the stall time is
+//!   warned about once (until the queue has drained to half), so a FIFO nobody reads does not
+//!   hang silently; a signal (SIGINT/SIGTERM) ends the wait, and what the sink then cannot take
+//!   is dropped, counted. A consumer that closes its end (`| head`) is not a stall: the sink
+//!   ends, its unwritten samples are counted as dropped, the replay goes on for the other
+//!   sinks. Network sinks keep their rule below in every mode.
 //!
 //! * Network sinks (TCP, UDP) are offered the batch with `try_send`; a full queue drops the
 //!   batch for that consumer only, counted. The TCP server repeats that per client: each client
 //!   has its own bounded queue and lag counter; what a client was sent counts bytes written to
 //!   its socket, not bytes queued; a client that leaves is folded into the sink's totals.
-//! * Local sinks (stdout, file, inline) are wanted complete, so a full queue is waited for — but
-//!   only up to the sink's stall time ([`DEFAULT_STALL`]). A sink whose queue stays full that long
-//!   is *stuck* (a `| (sleep 20; cat)` pipe, a full disk, a FIFO nobody reads): from then on it
-//!   is offered like a network sink — batches it cannot take are dropped and counted — until
-//!   its queue has drained to half, when it is waited for again. A stuck consumer therefore
-//!   costs the stream one stall time, once, and never freezes the daemon or its health reports.
+//! * Local sinks (stdout, file, inline, mcap) are wanted complete, so a full queue is waited
+//!   for — in a live or paced run only up to the sink's stall time ([`DEFAULT_STALL`]). A sink
+//!   whose queue stays full that long is *stuck* (a `| (sleep 20; cat)` pipe, a full disk, a
+//!   FIFO nobody reads): from then on it is offered like a network sink — batches it cannot
+//!   take are dropped and counted — until its queue has drained to half, when it is waited for
+//!   again. A stuck consumer therefore costs the stream one stall time, once, and never freezes
+//!   the daemon or its health reports.
 //! * Inline sinks (serial device, file, pseudo-terminal) are local sinks too, with one more
 //!   duty: each sample must meet its own carrier, which travels ahead of it in the side stream.
 //!   What a stuck inline sink drops (sample batches, side batches) is told to its writer by a
@@ -71,7 +85,8 @@ pub const DEFAULT_STALL: Duration = Duration::from_millis(500);
 pub struct SinkHandle {
     pub name: String,
     pub tx: mpsc::Sender<SinkItem>,
-    /// Waited for (up to `stall`) when true; see the module docs.
+    /// Local sink: waited for (up to `stall`, or without limit under back-pressure) when true;
+    /// see the module docs.
     pub lossless: bool,
     /// Wants the side stream ([`SinkItem::Side`]): inline sinks.
     pub wants_side: bool,
