@@ -332,15 +332,10 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     for s in &cfg.sinks {
         sinks.push(sink::start(s).await?);
     }
-    // SIGINT/SIGTERM, watched by a task of its own: a sink waited for without limit (below)
-    // must still let a signal stop the run while the loop awaits it.
+    // SIGINT/SIGTERM, watched by a task of its own (started below, once nothing can fail): a
+    // sink waited for without limit must still let a signal stop the run while the loop awaits it.
     let (sig_tx, sig_rx) = watch::channel::<Option<&'static str>>(None);
     let (stop_tx, stop_rx) = watch::channel(false);
-    let signals = tokio::spawn(async move {
-        let sig = shutdown_signal().await;
-        let _ = stop_tx.send(true);
-        let _ = sig_tx.send(Some(sig));
-    });
     // An offline replay at speed 0 gains nothing by dropping: its local sinks are waited for
     // without a stall limit (back-pressure). Live sources and paced replays keep the stall rule.
     if offline_replay(&cfg.source) {
@@ -375,6 +370,11 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
             tx,
         )),
     };
+    let signals = tokio::spawn(async move {
+        let sig = shutdown_signal().await;
+        let _ = stop_tx.send(true);
+        let _ = sig_tx.send(Some(sig));
+    });
     let started = Instant::now();
     let mut health = Health {
         cleaning_stages: cleaning_stages(&pipeline),
