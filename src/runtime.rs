@@ -12,7 +12,7 @@ use crate::stage::health::PipelineHealth;
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use tokio::sync::mpsc;
+use tokio::sync::{mpsc, watch};
 
 /// Health of one run: published at intervals and at the end.
 #[derive(Debug, Clone, Serialize, Default)]
@@ -332,6 +332,17 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     for s in &cfg.sinks {
         sinks.push(sink::start(s).await?);
     }
+    // SIGINT/SIGTERM, watched by a task of its own (started below, once nothing can fail): a
+    // sink waited for without limit must still let a signal stop the run while the loop awaits it.
+    let (sig_tx, sig_rx) = watch::channel::<Option<&'static str>>(None);
+    let (stop_tx, stop_rx) = watch::channel(false);
+    // An offline replay at speed 0 gains nothing by dropping: its local sinks are waited for
+    // without a stall limit (back-pressure). Live sources and paced replays keep the stall rule.
+    if offline_replay(&cfg.source) {
+        for k in &mut sinks {
+            k.wait_without_limit(stop_rx.clone());
+        }
+    }
     let (tx, mut rx) = mpsc::channel::<SourceEvent>(16);
     // Carriers and pass-through messages flow only when an inline sink wants them.
     let side = sinks.iter().any(|k| k.wants_side);
@@ -359,6 +370,11 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
             tx,
         )),
     };
+    let signals = tokio::spawn(async move {
+        let sig = shutdown_signal().await;
+        let _ = stop_tx.send(true);
+        let _ = sig_tx.send(Some(sig));
+    });
     let started = Instant::now();
     let mut health = Health {
         cleaning_stages: cleaning_stages(&pipeline),
@@ -371,7 +387,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
         3600.0
     }));
     tick.tick().await;
-    let mut shutdown = Box::pin(shutdown_signal());
+    let mut shutdown = Box::pin(signalled(sig_rx.clone()));
     loop {
         tokio::select! {
             ev = rx.recv() => match ev {
@@ -434,6 +450,7 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
         }
     }
     src.abort();
+    let stopped = *stop_rx.borrow();
     // Samples a stage still holds for its look-ahead are final now: publish them too.
     let mut held = Vec::new();
     pipeline.flush(&mut held);
@@ -448,13 +465,33 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     // Dropping each sink's sender closes its queue; the task flushes and ends.
     let mut closing: Vec<_> = sinks
         .into_iter()
-        .map(|k| (k.name, k.stats, k.task, k.lossless))
+        .map(|k| {
+            let waits = k.waits_without_limit();
+            (k.name, k.stats, k.task, k.lossless, waits)
+        })
         .collect();
-    for (name, stats, task, lossless) in closing.iter_mut() {
+    for (name, stats, task, lossless, waits) in closing.iter_mut() {
+        // A back-pressured sink writes all its queue out, however long its consumer takes,
+        // unless a signal stops the run (then the rule below).
+        let mut done = false;
+        if *waits && !stopped {
+            let mut stop = stop_rx.clone();
+            tokio::select! {
+                _ = &mut *task => done = true,
+                signalled = async { stop.wait_for(|s| *s).await.is_ok() } => {
+                    // The sender is gone only if the signal task ended without a signal.
+                    if !signalled {
+                        let _ = (&mut *task).await;
+                        done = true;
+                    }
+                }
+            }
+        }
         // Network sinks may hold clients open; give them a moment, then stop.
-        if tokio::time::timeout(Duration::from_secs(2), &mut *task)
-            .await
-            .is_err()
+        if !done
+            && tokio::time::timeout(Duration::from_secs(2), &mut *task)
+                .await
+                .is_err()
         {
             // Still blocked on its consumer: stop it, so that its counts are final. A sink on
             // a blocking thread (mcap) cannot be stopped: give it a moment, never wait for it.
@@ -465,10 +502,11 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
             account_unwritten(name, stats, health.samples_out);
         }
     }
+    signals.abort();
     health.elapsed_s = started.elapsed().as_secs_f64();
     health.stages = pipeline.health();
     health.cleaning_stages = cleaning_stages(&pipeline);
-    health.sinks = closing.iter().map(|(n, s, _, _)| s.report(n)).collect();
+    health.sinks = closing.iter().map(|(n, s, ..)| s.report(n)).collect();
     Ok(health)
 }
 
@@ -552,6 +590,32 @@ fn fill(h: &mut Health, p: &Pipeline, sinks: &[SinkHandle], started: Instant) {
     h.stages = p.health();
     h.cleaning_stages = cleaning_stages(p);
     h.sinks = sinks.iter().map(|s| s.stats.report(&s.name)).collect();
+}
+
+/// True when the source is a recorded file replayed at speed 0 (as fast as possible): nothing
+/// waits on it, so its local sinks apply back-pressure instead of the stall rule. A replay of
+/// something other than a regular file (a FIFO, `/dev/stdin` on a pipe) may be fed live: the
+/// stall rule, as for stdin and serial sources and paced replays (which stand in for a sensor).
+pub fn offline_replay(source: &SourceConfig) -> bool {
+    match source {
+        SourceConfig::Replay { path, speed } => {
+            *speed == 0.0 && std::fs::metadata(path).is_ok_and(|m| m.is_file())
+        }
+        SourceConfig::Stdin | SourceConfig::Serial { .. } => false,
+    }
+}
+
+/// Resolves with the signal's name once the signal task has seen SIGINT or SIGTERM; never if
+/// that task ended without one.
+async fn signalled(mut rx: watch::Receiver<Option<&'static str>>) -> &'static str {
+    let sig = match rx.wait_for(|s| s.is_some()).await {
+        Ok(s) => *s,
+        Err(_) => None,
+    };
+    match sig {
+        Some(s) => s,
+        None => std::future::pending().await,
+    }
 }
 
 /// Resolves on SIGINT or SIGTERM with the signal's name.

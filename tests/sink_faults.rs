@@ -362,3 +362,130 @@ fn stdout_closed_by_its_consumer_counts_every_unwritten_sample_as_dropped() {
         "the loss is said: {err}"
     );
 }
+
+/// `imuprep replay LOG --out stdout:csv` (a recorded file at speed 0) into `consumer`, which
+/// gets the child's stdout; returns (what `consumer` returned, stderr, exit status, summary).
+fn replay_to_consumer<T>(
+    n: usize,
+    seed: u64,
+    consumer: impl FnOnce(&mut std::process::Child, std::process::ChildStdout) -> T,
+) -> (T, String, std::process::ExitStatus, serde_json::Value) {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("in.log");
+    imuprep::io::log::write_log(&log, &common::descriptor(), &common::samples(n, seed)).unwrap();
+    let summary = dir.path().join("summary.json");
+    let mut child = Command::new(common::bin())
+        .arg("replay")
+        .arg(&log)
+        .args(["--out", "stdout:csv", "--summary-json"])
+        .arg(&summary)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let out = child.stdout.take().unwrap();
+    let got = consumer(&mut child, out);
+    let res = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&res.stderr).into_owned();
+    assert!(!err.contains("panicked"), "{err}");
+    let h: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    (got, err, res.status, h)
+}
+
+/// `imuprep replay LOG --out stdout:csv | (sleep 1.5; cat)`: an offline replay at speed 0 waits
+/// for its slow consumer (back-pressure) instead of counting it stuck after 0.5 s and dropping
+/// (before: 11 680 of 29 982 samples of replay/drive.log reached a consumer that slept 0.6 s,
+/// exit 0). Every sample arrives, the summary says 0 dropped, and the wait is said on stderr.
+#[test]
+fn offline_replay_at_speed_0_waits_for_a_slow_stdout_consumer_and_drops_nothing() {
+    use std::io::Read;
+    // 30 000 samples of CSV (~2.6 MB): far beyond a pipe's 64 KiB and the sink's 64-batch
+    // queue, so the replay has to wait for the consumer; its 1.5-s sleep is 3 stall times
+    // (0.5 s), so the wait passes the stall time on any machine.
+    let n = 30_000;
+    let (text, err, status, h) = replay_to_consumer(n, 33, |_, mut out| {
+        std::thread::sleep(Duration::from_millis(1500));
+        let mut text = String::new();
+        out.read_to_string(&mut text).unwrap();
+        text
+    });
+    assert!(status.success(), "{err}");
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[0].starts_with("t,"), "CSV header: {}", lines[0]);
+    assert_eq!(lines.len() - 1, n, "every sample arrives");
+    assert_eq!(h["samples_out"], n as u64);
+    let s = &h["sinks"][0];
+    assert_eq!(s["samples_out"], n as u64, "{s}");
+    assert_eq!(s["dropped"], 0, "{s}");
+    assert!(
+        err.contains("waiting for sink stdout") && err.contains("the replay waits"),
+        "the wait is said: {err}"
+    );
+    assert!(!err.contains("sink stuck"), "no stall rule offline: {err}");
+}
+
+/// An offline replay waiting for a consumer that never reads still stops on SIGINT, and its
+/// summary accounts for every published sample (written or dropped).
+#[test]
+fn offline_replay_waiting_for_its_consumer_stops_on_sigint() {
+    let n = 30_000;
+    let (_, err, status, h) = replay_to_consumer(n, 34, |child, out| {
+        // Hold the read end open, read nothing: the replay waits. SIGINT once it says so
+        // (stderr is read only at the end, so give the 0.5-s stall time three times over).
+        std::thread::sleep(Duration::from_millis(1500));
+        assert_eq!(
+            unsafe { libc::kill(child.id() as i32, libc::SIGINT) },
+            0,
+            "kill"
+        );
+        // The run must end on its own now; the read end stays open until it has.
+        let t0 = std::time::Instant::now();
+        while child.try_wait().unwrap().is_none() {
+            assert!(
+                t0.elapsed() < Duration::from_secs(20),
+                "SIGINT did not stop a replay waiting for its sink"
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        drop(out);
+    });
+    assert!(status.success(), "{err}");
+    assert!(err.contains("waiting for sink stdout"), "{err}");
+    assert_eq!(h["ended_by"], "signal SIGINT", "{h}");
+    let published = h["samples_out"].as_u64().unwrap();
+    assert!(published < n as u64, "it stopped before the end: {h}");
+    let s = &h["sinks"][0];
+    let (written, dropped) = (
+        s["samples_out"].as_u64().unwrap(),
+        s["dropped"].as_u64().unwrap(),
+    );
+    assert_eq!(written + dropped, published, "{s}");
+}
+
+/// Which runs wait for their local sinks without limit: a recorded (regular) file replayed at
+/// speed 0 only. Paced replays stand in for a live sensor, and a FIFO may be fed live: the
+/// stall rule, as for stdin and serial sources.
+#[test]
+fn only_a_recorded_file_at_speed_0_applies_back_pressure() {
+    use imuprep::runtime::offline_replay;
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("in.log");
+    imuprep::io::log::write_log(&log, &common::descriptor(), &common::samples(10, 1)).unwrap();
+    let fifo = dir.path().join("live.log");
+    let _reader = stuck_fifo(&fifo);
+    let replay = |path: &Path, speed: f64| SourceConfig::Replay {
+        path: path.to_path_buf(),
+        speed,
+    };
+    assert!(offline_replay(&replay(&log, 0.0)));
+    assert!(!offline_replay(&replay(&log, 1.0)));
+    assert!(!offline_replay(&replay(&log, 20.0)));
+    assert!(!offline_replay(&replay(&fifo, 0.0)));
+    assert!(!offline_replay(&replay(
+        &dir.path().join("missing.log"),
+        0.0
+    )));
+    assert!(!offline_replay(&SourceConfig::Stdin));
+}

@@ -1,18 +1,32 @@
 //! Sinks: stdout, file, TCP server, UDP, inline (the input's own protocol to a serial device,
 //! file or pseudo-terminal). Each runs as its own task behind a bounded queue.
 //!
-//! The runtime hands every sink the same `Arc` batch and never waits long for any of them:
+//! The runtime hands every sink the same `Arc` batch. How long it waits for a sink depends on
+//! the source:
+//!
+//! * Live runs (serial, stdin) and paced replays (`--speed` > 0, standing in for a live
+//!   sensor): never long for any sink — the stall rule of the items below.
+//! * An offline replay (a recorded regular file at `--speed 0`, see
+//!   [`crate::runtime::offline_replay`]): the source is a file and can wait, so local sinks
+//!   apply back-pressure — a full queue is waited for without limit
+//!   ([`SinkHandle::wait_without_limit`]) and nothing is dropped. A wait past the stall time is
+//!   warned about once (until the queue has drained to half), so a FIFO nobody reads does not
+//!   hang silently; a signal (SIGINT/SIGTERM) ends the wait, and what the sink then cannot take
+//!   is dropped, counted. A consumer that closes its end (`| head`) is not a stall: the sink
+//!   ends, its unwritten samples are counted as dropped, the replay goes on for the other
+//!   sinks. Network sinks keep their rule below in every mode.
 //!
 //! * Network sinks (TCP, UDP) are offered the batch with `try_send`; a full queue drops the
 //!   batch for that consumer only, counted. The TCP server repeats that per client: each client
 //!   has its own bounded queue and lag counter; what a client was sent counts bytes written to
 //!   its socket, not bytes queued; a client that leaves is folded into the sink's totals.
-//! * Local sinks (stdout, file, inline) are wanted complete, so a full queue is waited for — but
-//!   only up to the sink's stall time ([`DEFAULT_STALL`]). A sink whose queue stays full that long
-//!   is *stuck* (a `| (sleep 20; cat)` pipe, a full disk, a FIFO nobody reads): from then on it
-//!   is offered like a network sink — batches it cannot take are dropped and counted — until
-//!   its queue has drained to half, when it is waited for again. A stuck consumer therefore
-//!   costs the stream one stall time, once, and never freezes the daemon or its health reports.
+//! * Local sinks (stdout, file, inline, mcap) are wanted complete, so a full queue is waited
+//!   for — in a live or paced run only up to the sink's stall time ([`DEFAULT_STALL`]). A sink
+//!   whose queue stays full that long is *stuck* (a `| (sleep 20; cat)` pipe, a full disk, a
+//!   FIFO nobody reads): from then on it is offered like a network sink — batches it cannot
+//!   take are dropped and counted — until its queue has drained to half, when it is waited for
+//!   again. A stuck consumer therefore costs the stream one stall time, once, and never freezes
+//!   the daemon or its health reports.
 //! * Inline sinks (serial device, file, pseudo-terminal) are local sinks too, with one more
 //!   duty: each sample must meet its own carrier, which travels ahead of it in the side stream.
 //!   What a stuck inline sink drops (sample batches, side batches) is told to its writer by a
@@ -34,7 +48,7 @@ use crate::sample::Sample;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-use tokio::sync::mpsc;
+use tokio::sync::{mpsc, watch};
 use tokio::task::JoinHandle;
 
 mod inline;
@@ -71,7 +85,8 @@ pub const DEFAULT_STALL: Duration = Duration::from_millis(500);
 pub struct SinkHandle {
     pub name: String,
     pub tx: mpsc::Sender<SinkItem>,
-    /// Waited for (up to `stall`) when true; see the module docs.
+    /// Local sink: waited for (up to `stall`, or without limit under back-pressure) when true;
+    /// see the module docs.
     pub lossless: bool,
     /// Wants the side stream ([`SinkItem::Side`]): inline sinks.
     pub wants_side: bool,
@@ -81,6 +96,12 @@ pub struct SinkHandle {
     pub stall: Duration,
     /// Set while the sink is stuck (dropping instead of waiting).
     stuck: AtomicBool,
+    /// Local sinks of an offline replay at speed 0: wait without a stall limit (back-pressure),
+    /// until this says the run is stopping (a signal); see the module docs and
+    /// [`SinkHandle::wait_without_limit`]. `None`: the stall rule.
+    backpressure: Option<watch::Receiver<bool>>,
+    /// Set while a back-pressured sink has been waited for beyond its stall time (warned once).
+    waiting: AtomicBool,
     /// Inline sinks: samples and carriers dropped since the last item that got through, not
     /// yet told to the writer (a [`SinkItem::Skip`] goes ahead of the next item).
     skip_samples: AtomicU64,
@@ -89,6 +110,21 @@ pub struct SinkHandle {
 }
 
 impl SinkHandle {
+    /// Back-pressure instead of the stall rule (offline replays at speed 0): a full queue is
+    /// waited for without limit, with a warning once the wait passes the stall time, until
+    /// `stop` turns true (SIGINT/SIGTERM); from then on what the sink cannot take is dropped,
+    /// counted. Network sinks keep their rule (never waited for): this does nothing to them.
+    pub fn wait_without_limit(&mut self, stop: watch::Receiver<bool>) {
+        if self.lossless {
+            self.backpressure = Some(stop);
+        }
+    }
+
+    /// True when this sink is waited for without a stall limit (see [`Self::wait_without_limit`]).
+    pub fn waits_without_limit(&self) -> bool {
+        self.backpressure.is_some()
+    }
+
     /// Offer an item. Network sinks: dropped (and counted) when the queue is full. Local sinks
     /// (inline ones included): waited for up to `stall`, then dropped while the sink is stuck
     /// (see the module docs).
@@ -97,6 +133,13 @@ impl SinkHandle {
             Put::Sent | Put::Closed => return,
             Put::Full(item) => *item,
         };
+        if let Some(stop) = &self.backpressure {
+            match self.put_until_stopped(item, stop.clone()).await {
+                Put::Sent | Put::Closed => {}
+                Put::Full(item) => self.dropped(*item),
+            }
+            return;
+        }
         if self.lossless && self.stuck.load(Relaxed) && self.tx.capacity() * 2 >= SINK_QUEUE {
             self.stuck.store(false, Relaxed);
             tracing::info!(sink = %self.name, "sink caught up; no longer dropping");
@@ -176,6 +219,52 @@ impl SinkHandle {
             Ok(()) => Put::Sent,
             Err(mpsc::error::SendTimeoutError::Timeout(item)) => Put::Full(Box::new(item)),
             Err(mpsc::error::SendTimeoutError::Closed(_)) => Put::Closed,
+        }
+    }
+
+    /// Queue `item` (after the pending skip marker), waiting as long as it takes, until `stop`
+    /// turns true: then the item is handed back (to be dropped, counted). A wait past the stall
+    /// time is warned about once, until the queue has drained to half again.
+    async fn put_until_stopped(&self, item: SinkItem, mut stop: watch::Receiver<bool>) -> Put {
+        if self.waiting.load(Relaxed) && self.tx.capacity() * 2 >= SINK_QUEUE {
+            self.waiting.store(false, Relaxed);
+            tracing::info!(sink = %self.name, "sink caught up");
+        }
+        // Resolves once the run is stopping; never if the runtime has gone (no stop can come).
+        let stopping = async move {
+            if stop.wait_for(|s| *s).await.is_err() {
+                std::future::pending::<()>().await;
+            }
+        };
+        tokio::pin!(stopping);
+        loop {
+            // `reserve` keeps the item here while waiting, so a stop loses nothing uncounted.
+            let permit = tokio::select! {
+                biased;
+                () = &mut stopping => return Put::Full(Box::new(item)),
+                r = tokio::time::timeout(self.stall, self.tx.reserve()) => match r {
+                    Ok(Ok(permit)) => permit,
+                    Ok(Err(_)) => return Put::Closed,
+                    Err(_) => {
+                        if !self.waiting.swap(true, Relaxed) {
+                            tracing::warn!(
+                                sink = %self.name,
+                                "waiting for sink {}: its consumer has taken nothing for {:.1} s; the replay waits for it, nothing is dropped (Ctrl-C stops)",
+                                self.name,
+                                self.stall.as_secs_f64()
+                            );
+                        }
+                        continue;
+                    }
+                },
+            };
+            if let Some(skip) = self.pending_skip() {
+                permit.send(skip);
+                self.skip_sent();
+                continue;
+            }
+            permit.send(item);
+            return Put::Sent;
         }
     }
 
@@ -317,6 +406,8 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
         task,
         stall: DEFAULT_STALL,
         stuck: AtomicBool::new(false),
+        backpressure: None,
+        waiting: AtomicBool::new(false),
         skip_samples: AtomicU64::new(0),
         skip_carriers: AtomicU64::new(0),
         skip_protocol: Mutex::new(None),
