@@ -665,3 +665,67 @@ fn the_misses_have_the_causes_the_docs_give() {
     eprintln!("{name} rate/4, the gross-error bound alone: engaged {e:?}");
     assert!(e.is_some_and(|t| t <= 60.0), "{name}: {e:?}");
 }
+
+/// The walk rounded to 4× its LSB (docs/real-data.md, "Sensor classes we do not have", item 2):
+/// its accelerometers at rest sit on one code for whole windows, so the minimum-statistics floor
+/// alone would fall to round-off; the detector's floor is no lower than the learned LSB's
+/// quantisation noise, and the windows at the original's rests lie within `noise_factor` of it.
+/// The detector is replayed on the copy's samples (stale repeats skipped, as the bias stage
+/// does); the numbers print with `-- --nocapture`.
+#[test]
+fn a_coarse_lsb_keeps_the_walks_rests_within_the_noise_floor() {
+    use imuprep::stage::bias::stillness::{StillnessDetector, StillnessSettings};
+    let Some(dir) = common::real_data("") else {
+        return;
+    };
+    let name = "rtklibexplorer_drive_walk/walk_0827_imu.csv";
+    let (desc, raw) = load_recording(&dir.join(name)).unwrap();
+    let (d, x) = transform(name, &desc, &raw, Transform::Quantise(4.0), 0).unwrap();
+    let base = run_config(&Config::default_embedded().unwrap(), &desc, &raw).unwrap();
+    let out = run_config(&Config::default_embedded().unwrap(), &d, &x).unwrap();
+    let s = StillnessSettings::default();
+    let mut det = StillnessDetector::new(&s, d.sample_rate_hz);
+    let (mut sd, mut min_floor) = (Vec::new(), f64::INFINITY);
+    for ((v, o), b) in x.iter().zip(&out).zip(&base) {
+        if o.has(flags::REPEATED) {
+            continue;
+        }
+        let g = [v.channel(0), v.channel(1), v.channel(2)];
+        let a = [v.channel(3), v.channel(4), v.channel(5)];
+        det.update(&g, &a, &[None; 3]);
+        let f = det.features();
+        // Once every accel axis has shown its grid (before, its LSB is not known).
+        if det.lsb()[3..].iter().all(|l| *l > 0.0) {
+            min_floor = min_floor.min(f.accel_floor_m_s2);
+        }
+        if b.has(flags::STILL) {
+            sd.push(f.accel_sd_m_s2);
+        }
+    }
+    sd.sort_by(f64::total_cmp);
+    let pct = |p: usize| sd[(sd.len() - 1) * p / 100];
+    let lsb = det.lsb();
+    let la = 4.0 * 0.001 * G;
+    let quant = (3.0 * la * la / 12.0).sqrt();
+    let (_, floor) = det.floors();
+    eprintln!(
+        "walk lsb×4: accel LSB learned {:.4e} {:.4e} {:.4e} m/s² (4 mg: {la:.4e}); accel floor \
+         {floor:.4e} (lowest once the LSB is known {min_floor:.4e}, quantisation floor {quant:.4e}); accel window sd at \
+         the original's {} STILL samples: p5 {:.4e} p50 {:.4e} p95 {:.4e} max {:.4e} m/s²",
+        lsb[3],
+        lsb[4],
+        lsb[5],
+        sd.len(),
+        pct(5),
+        pct(50),
+        pct(95),
+        pct(100)
+    );
+    for l in &lsb[3..] {
+        assert!((l / la - 1.0).abs() < 1e-9, "{lsb:?}");
+    }
+    // Not below the quantisation noise (1e-12 relative: the floor is that value, recomputed).
+    assert!(min_floor >= quant * (1.0 - 1e-12), "{min_floor} < {quant}");
+    // The original's rests: at least 95 % of their windows within noise_factor of the floor.
+    assert!(pct(95) <= s.noise_factor * floor, "{} > {}", pct(95), floor);
+}

@@ -4,6 +4,7 @@
 //!   [`student_t`], with the measurement that says why).
 //! * [`acf`]: sample ACF and PACF with their white-noise bounds, the Ljung–Box test.
 //! * [`adf`]: the augmented Dickey–Fuller unit-root test with MacKinnon's p-values.
+//! * [`grid`]: the LSB a quantised channel's values lie on.
 //! * [`robust`]: median, MAD-based σ, the Hampel filter.
 //! * [`ar_poly`]: the AR polynomial — stability (Schur–Cohn step-down), Durbin–Levinson and its
 //!   inverse, exact AR autocovariances. It sits here rather than in `model/` because the PACF
@@ -17,6 +18,7 @@ pub mod acf;
 pub mod adf;
 pub mod allan_edf;
 pub mod ar_poly;
+pub mod grid;
 pub mod robust;
 pub mod special;
 pub mod student_t;

@@ -21,7 +21,19 @@
 //! than `instant_k` per-axis floor σ, and — once a confident bias estimate exists — its gyro mean
 //! is within `mean_k` σ of that estimate (a slow constant turn has no variance). Nothing here is
 //! a rate in rad/s that fits one sensor class: an ADIS16405 at rest (0.66 °/s three-axis sd) and
-//! a foot-mounted MEMS at rest (0.04 °/s) are both still against their own floors. The only
+//! a foot-mounted MEMS at rest (0.04 °/s) are both still against their own floors.
+//!
+//! **No floor below the sensor's resolution.** A quantised channel whose noise is below its LSB
+//! sits on one code at rest, or toggles one LSB: its quietest windows have an sd near 0, and the
+//! minimum statistics would learn that, so that every ordinary rest window (dithered by the real
+//! noise, ≈ LSB/√12 per axis) looks like motion. Each floor is therefore no lower than its
+//! triad's quantisation noise, √(Σ_axes LSB²/12), with each channel's LSB learned as the grid its
+//! values lie on ([`crate::stats::grid::grid_step`], on each full window with at least
+//! `GRID_MIN_DIFFS` non-zero differences; the smallest such grid seen so far, since a window can
+//! only show a whole multiple of the LSB). A channel on no grid (unquantised, or calibrated off
+//! its grid) has LSB 0 and the floor is the learned one alone.
+//!
+//! The only
 //! absolute numbers are plausibility ceilings no sensor at rest exceeds (`gyro_sd_max_rad_s`,
 //! `accel_sd_max_m_s2`: a moving car's road vibration does), which keep a recording that never
 //! rests from calling its quietest motion "still".
@@ -33,6 +45,8 @@
 //! learned instead of configured.
 
 use serde::{Deserialize, Serialize};
+
+use crate::stats::grid::grid_step_counted;
 
 /// Longest window, samples (fixed-size ring buffer; 0.5 s up to 1 kHz).
 pub const MAX_WINDOW: usize = 512;
@@ -165,6 +179,12 @@ pub struct StillnessFeatures {
 /// Number of window columns: gyro xyz, accel xyz, |accel|, gyro xyz lag-1 products.
 const COLS: usize = 10;
 
+/// Non-zero successive differences a window needs before its grid is taken for the channel's
+/// LSB: 8 differences of an unquantised channel all within 1 % of whole multiples of the
+/// smallest happen by chance with probability ~0.02^7 ≈ 1e-12; a quantised channel at rest
+/// toggling its LSB shows 8 in a 0.5-s window or in a later one.
+const GRID_MIN_DIFFS: usize = 8;
+
 /// Add (`sign = 1`) or remove (`sign = -1`) one window row to the running sums.
 #[inline]
 fn accumulate(sum: &mut [f64; COLS], sumsq: &mut [f64; COLS], row: &[f64; COLS], sign: f64) {
@@ -199,6 +219,11 @@ pub struct StillnessDetector {
     veto_samples: u64,
     /// Window length, samples.
     window: usize,
+    /// Each channel's LSB (gx gy gz ax ay az; 0 while none is known) and the quantisation noise
+    /// of each triad, √(Σ LSB²/12), below which no floor falls (module docs).
+    lsb: [f64; 6],
+    quant_g: f64,
+    quant_a: f64,
 }
 
 /// The window of `window_s` at `sample_rate_hz`, in samples (2..=`MAX_WINDOW`).
@@ -233,6 +258,9 @@ impl StillnessDetector {
             prev_g: [f64::NAN; 3],
             vetoed: 0,
             veto_samples: ((s.mean_veto_s.max(0.0) * sample_rate_hz.max(0.0)).ceil() as u64).max(1),
+            lsb: [0.0; 6],
+            quant_g: 0.0,
+            quant_a: 0.0,
         }
     }
 
@@ -240,6 +268,11 @@ impl StillnessDetector {
     /// first full window.
     pub fn floors(&self) -> (f64, f64) {
         (self.floor_g, self.floor_a)
+    }
+
+    /// Each channel's learned LSB (gx gy gz ax ay az; 0 while none is known).
+    pub fn lsb(&self) -> [f64; 6] {
+        self.lsb
     }
 
     /// True while in the STILL state.
@@ -272,6 +305,29 @@ impl StillnessDetector {
             accumulate(&mut self.sum, &mut self.sumsq, row, 1.0);
         }
         self.since_recompute = 0;
+        if self.filled == n {
+            self.learn_grid();
+        }
+    }
+
+    /// Each channel's LSB from the full window (once per window, with the exact sums): the
+    /// smallest grid seen on a window with `GRID_MIN_DIFFS` non-zero differences. The ring's
+    /// order is kept but for its seam, whose difference lies on the same grid.
+    fn learn_grid(&mut self) {
+        let n = self.window;
+        let mut col = [0.0; MAX_WINDOW];
+        for c in 0..6 {
+            for (v, row) in col.iter_mut().zip(self.buf.iter()).take(n) {
+                *v = row[c];
+            }
+            let (q, diffs) = grid_step_counted(&col[..n]);
+            if q > 0.0 && diffs >= GRID_MIN_DIFFS && (self.lsb[c] == 0.0 || q < self.lsb[c]) {
+                self.lsb[c] = q;
+            }
+        }
+        let quant = |l: &[f64]| (l.iter().map(|q| q * q).sum::<f64>() / 12.0).sqrt();
+        self.quant_g = quant(&self.lsb[..3]);
+        self.quant_a = quant(&self.lsb[3..]);
     }
 
     /// Feed one sample (calibrated gyro, rad/s; specific force, m/s²) with the current gyro bias
@@ -385,19 +441,22 @@ impl StillnessDetector {
         let full = self.filled == n;
         if full && (!gyro_on || gyro_sd > 0.0) && (!accel_on || accel_sd > 0.0) {
             // Minimum statistics: fall at once, rise slowly.
+            // Never below the triad's quantisation noise (module docs).
             if gyro_on {
                 self.floor_g = if self.floor_g.is_nan() {
                     gyro_sd
                 } else {
                     (self.floor_g * self.rise).min(gyro_sd)
-                };
+                }
+                .max(self.quant_g);
             }
             if accel_on {
                 self.floor_a = if self.floor_a.is_nan() {
                     accel_sd
                 } else {
                     (self.floor_a * self.rise).min(accel_sd)
-                };
+                }
+                .max(self.quant_a);
             }
         }
         // Per-axis σ: the window's own, no lower than the floor's share (a sample that leaves the
@@ -613,6 +672,71 @@ mod tests {
             let (mut g, a) = still_sample(&mut r, 0.0, 0.1, 0.04);
             g[2] += 0.05;
             assert!(!d.update(&g, &a, &[Some((0.0, 1e-3)); 3]));
+        }
+    }
+
+    #[test]
+    fn a_quantised_rest_toggling_one_lsb_is_still_and_a_few_lsb_of_motion_is_not() {
+        // The walk rounded to 4× its LSB (gyro 0.0304 °/s, accel 4 mg); gyro noise 1 LSB per
+        // axis, accel 0.1 LSB. For 10 s the accelerometer's true values lie mid-code: it sits on
+        // one code and its window sd is round-off (the minimum statistics learned 2e-8 m/s² on
+        // `walk lsb×4`). Then ax's true value lies near a code boundary (0.48 LSB, noise
+        // 0.3 LSB): it toggles one LSB, a window sd of ≈ LSB/2, which is motion against a floor
+        // of round-off; against the quantisation floor √(3 LSB²/12) = LSB/2 it is rest. A motion
+        // of a few LSB on one accel axis is not rest.
+        let (lg, la) = (4.0 * 0.0076f64.to_radians(), 4.0 * 0.001 * G);
+        let q = |v: f64, l: f64| (v / l).round() * l;
+        let rest = |r: &mut Rng, toggle: bool| {
+            let (ax, sa) = if toggle { (0.48, 0.3) } else { (0.0, 0.1) };
+            (
+                [
+                    q(0.1 * lg + lg * r.normal(), lg),
+                    q(-0.2 * lg + lg * r.normal(), lg),
+                    q(-2.0 * lg + lg * r.normal(), lg),
+                ],
+                [
+                    q((ax + sa * r.normal()) * la, la),
+                    q(-3.0 * la + 0.1 * la * r.normal(), la),
+                    q(250.0 * la + 0.1 * la * r.normal(), la),
+                ],
+            )
+        };
+        for (axis, amp, name) in [(0, 3.0, "ax"), (1, 2.0, "ay")] {
+            let mut d = StillnessDetector::new(&StillnessSettings::default(), 100.0);
+            let mut r = Rng::new(8);
+            // Still from the first full window (sample 49) + 1 s of candidates on, but for the
+            // toggles' first window + 1 s: the accelerometer's LSB is learned only once it shows
+            // its grid (≥ GRID_MIN_DIFFS differences), and its floor had fallen to round-off.
+            // Without the quantisation floor: still on 852 of the 3000 samples.
+            for k in 0..3000 {
+                let (g, a) = rest(&mut r, k >= 1000);
+                let st = d.update(&g, &a, &[None; 3]);
+                let settling = k < 150 || (1000..1150).contains(&k);
+                assert!(
+                    st || settling,
+                    "{name}: rest not still at {k}: {:?}",
+                    d.features()
+                );
+            }
+            // Learned: each gyro axis's and ax's LSB; ay and az never leave their code, so they
+            // show no grid (0).
+            let lsb = d.lsb();
+            for (c, l) in [lg, lg, lg, la, 0.0, 0.0].iter().enumerate() {
+                assert!((lsb[c] - l).abs() <= 1e-9 * l, "channel {c}: {lsb:?}");
+            }
+            // 3 LSB (ax) or 2 LSB (ay, on one code until then) at 2 Hz: not still once the onset
+            // is in the window (≤ 20 samples; window sd ≥ 1.4 LSB against 2 × LSB/2).
+            for k in 0..200 {
+                let (g, mut a) = rest(&mut r, true);
+                let m = amp * (2.0 * std::f64::consts::PI * 2.0 * k as f64 / 100.0).sin();
+                a[axis] = q(a[axis] + m * la, la);
+                let st = d.update(&g, &a, &[None; 3]);
+                assert!(
+                    k < 20 || !st,
+                    "{name}: still at motion sample {k}: {:?}",
+                    d.features()
+                );
+            }
         }
     }
 

@@ -49,6 +49,7 @@ use super::settings::{GrossErrorSettings, MAX_MEDIAN_WINDOW, Replacement};
 use crate::model::arima::{
     ArimaChannelModel, ArimaError, ArimaPredictor, MAX_D, MAX_P, identify, psi_weights,
 };
+use crate::stats::grid::grid_step;
 use crate::stats::robust::{hampel, median_small, upper_median_and_mad_sigma};
 use crate::stats::special::{normal_cdf, normal_pdf};
 
@@ -244,46 +245,13 @@ pub struct ChannelGate {
     warm_gap: bool,
     pub model: Option<ArimaChannelModel>,
     /// The step of the grid the warm-up's values lie on (the channel's LSB), 0 when they lie on
-    /// none (or the model came from a file): see [`grid_step`] and [`ChannelGate::resolution`].
+    /// none (or the model came from a file): see [`grid_step`](crate::stats::grid::grid_step) and [`ChannelGate::resolution`].
     resolution: f64,
 }
-
-/// Share of a quantised channel's non-zero successive differences that must be whole multiples
-/// of its smallest one: a quantised sensor's are all (its gross errors too); a non-quantised
-/// channel's nearly none are.
-const GRID_SHARE: f64 = 0.99;
 
 /// Warm-up samples before the grid is trusted: with fewer, the smallest difference seen may
 /// still be a multiple of the LSB (a floor too high).
 const GRID_MIN_SAMPLES: usize = 100;
-
-/// The quantisation step of `x` (its LSB): the smallest non-zero |successive difference|, when
-/// at least `GRID_SHARE` of the non-zero differences are whole multiples of it (within 1 % of a
-/// step: values printed in decimal carry rounding far below that); else 0.
-pub fn grid_step(x: &[f64]) -> f64 {
-    let diffs = || {
-        x.windows(2)
-            .map(|w| (w[1] - w[0]).abs())
-            .filter(|d| d.is_finite() && *d > 0.0)
-    };
-    let q = diffs().fold(f64::INFINITY, f64::min);
-    if !q.is_finite() {
-        return 0.0;
-    }
-    let (mut n, mut on) = (0usize, 0usize);
-    for d in diffs() {
-        n += 1;
-        let m = d / q;
-        if (m - m.round()).abs() <= 0.01 {
-            on += 1;
-        }
-    }
-    if on as f64 >= GRID_SHARE * n as f64 {
-        q
-    } else {
-        0.0
-    }
-}
 
 /// `E[min(Z², c²)]` for Z ~ N(0, 1).
 pub fn huber_beta(c: f64) -> f64 {
@@ -816,25 +784,5 @@ mod tests {
         // channel would have activated on it), so 30 s of samples still take 751 samples.
         let (i, _) = activation(40_000_000, Some((100, 100_000_000_000)));
         assert_eq!(i, 751);
-    }
-
-    #[test]
-    fn grid_step_finds_a_quantised_channels_lsb_and_no_other() {
-        // The ADIS16405's accelerometer LSB (3.33 mg) in m/s², on seeded white noise of 1 LSB:
-        // every difference is a whole number of steps, the smallest one step.
-        let lsb = 0.00333 * 9.80665;
-        let noise = crate::rng::normal_vec(2000, 3);
-        let q: Vec<f64> = noise.iter().map(|v| v.round() * lsb + 9.8).collect();
-        let g = grid_step(&q);
-        assert!((g / lsb - 1.0).abs() < 1e-9, "{g}");
-        // Unquantised noise lies on no grid; nor does a constant (no difference at all).
-        assert_eq!(grid_step(&noise), 0.0);
-        assert_eq!(grid_step(&[1.0; 50]), 0.0);
-        // 2 % off-grid values (a processed stretch) are more than GRID_SHARE allows.
-        let mut m = q.clone();
-        for v in m.iter_mut().step_by(50) {
-            *v += 0.37 * lsb;
-        }
-        assert_eq!(grid_step(&m), 0.0);
     }
 }
