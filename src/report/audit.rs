@@ -124,21 +124,15 @@ pub struct RecordingAudit {
     pub samples: usize,
     pub rate_hz: f64,
     pub duration_s: f64,
-    pub channels: Vec<ChannelFigures>,
-    /// Share of samples with a running bias estimate removed, and the time to the first, s.
-    pub bias_engaged_share: f64,
-    pub bias_first_engaged_s: Option<f64>,
-    /// Share of samples flagged STILL.
-    pub still_share: f64,
-    /// Motion onsets seen, and the worst bias move across one in its own 3σ.
-    pub onsets: usize,
-    pub onset_worst_move_3sigma: f64,
+    /// The do-no-harm figures of the default run; its `targets` also hold the injections' rows
+    /// (flattened: the JSON keeps one object per recording).
+    #[serde(flatten)]
+    pub harm: HarmScore,
     pub injected_f1: Option<f64>,
     pub contamination_recall: Option<f64>,
     pub contamination_precision: Option<f64>,
     pub bad_values_injected: usize,
     pub bad_values_unflagged: usize,
-    pub targets: Vec<TargetRow>,
 }
 
 /// A recording that could not be audited, and why.
@@ -159,7 +153,7 @@ pub struct AuditReport {
 impl AuditReport {
     /// Every target row of every recording.
     pub fn targets(&self) -> impl Iterator<Item = &TargetRow> {
-        self.recordings.iter().flat_map(|r| r.targets.iter())
+        self.recordings.iter().flat_map(|r| r.harm.targets.iter())
     }
 
     /// Targets missed.
@@ -492,17 +486,9 @@ pub fn audit_recording(
     let duration_s = raw[n - 1].t_s() - raw[0].t_s();
     let class = classify(raw, rate);
     let out = run_config(cfg, desc, raw)?;
-    let HarmScore {
-        channels,
-        bias_engaged_share,
-        bias_first_engaged_s,
-        still_share,
-        onsets,
-        onset_worst_move_3sigma: worst_onset,
-        mut targets,
-    } = score_harm(name, class, rate, raw, &out);
+    let mut harm = score_harm(name, class, rate, raw, &out);
     let mut target = |channel: &str, what: &str, measured: f64, limit: f64, at_most: bool| {
-        targets.push(TargetRow::new(
+        harm.targets.push(TargetRow::new(
             name, channel, what, measured, limit, at_most,
         ));
     };
@@ -552,18 +538,12 @@ pub fn audit_recording(
         samples: n,
         rate_hz: rate,
         duration_s,
-        channels,
-        bias_engaged_share,
-        bias_first_engaged_s,
-        still_share,
-        onsets,
-        onset_worst_move_3sigma: worst_onset,
+        harm,
         injected_f1,
         contamination_recall,
         contamination_precision,
         bad_values_injected: bad.len(),
         bad_values_unflagged: unflagged,
-        targets,
     })
 }
 
@@ -606,19 +586,20 @@ impl std::fmt::Display for AuditReport {
             writeln!(
                 f,
                 "still {:.1} %, bias engaged {:.1} % (first at {}), {} motion onsets (worst bias move {:.2} × 3σ)",
-                100.0 * r.still_share,
-                100.0 * r.bias_engaged_share,
-                r.bias_first_engaged_s
+                100.0 * r.harm.still_share,
+                100.0 * r.harm.bias_engaged_share,
+                r.harm
+                    .bias_first_engaged_s
                     .map_or("never".to_string(), |t| format!("{t:.1} s")),
-                r.onsets,
-                r.onset_worst_move_3sigma
+                r.harm.onsets,
+                r.harm.onset_worst_move_3sigma
             )?;
             writeln!(
                 f,
                 "| ch | replaced | per ch-sample | suspect | invented angle ° | ADEV worst out/raw/(1+1σ) | ADEV at longest τ |"
             )?;
             writeln!(f, "|---|---|---|---|---|---|---|")?;
-            for (c, ch) in r.channels.iter().enumerate() {
+            for (c, ch) in r.harm.channels.iter().enumerate() {
                 let opt =
                     |v: Option<f64>, p: usize| v.map_or("–".to_string(), |v| format!("{v:.p$}"));
                 writeln!(
