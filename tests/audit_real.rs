@@ -10,6 +10,8 @@
 //!
 //! Skipped (visibly, on stderr) when `../shared/data/real` is absent.
 
+mod common;
+
 use std::path::Path;
 
 use imuprep::config::Config;
@@ -82,30 +84,11 @@ fn every_real_recording_meets_the_do_no_harm_targets_or_a_known_bound() {
         let known = KNOWN_MISSES.iter().find(|(rec, ch, what, _)| {
             t.recording.starts_with(rec) && t.channel == *ch && t.target.starts_with(what)
         });
-        match (t.met, known) {
-            (true, None) => {}
-            (true, Some(_)) => failures.push(format!(
-                "known miss now met (update KNOWN_MISSES and the docs): {} {} {} = {}",
-                t.recording, t.channel, t.target, t.measured
-            )),
-            (false, None) => failures.push(format!(
-                "MISSED {} {} {} = {} (limit {})",
-                t.recording, t.channel, t.target, t.measured, t.limit
-            )),
-            (false, Some((_, _, _, bound))) => {
-                let ok = if t.at_most {
-                    t.measured <= *bound
-                } else {
-                    t.measured >= *bound
-                };
-                if !ok {
-                    failures.push(format!(
-                        "known miss got worse: {} {} {} = {} (bound {bound})",
-                        t.recording, t.channel, t.target, t.measured
-                    ));
-                }
-            }
-        }
+        failures.extend(common::judge_target(
+            t,
+            &t.recording,
+            known.map(|&(.., bound)| bound),
+        ));
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }

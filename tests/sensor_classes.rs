@@ -502,30 +502,11 @@ fn transformed_real_recordings_meet_the_do_no_harm_targets() {
                     && t.channel == *ch
                     && t.target.starts_with(what)
             });
-            match (t.met, known) {
-                (true, None) => {}
-                (true, Some(_)) => failures.push(format!(
-                    "known miss now met (update KNOWN_MISSES and the docs): {} {label} {} {} = {}",
-                    r.recording, t.channel, t.target, t.measured
-                )),
-                (false, None) => failures.push(format!(
-                    "MISSED {} {label} {} {} = {} (limit {})",
-                    r.recording, t.channel, t.target, t.measured, t.limit
-                )),
-                (false, Some((.., bound))) => {
-                    let ok = if t.at_most {
-                        t.measured <= *bound
-                    } else {
-                        t.measured >= *bound
-                    };
-                    if !ok {
-                        failures.push(format!(
-                            "known miss got worse: {} {label} {} {} = {} (bound {bound})",
-                            r.recording, t.channel, t.target, t.measured
-                        ));
-                    }
-                }
-            }
+            failures.extend(common::judge_target(
+                t,
+                &format!("{} {label}", r.recording),
+                known.map(|&(.., bound)| bound),
+            ));
         }
         if let (Some(rep), Some(still)) = (r.replaced_diff, r.still_diff) {
             let known = KNOWN_DIFFS

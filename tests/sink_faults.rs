@@ -321,31 +321,13 @@ async fn stuck_pty_inline_sink_never_freezes_the_run_and_its_drops_show_as_they_
 #[test]
 fn stdout_closed_by_its_consumer_counts_every_unwritten_sample_as_dropped() {
     use std::io::Read;
-    use std::process::{Command, Stdio};
-    let dir = tempfile::tempdir().unwrap();
-    let log = dir.path().join("in.log");
     let n = 20_000;
-    imuprep::io::log::write_log(&log, &common::descriptor(), &common::samples(n, 21)).unwrap();
-    let summary = dir.path().join("summary.json");
-    let mut child = Command::new(common::bin())
-        .arg("replay")
-        .arg(&log)
-        .args(["--out", "stdout:csv", "--summary-json"])
-        .arg(&summary)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut out = child.stdout.take().unwrap();
-    let mut first = [0u8; 100];
-    out.read_exact(&mut first).unwrap();
-    drop(out); // like `head -c 100`: the pipe's read end closes
-    let res = child.wait_with_output().unwrap();
-    let err = String::from_utf8_lossy(&res.stderr);
-    assert!(!err.contains("panicked"), "{err}");
-    assert!(res.status.success(), "{err}");
-    let h: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    let ((), err, status, h) = replay_to_consumer(n, 21, |_, mut out| {
+        let mut first = [0u8; 100];
+        out.read_exact(&mut first).unwrap();
+        drop(out); // like `head -c 100`: the pipe's read end closes
+    });
+    assert!(status.success(), "{err}");
     assert_eq!(h["samples_out"], n as u64);
     let s = &h["sinks"][0];
     let (written, dropped) = (

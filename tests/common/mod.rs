@@ -300,3 +300,38 @@ pub fn replay_csv(
         .collect();
     (header, csv_rows(&text))
 }
+
+/// One audit target row judged against the known misses a test lists: `bound` is the measured
+/// bound of the known miss that matches the row, if one does; `what` names the row's recording
+/// (and copy) in the message. The failure, if any: a miss not listed, a listed miss now met
+/// (the list must stay true), or a listed miss beyond its bound.
+pub fn judge_target(
+    t: &imuprep::report::audit::TargetRow,
+    what: &str,
+    bound: Option<f64>,
+) -> Option<String> {
+    match (t.met, bound) {
+        (true, None) => None,
+        (true, Some(_)) => Some(format!(
+            "known miss now met (update KNOWN_MISSES and the docs): {what} {} {} = {}",
+            t.channel, t.target, t.measured
+        )),
+        (false, None) => Some(format!(
+            "MISSED {what} {} {} = {} (limit {})",
+            t.channel, t.target, t.measured, t.limit
+        )),
+        (false, Some(bound)) => {
+            let ok = if t.at_most {
+                t.measured <= bound
+            } else {
+                t.measured >= bound
+            };
+            (!ok).then(|| {
+                format!(
+                    "known miss got worse: {what} {} {} = {} (bound {bound})",
+                    t.channel, t.target, t.measured
+                )
+            })
+        }
+    }
+}
