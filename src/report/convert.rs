@@ -117,7 +117,9 @@ impl fmt::Display for ImportReport {
             writeln!(f, "{d}")?;
         }
         if let Some(t) = &self.timing {
-            writeln!(f, "import: {t}")?;
+            for line in t.lines() {
+                writeln!(f, "import: {line}")?;
+            }
         }
         writeln!(
             f,
