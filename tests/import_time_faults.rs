@@ -148,7 +148,7 @@ fn one_backward_step_counts_the_samples_behind_it_and_says_so() {
 
 /// A protocol recording's time faults are said at import as a CSV's are (a ULog whose logger
 /// dropped 662 of 2 690 samples once imported with no word of it): a MAVLink stream with 5
-/// samples missing imports with "1 gaps (5 samples missing)".
+/// samples missing imports with "1 gap (5 samples missing)" (it once said "1 gaps").
 #[test]
 fn protocol_import_reports_its_gaps() {
     let dir = tempfile::tempdir().unwrap();
@@ -173,8 +173,14 @@ fn protocol_import_reports_its_gaps() {
         back.to_str().unwrap(),
     ]);
     assert!(
-        out.contains("import: 1 gaps (5 samples missing), 0 duplicate"),
+        out.contains("import: 1 gap (5 samples missing), 0 duplicate"),
         "{out}"
     );
     assert!(out.contains("imported 995 samples"), "{out}");
+    // The replay summary of the imported log says it the same way.
+    let out = common::run_cli(&["replay", back.to_str().unwrap(), "--out", "stdout:csv"]);
+    assert!(
+        out.contains("sequence   : 1 gap (5 frames missing), 0 duplicates, 0 restarts"),
+        "{out}"
+    );
 }

@@ -394,8 +394,8 @@ pub fn read_csv_report(
                     path: path.into(),
                     line: lineno,
                     msg: format!(
-                        "{} cells, column {} ({}) missing",
-                        cells.len(),
+                        "{}, column {} ({}) missing",
+                        crate::text::count(cells.len() as u64, "cell", "cells"),
                         p + 1,
                         header[p]
                     ),

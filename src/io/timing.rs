@@ -61,9 +61,10 @@ impl TimeFaults {
 
 impl std::fmt::Display for TimeFaults {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use crate::text::count;
         write!(
             f,
-            "time: {:.3} Hz nominal from the {} interval ({:.3} ms; median {:.3} ms, mean {:.3} ms){}; {} gaps ({} samples missing), {} duplicate time stamps, {} samples stamped behind the latest time ({} of them restarts)",
+            "time: {:.3} Hz nominal from the {} interval ({:.3} ms; median {:.3} ms, mean {:.3} ms){}; {} ({} missing), {}, {} behind the latest time ({} of them {})",
             self.nominal_rate_hz,
             if self.bursty {
                 "mean"
@@ -80,11 +81,20 @@ impl std::fmt::Display for TimeFaults {
             } else {
                 String::new()
             },
-            self.gaps,
-            self.missing,
-            self.duplicates,
-            self.backwards,
-            self.restarts
+            count(self.gaps, "gap", "gaps"),
+            count(self.missing, "sample", "samples"),
+            count(
+                self.duplicates,
+                "duplicate time stamp",
+                "duplicate time stamps"
+            ),
+            count(self.backwards, "sample stamped", "samples stamped"),
+            self.restarts,
+            if self.restarts == 1 {
+                "a restart"
+            } else {
+                "restarts"
+            }
         )
     }
 }
@@ -201,6 +211,12 @@ mod tests {
             (1, 2, 2, 1)
         );
         assert_eq!(tf.nominal_rate_hz, 100.0);
+        // Counts of one read as one (it once printed "1 gaps").
+        let text = tf.to_string();
+        assert!(
+            text.contains("; 1 gap (2 samples missing), 2 duplicate time stamps, 1 sample stamped behind the latest time (0 of them restarts)"),
+            "{text}"
+        );
     }
 
     #[test]

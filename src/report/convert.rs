@@ -10,6 +10,7 @@ use super::{InputProblem, check_input};
 use crate::frame::detect::{ProtocolArgs, ProtocolConfig};
 use crate::io::convert::{ExportFormat, encode_stream, read_any};
 use crate::io::csv::{self as csvio, ImportOptions};
+use crate::text::count;
 
 /// `--col KEY=COLUMN` mappings → the importer's column names (keys: t gx gy gz ax ay az temp).
 pub fn parse_columns(cols: &[String], o: &mut ImportOptions) -> Result<()> {
@@ -97,15 +98,27 @@ pub fn import(
 /// samples must not import in silence).
 fn protocol_faults(s: &crate::frame::DecoderStats) -> String {
     let mut t = format!(
-        "{} gaps ({} samples missing), {} duplicate time stamps or sequence numbers, {} samples stamped behind the latest time, {} restarts",
-        s.gaps, s.missing_frames, s.duplicates, s.time_backwards, s.seq_restarts
+        "{} ({} missing), {}, {} behind the latest time, {}",
+        count(s.gaps, "gap", "gaps"),
+        count(s.missing_frames, "sample", "samples"),
+        count(
+            s.duplicates,
+            "duplicate time stamp or sequence number",
+            "duplicate time stamps or sequence numbers"
+        ),
+        count(s.time_backwards, "sample stamped", "samples stamped"),
+        count(s.seq_restarts, "restart", "restarts")
     );
     let frame_faults =
         s.crc_errors + s.header_errors + s.bad_length + s.truncated + s.garbage_bytes;
     if frame_faults > 0 {
         t += &format!(
-            "; {} CRC errors, {} header errors, {} bad lengths, {} truncated frames, {} garbage bytes",
-            s.crc_errors, s.header_errors, s.bad_length, s.truncated, s.garbage_bytes
+            "; {}, {}, {}, {}, {}",
+            count(s.crc_errors, "CRC error", "CRC errors"),
+            count(s.header_errors, "header error", "header errors"),
+            count(s.bad_length, "bad length", "bad lengths"),
+            count(s.truncated, "truncated frame", "truncated frames"),
+            count(s.garbage_bytes, "garbage byte", "garbage bytes")
         );
     }
     t
@@ -123,8 +136,8 @@ impl fmt::Display for ImportReport {
         }
         writeln!(
             f,
-            "imported {} samples ({:.1} s at {:.2} Hz) from {} into {}",
-            self.samples,
+            "imported {} ({:.1} s at {:.2} Hz) from {} into {}",
+            count(self.samples as u64, "sample", "samples"),
             self.duration_s,
             self.sample_rate_hz,
             self.input.display(),
@@ -172,11 +185,11 @@ impl fmt::Display for ExportReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "exported {} samples to {} ({} CRC errors, {} resyncs in the log)",
-            self.samples,
+            "exported {} to {} ({}, {} in the log)",
+            count(self.samples as u64, "sample", "samples"),
             self.output.display(),
-            self.crc_errors,
-            self.resyncs
+            count(self.crc_errors, "CRC error", "CRC errors"),
+            count(self.resyncs, "resync", "resyncs")
         )
     }
 }
@@ -219,13 +232,13 @@ impl fmt::Display for SimulateReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "simulated {} instants (seed {}): {} frames ({} dropped, {} duplicated), {} bytes → {}",
-            self.instants,
+            "simulated {} (seed {}): {} ({} dropped, {} duplicated), {} → {}",
+            count(self.instants, "instant", "instants"),
             self.seed,
-            self.frames,
+            count(self.frames, "frame", "frames"),
             self.dropped,
             self.duplicated,
-            self.bytes,
+            count(self.bytes, "byte", "bytes"),
             self.output.display()
         )
     }
