@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::{InputProblem, check_input};
 use crate::frame::detect::{ProtocolArgs, ProtocolConfig};
-use crate::io::convert::{ExportFormat, encode_stream, read_any};
+use crate::io::convert::{ExportFormat, encode_stream, read_any, read_any_whole};
 use crate::io::csv::{self as csvio, ImportOptions};
 use crate::text::count;
 
@@ -68,12 +68,17 @@ pub fn import(
     } else {
         let mut pc = ProtocolConfig::auto();
         proto.apply(&mut pc);
-        let f = read_any(input, &pc)?;
+        // The whole file is at hand: time faults and rate derived over all of it, as for a CSV
+        // (`read_any_whole`), not as the streaming decoder learned them.
+        let (f, time) = read_any_whole(input, &pc)?;
         check_input(input, f.samples.len() as u64, &f.stats)?;
         let mut d = f.descriptor.unwrap_or_default();
         d.gyro_range_rad_s = o.gyro_range_rad_s;
         d.accel_range_m_s2 = o.accel_range_m_s2;
-        let timing = Some(protocol_faults(&f.stats));
+        let timing = Some(match time {
+            Some(tf) => format!("{tf}{}", frame_faults(&f.stats)),
+            None => protocol_faults(&f.stats),
+        });
         (
             d,
             f.samples,
@@ -93,11 +98,11 @@ pub fn import(
     })
 }
 
-/// A protocol input's time and frame faults, said at import as a CSV's are (they are flagged on
-/// the samples and counted again on replay; a ULog whose logger dropped a quarter of its
-/// samples must not import in silence).
+/// A native log's sequence and frame faults, said at import as a CSV's time faults are (they
+/// are flagged on the samples and counted again on replay; a log whose writer dropped a quarter
+/// of its samples must not import in silence).
 fn protocol_faults(s: &crate::frame::DecoderStats) -> String {
-    let mut t = format!(
+    let t = format!(
         "{} ({} missing), {}, {} behind the latest time, {}",
         count(s.gaps, "gap", "gaps"),
         count(s.missing_frames, "sample", "samples"),
@@ -109,19 +114,23 @@ fn protocol_faults(s: &crate::frame::DecoderStats) -> String {
         count(s.time_backwards, "sample stamped", "samples stamped"),
         count(s.seq_restarts, "restart", "restarts")
     );
-    let frame_faults =
-        s.crc_errors + s.header_errors + s.bad_length + s.truncated + s.garbage_bytes;
-    if frame_faults > 0 {
-        t += &format!(
-            "; {}, {}, {}, {}, {}",
-            count(s.crc_errors, "CRC error", "CRC errors"),
-            count(s.header_errors, "header error", "header errors"),
-            count(s.bad_length, "bad length", "bad lengths"),
-            count(s.truncated, "truncated frame", "truncated frames"),
-            count(s.garbage_bytes, "garbage byte", "garbage bytes")
-        );
+    t + &frame_faults(s)
+}
+
+/// `; N CRC errors, ...` when the decoder met any frame fault, else nothing.
+fn frame_faults(s: &crate::frame::DecoderStats) -> String {
+    let n = s.crc_errors + s.header_errors + s.bad_length + s.truncated + s.garbage_bytes;
+    if n == 0 {
+        return String::new();
     }
-    t
+    format!(
+        "; {}, {}, {}, {}, {}",
+        count(s.crc_errors, "CRC error", "CRC errors"),
+        count(s.header_errors, "header error", "header errors"),
+        count(s.bad_length, "bad length", "bad lengths"),
+        count(s.truncated, "truncated frame", "truncated frames"),
+        count(s.garbage_bytes, "garbage byte", "garbage bytes")
+    )
 }
 
 impl fmt::Display for ImportReport {
