@@ -95,6 +95,14 @@ fn empty_cells_are_counted_with_their_first_line_and_the_rows_kept() {
     assert!(s[ALL_HOLE].channels().iter().all(|v| v.is_nan()));
     // No time fault from a hole: the empty row's time stamp holds the time base.
     assert!(!rep.time.any(), "{rep}");
+    // With time from the row index (`--rate`), the kept rows keep every later time right.
+    let o = ImportOptions {
+        time_from_index_hz: Some(FS),
+        ..ImportOptions::default()
+    };
+    let (_, by_index, _) = read_csv_report(&p, &o).unwrap();
+    assert_eq!(by_index.len(), N);
+    assert_eq!(by_index[N - 1].t_ns, (N as u64 - 1) * 10_000_000);
     let text = rep.to_string();
     assert!(
         text.contains(
