@@ -27,5 +27,6 @@ pub mod settings;
 pub mod sim;
 pub mod stage;
 pub mod stats;
+pub mod text;
 
 pub use sample::{Sample, flags};

@@ -9,6 +9,7 @@ use crate::io::source::{self, SourceEvent};
 use crate::sample::{Sample, channel_names_of, flags};
 use crate::stage::Pipeline;
 use crate::stage::health::PipelineHealth;
+use crate::text::count;
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -93,24 +94,31 @@ impl Health {
         }
         let _ = writeln!(
             o,
-            "  frames     : {} bytes in, {} good frames ({} samples, {} descriptors)",
-            d.bytes_in, d.frames_ok, d.samples, d.descriptors
+            "  frames     : {} in, {} ({}, {})",
+            count(d.bytes_in, "byte", "bytes"),
+            count(d.frames_ok, "good frame", "good frames"),
+            count(d.samples, "sample", "samples"),
+            count(d.descriptors, "descriptor", "descriptors")
         );
-        let faults = counts(&[
-            (d.crc_errors, "CRC errors"),
-            (d.header_errors, "header errors"),
-            (d.bad_length, "bad lengths"),
-            (d.resyncs, "resyncs"),
-            (d.garbage_bytes, "garbage bytes"),
-            (d.truncated, "truncated"),
-            (d.unknown_type, "unknown type"),
-            (d.bad_payload, "bad payload"),
-        ]);
+        let faults = [
+            count(d.crc_errors, "CRC error", "CRC errors"),
+            count(d.header_errors, "header error", "header errors"),
+            count(d.bad_length, "bad length", "bad lengths"),
+            count(d.resyncs, "resync", "resyncs"),
+            count(d.garbage_bytes, "garbage byte", "garbage bytes"),
+            format!("{} truncated", d.truncated),
+            format!("{} unknown type", d.unknown_type),
+            format!("{} bad payload", d.bad_payload),
+        ]
+        .join(", ");
         let _ = writeln!(o, "  faults     : {faults}");
         let _ = writeln!(
             o,
-            "  sequence   : {} gaps ({} frames missing), {} duplicates, {} restarts",
-            d.gaps, d.missing_frames, d.duplicates, d.seq_restarts
+            "  sequence   : {} ({} missing), {}, {}",
+            count(d.gaps, "gap", "gaps"),
+            count(d.missing_frames, "frame", "frames"),
+            count(d.duplicates, "duplicate", "duplicates"),
+            count(d.seq_restarts, "restart", "restarts")
         );
         let flagged = counts(&[
             (self.flagged_replaced, "replaced"),
@@ -129,8 +137,8 @@ impl Health {
         if self.samples_partial > 0 {
             let _ = writeln!(
                 o,
-                "  absent     : {} samples without channel(s) {} (published as absent, never as zeros; not cleaned)",
-                self.samples_partial,
+                "  absent     : {} without channel(s) {} (published as absent, never as zeros; not cleaned)",
+                count(self.samples_partial, "sample", "samples"),
                 channel_names_of(self.absent_channels).join(" ")
             );
         }
@@ -140,12 +148,20 @@ impl Health {
         if d.other_messages + d.partial_samples + d.time_backwards + d.unverified > 0 {
             let _ = writeln!(
                 o,
-                "  protocol   : {} other messages ({} bytes) passed by, {} partial samples, {} samples stamped behind the latest time, {} unverified",
-                d.other_messages, d.other_bytes, d.partial_samples, d.time_backwards, d.unverified
+                "  protocol   : {} ({}) passed by, {}, {} behind the latest time, {} unverified",
+                count(d.other_messages, "other message", "other messages"),
+                count(d.other_bytes, "byte", "bytes"),
+                count(d.partial_samples, "partial sample", "partial samples"),
+                count(d.time_backwards, "sample stamped", "samples stamped"),
+                d.unverified
             );
         }
         if self.source_outages > 0 {
-            let _ = writeln!(o, "  source     : {} outages", self.source_outages);
+            let _ = writeln!(
+                o,
+                "  source     : {}",
+                count(self.source_outages, "outage", "outages")
+            );
         }
         if self.cleaning_stages.is_empty() {
             let _ = writeln!(o, "  cleaning   : {NO_CLEANING}");
@@ -161,21 +177,28 @@ impl Health {
         if self.source_stalls > 0 {
             let _ = writeln!(
                 o,
-                "  source     : {} stalls (open but silent; reopened)",
-                self.source_stalls
+                "  source     : {} (open but silent; reopened)",
+                count(self.source_stalls, "stall", "stalls")
             );
         }
         for s in &self.sinks {
             let _ = writeln!(
                 o,
-                "  sink       : {} — {} out, {} dropped, {} errors, {} health reports{}",
+                "  sink       : {} — {} out, {} dropped, {}, {}{}",
                 s.name,
                 s.samples_out,
                 s.dropped,
-                s.errors,
-                s.health_out,
+                count(s.errors, "error", "errors"),
+                count(s.health_out, "health report", "health reports"),
                 if s.messages_dropped > 0 {
-                    format!(", {} pass-through messages dropped", s.messages_dropped)
+                    format!(
+                        ", {} dropped",
+                        count(
+                            s.messages_dropped,
+                            "pass-through message",
+                            "pass-through messages"
+                        )
+                    )
                 } else {
                     String::new()
                 }
@@ -184,8 +207,10 @@ impl Health {
             if g.clients > 0 {
                 let _ = writeln!(
                     o,
-                    "               {} clients gone — {} sent, {} dropped (lag)",
-                    g.clients, g.samples_sent, g.samples_dropped
+                    "               {} gone — {} sent, {} dropped (lag)",
+                    count(g.clients, "client", "clients"),
+                    g.samples_sent,
+                    g.samples_dropped
                 );
             }
             for c in &s.clients {

@@ -72,20 +72,25 @@ impl DecoderStats {
     /// garbage (more than [`GARBAGE_LIMIT`] of them skipped while searching for frames, or lost
     /// in frames that failed their checks).
     pub fn input_problem(&self, samples: u64) -> Option<String> {
+        use crate::text::count;
         let lost = self.garbage_bytes;
         if samples == 0 {
             return Some(format!(
-                "no samples decoded from {} bytes of input ({} garbage bytes, {} CRC errors, {} header errors, {} truncated frames): nothing was published",
-                self.bytes_in, lost, self.crc_errors, self.header_errors, self.truncated
+                "no samples decoded from {} of input ({}, {}, {}, {}): nothing was published",
+                count(self.bytes_in, "byte", "bytes"),
+                count(lost, "garbage byte", "garbage bytes"),
+                count(self.crc_errors, "CRC error", "CRC errors"),
+                count(self.header_errors, "header error", "header errors"),
+                count(self.truncated, "truncated frame", "truncated frames")
             ));
         }
         if self.bytes_in > 0 && lost as f64 > GARBAGE_LIMIT * self.bytes_in as f64 {
             return Some(format!(
-                "most of the input was garbage: {} of {} bytes ({:.0} %) skipped; only {} samples decoded",
+                "most of the input was garbage: {} of {} bytes ({:.0} %) skipped; only {} decoded",
                 lost,
                 self.bytes_in,
                 100.0 * lost as f64 / self.bytes_in as f64,
-                samples
+                count(samples, "sample", "samples")
             ));
         }
         None

@@ -14,7 +14,8 @@
 //! take for measurements.
 
 use crate::frame::detect::{DecodedFile, ProtocolConfig, decode_bytes};
-use crate::frame::{Descriptor, mavlink, ubx, ulog};
+use crate::frame::{Descriptor, Protocol, mavlink, ubx, ulog};
+use crate::io::timing::{TimeFaults, rederive_sequence};
 use crate::sample::Sample;
 use bytes::BytesMut;
 use std::path::Path;
@@ -41,6 +42,34 @@ pub fn read_any(path: &Path, c: &ProtocolConfig) -> std::io::Result<DecodedFile>
     let bytes = std::fs::read(path)
         .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
     Ok(decode_bytes(&bytes, c))
+}
+
+/// Read a whole recording to import it: [`read_any`], then, for a protocol whose decoder derives
+/// the sequence from time stamps (all but the native one, which has a frame counter), sequence
+/// numbers, time-fault flags and the nominal rate derived over the whole file by the rule a CSV
+/// import uses ([`rederive_sequence`]), so a ULog and the CSV of the same stream import to the
+/// same gaps and rate. The decoder's time counters (gaps, missing, duplicates, samples behind,
+/// restarts) are replaced by what that found; its frame counters are kept. The time faults are
+/// returned when they were derived so.
+pub fn read_any_whole(
+    path: &Path,
+    c: &ProtocolConfig,
+) -> std::io::Result<(DecodedFile, Option<TimeFaults>)> {
+    let mut f = read_any(path, c)?;
+    if f.protocol == Protocol::Native || f.samples.is_empty() {
+        return Ok((f, None));
+    }
+    let tf = rederive_sequence(&mut f.samples);
+    f.stats.gaps = tf.gaps;
+    f.stats.missing_frames = tf.missing;
+    f.stats.duplicates = tf.duplicates;
+    f.stats.time_backwards = tf.backwards;
+    f.stats.seq_restarts = tf.restarts;
+    if tf.nominal_rate_hz > 0.0 {
+        let d = f.descriptor.get_or_insert_with(Descriptor::default);
+        d.sample_rate_hz = tf.nominal_rate_hz;
+    }
+    Ok((f, Some(tf)))
 }
 
 /// The samples as a byte stream in `to` (not CSV). Fails for `Mcap` in a build without ROS 2

@@ -1,7 +1,8 @@
 //! CSV import (canonical and vendor column layouts) and export.
 //!
 //! Canonical CSV: header `t,gx,gy,gz,ax,ay,az,temp` in s, rad/s, m/s², °C; `temp` may be empty
-//! or missing; extra columns are ignored. Other layouts are matched by column name (e.g.
+//! or missing; extra columns are ignored. A channel column empty in every row is an absent
+//! channel; an empty cell in a column with values elsewhere is a missing value (NaN, counted). Other layouts are matched by column name (e.g.
 //! `gyro_x_dps`, `Accelerometer X (g)`), with units read from the name or given as options.
 
 use crate::frame::Descriptor;
@@ -248,6 +249,16 @@ fn open_text(path: &Path) -> Result<Box<dyn BufRead>, CsvError> {
     Ok(Box::new(BufReader::with_capacity(1 << 16, r)))
 }
 
+/// The empty cells of one present channel (a column with values in other rows): each imported
+/// as a missing value (NaN), which the decoders and the pipeline flag `NON_FINITE`.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct EmptyCells {
+    pub channel: String,
+    pub cells: u64,
+    /// Line in the file (1 = the header) of the first.
+    pub first_line: usize,
+}
+
 /// What an import found besides the samples.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct ImportReport {
@@ -258,16 +269,57 @@ pub struct ImportReport {
     /// Channels the file does not have (no column, or a column empty in every row): written as
     /// absent (the descriptor's absent mask, NaN values), never as zeros.
     pub absent: Vec<String>,
+    /// Present channels with some empty cells, in channel order (rows kept, values NaN).
+    pub empty_cells: Vec<EmptyCells>,
+    /// Rows whose every present channel is empty (counted in `empty_cells` too): kept as
+    /// samples with no value, their time stamp holding the time base.
+    pub empty_rows: u64,
+    /// Line of the first such row.
+    pub first_empty_row: Option<usize>,
 }
 
 impl std::fmt::Display for ImportReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} rows; {}", self.rows, self.time)?;
+        write!(
+            f,
+            "{}; {}",
+            crate::text::count(self.rows, "row", "rows"),
+            self.time
+        )?;
         if !self.absent.is_empty() {
             write!(
                 f,
                 "; channels absent (no column, or every cell empty): {} — written as absent, not as zeros",
                 self.absent.join(", ")
+            )?;
+        }
+        // Missing values on a line of their own: a user must see them, not find them at the
+        // end of the time summary.
+        if !self.empty_cells.is_empty() {
+            let each: Vec<String> = self
+                .empty_cells
+                .iter()
+                .map(|e| {
+                    format!(
+                        "{}: {} (first at line {})",
+                        e.channel,
+                        crate::text::count(e.cells, "empty cell", "empty cells"),
+                        e.first_line
+                    )
+                })
+                .collect();
+            write!(
+                f,
+                "\n{} — imported as missing values (NaN), rows kept, flagged non-finite by the pipeline",
+                each.join(", ")
+            )?;
+        }
+        if let Some(line) = self.first_empty_row {
+            write!(
+                f,
+                "\n{} with every channel empty (first at line {}) — kept, with no value (the time stamp holds the time base), flagged non-finite by the pipeline",
+                crate::text::count(self.empty_rows, "row", "rows"),
+                line
             )?;
         }
         Ok(())
@@ -322,9 +374,11 @@ pub fn read_csv_report(
     let ascale = if lay.accel == AccelUnit::G { G0 } else { 1.0 };
     let mut out = Vec::new();
     let mut t0: Option<f64> = None;
-    // Empty cells per channel, and the line of the first.
+    // Empty cells per channel, and the line of the first; the rows with any empty channel cell
+    // (line, mask of the empty channels), to find those left with no value at all.
     let mut empty = [0usize; 6];
     let mut first_empty: [Option<usize>; 6] = [None; 6];
+    let mut holey_rows: Vec<(usize, u8)> = Vec::new();
     while rd.read_record(&mut rec).map_err(io)? {
         let lineno = rec.position().map_or(0, |p| p.line() as usize);
         if rec.len() == 1 && rec[0].trim().is_empty() {
@@ -340,15 +394,15 @@ pub fn read_csv_report(
                     path: path.into(),
                     line: lineno,
                     msg: format!(
-                        "{} cells, column {} ({}) missing",
-                        cells.len(),
+                        "{}, column {} ({}) missing",
+                        crate::text::count(cells.len() as u64, "cell", "cells"),
                         p + 1,
                         header[p]
                     ),
                 })?;
             if cell.is_empty() && k != 0 {
-                // Temperature may be empty; an empty channel cell is judged after the last row
-                // (a column empty in every row is an absent channel).
+                // Temperature may be empty; an empty channel cell is a missing value, judged
+                // after the last row (a column empty in every row is an absent channel).
                 return Ok(None);
             }
             cell.parse::<f64>().map(Some).map_err(|_| CsvError::Cell {
@@ -385,6 +439,7 @@ pub fn read_csv_report(
         }
         s.t_ns = t_ns as u64;
         let mut ch = [f64::NAN; 6];
+        let mut empty_here = 0u8;
         for (c, v) in ch.iter_mut().enumerate() {
             if lay.absent & (1 << c) != 0 {
                 continue;
@@ -395,31 +450,44 @@ pub fn read_csv_report(
                 None => {
                     empty[c] += 1;
                     first_empty[c].get_or_insert(lineno);
+                    empty_here |= 1 << c;
                 }
             }
+        }
+        if empty_here != 0 {
+            holey_rows.push((lineno, empty_here));
         }
         s.set_channels(&ch);
         s.temp_c = get(7)?;
         out.push(s);
     }
-    // A channel column empty in every row is an absent channel; a few empty cells are an error
-    // (a value is missing, and nothing says what it was).
+    // A channel column empty in every row is an absent channel (the sensor has no such
+    // channel); an empty cell in a column with values elsewhere is a missing value: the row is
+    // kept (its other channels are measurements), the value NaN, which the decoders and the
+    // pipeline flag `NON_FINITE` (and the pipeline replaces), and the import counts it.
     let mut absent = lay.absent;
+    let mut empty_cells = Vec::new();
     for c in 0..6 {
-        let Some(line) = first_empty[c] else { continue };
+        let Some(first_line) = first_empty[c] else {
+            continue;
+        };
         if empty[c] == out.len() {
             absent |= 1 << c;
-            continue;
+        } else {
+            empty_cells.push(EmptyCells {
+                channel: crate::sample::CHANNEL_NAMES[c].to_string(),
+                cells: empty[c] as u64,
+                first_line,
+            });
         }
-        let p = lay.idx[c + 1].expect("present channel");
-        return Err(CsvError::Cell {
-            path: path.into(),
-            line,
-            col: p + 1,
-            cell: String::new(),
-            name: header[p].clone(),
-        });
     }
+    // A row with every present channel empty is kept too (decided so: its time stamp is real
+    // and holds the time base, where a dropped row would be a gap the file does not have, and
+    // with `--rate` would shift every later time stamp; one rule for any number of empty
+    // cells), and counted on its own.
+    let no_value = |m: u8| (m | absent) == ALL_CHANNELS;
+    let empty_rows = holey_rows.iter().filter(|r| no_value(r.1)).count() as u64;
+    let first_empty_row = holey_rows.iter().find(|r| no_value(r.1)).map(|r| r.0);
     if absent == ALL_CHANNELS {
         return Err(CsvError::Columns {
             path: path.into(),
@@ -438,6 +506,9 @@ pub fn read_csv_report(
             .into_iter()
             .map(str::to_string)
             .collect(),
+        empty_cells,
+        empty_rows,
+        first_empty_row,
         ..ImportReport::default()
     };
     let rate = match o.time_from_index_hz {

@@ -61,9 +61,10 @@ impl TimeFaults {
 
 impl std::fmt::Display for TimeFaults {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use crate::text::count;
         write!(
             f,
-            "time: {:.3} Hz nominal from the {} interval ({:.3} ms; median {:.3} ms, mean {:.3} ms){}; {} gaps ({} samples missing), {} duplicate time stamps, {} samples stamped behind the latest time ({} of them restarts)",
+            "time: {:.3} Hz nominal from the {} interval ({:.3} ms; median {:.3} ms, mean {:.3} ms){}; {} ({} missing), {}, {} behind the latest time ({} of them {})",
             self.nominal_rate_hz,
             if self.bursty {
                 "mean"
@@ -80,11 +81,20 @@ impl std::fmt::Display for TimeFaults {
             } else {
                 String::new()
             },
-            self.gaps,
-            self.missing,
-            self.duplicates,
-            self.backwards,
-            self.restarts
+            count(self.gaps, "gap", "gaps"),
+            count(self.missing, "sample", "samples"),
+            count(
+                self.duplicates,
+                "duplicate time stamp",
+                "duplicate time stamps"
+            ),
+            count(self.backwards, "sample stamped", "samples stamped"),
+            self.restarts,
+            if self.restarts == 1 {
+                "a restart"
+            } else {
+                "restarts"
+            }
         )
     }
 }
@@ -173,6 +183,20 @@ pub fn derive_sequence(samples: &mut [Sample]) -> TimeFaults {
     tf
 }
 
+/// [`derive_sequence`] over a whole recording a streaming decoder has already sequenced from its
+/// time stamps (UBX, MAVLink, ULog, MCAP: no sample counter). The decoder learns the period from
+/// the first intervals of the stream and judges each interval as it comes, so a gap among those
+/// first intervals goes unflagged (the PX4 sample's first interval, 36 ms at 250 Hz, is one), and
+/// its period is their median, not this module's rule. With the whole recording at hand, the
+/// `GAP` and `DUPLICATE` flags it set are cleared and derived afresh, exactly as for a CSV of
+/// the same stream (no other code sets those two flags on these protocols' samples).
+pub fn rederive_sequence(samples: &mut [Sample]) -> TimeFaults {
+    for s in samples.iter_mut() {
+        s.flags &= !(flags::GAP | flags::DUPLICATE);
+    }
+    derive_sequence(samples)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -201,6 +225,12 @@ mod tests {
             (1, 2, 2, 1)
         );
         assert_eq!(tf.nominal_rate_hz, 100.0);
+        // Counts of one read as one (it once printed "1 gaps").
+        let text = tf.to_string();
+        assert!(
+            text.contains("; 1 gap (2 samples missing), 2 duplicate time stamps, 1 sample stamped behind the latest time (0 of them restarts)"),
+            "{text}"
+        );
     }
 
     #[test]

@@ -8,8 +8,9 @@ use serde::Serialize;
 
 use super::{InputProblem, check_input};
 use crate::frame::detect::{ProtocolArgs, ProtocolConfig};
-use crate::io::convert::{ExportFormat, encode_stream, read_any};
+use crate::io::convert::{ExportFormat, encode_stream, read_any, read_any_whole};
 use crate::io::csv::{self as csvio, ImportOptions};
+use crate::text::count;
 
 /// `--col KEY=COLUMN` mappings → the importer's column names (keys: t gx gy gz ax ay az temp).
 pub fn parse_columns(cols: &[String], o: &mut ImportOptions) -> Result<()> {
@@ -67,12 +68,17 @@ pub fn import(
     } else {
         let mut pc = ProtocolConfig::auto();
         proto.apply(&mut pc);
-        let f = read_any(input, &pc)?;
+        // The whole file is at hand: time faults and rate derived over all of it, as for a CSV
+        // (`read_any_whole`), not as the streaming decoder learned them.
+        let (f, time) = read_any_whole(input, &pc)?;
         check_input(input, f.samples.len() as u64, &f.stats)?;
         let mut d = f.descriptor.unwrap_or_default();
         d.gyro_range_rad_s = o.gyro_range_rad_s;
         d.accel_range_m_s2 = o.accel_range_m_s2;
-        let timing = Some(protocol_faults(&f.stats));
+        let timing = Some(match time {
+            Some(tf) => format!("{tf}{}", frame_faults(&f.stats)),
+            None => protocol_faults(&f.stats),
+        });
         (
             d,
             f.samples,
@@ -92,23 +98,39 @@ pub fn import(
     })
 }
 
-/// A protocol input's time and frame faults, said at import as a CSV's are (they are flagged on
-/// the samples and counted again on replay; a ULog whose logger dropped a quarter of its
-/// samples must not import in silence).
+/// A native log's sequence and frame faults, said at import as a CSV's time faults are (they
+/// are flagged on the samples and counted again on replay; a log whose writer dropped a quarter
+/// of its samples must not import in silence).
 fn protocol_faults(s: &crate::frame::DecoderStats) -> String {
-    let mut t = format!(
-        "{} gaps ({} samples missing), {} duplicate time stamps or sequence numbers, {} samples stamped behind the latest time, {} restarts",
-        s.gaps, s.missing_frames, s.duplicates, s.time_backwards, s.seq_restarts
+    let t = format!(
+        "{} ({} missing), {}, {} behind the latest time, {}",
+        count(s.gaps, "gap", "gaps"),
+        count(s.missing_frames, "sample", "samples"),
+        count(
+            s.duplicates,
+            "duplicate time stamp or sequence number",
+            "duplicate time stamps or sequence numbers"
+        ),
+        count(s.time_backwards, "sample stamped", "samples stamped"),
+        count(s.seq_restarts, "restart", "restarts")
     );
-    let frame_faults =
-        s.crc_errors + s.header_errors + s.bad_length + s.truncated + s.garbage_bytes;
-    if frame_faults > 0 {
-        t += &format!(
-            "; {} CRC errors, {} header errors, {} bad lengths, {} truncated frames, {} garbage bytes",
-            s.crc_errors, s.header_errors, s.bad_length, s.truncated, s.garbage_bytes
-        );
+    t + &frame_faults(s)
+}
+
+/// `; N CRC errors, ...` when the decoder met any frame fault, else nothing.
+fn frame_faults(s: &crate::frame::DecoderStats) -> String {
+    let n = s.crc_errors + s.header_errors + s.bad_length + s.truncated + s.garbage_bytes;
+    if n == 0 {
+        return String::new();
     }
-    t
+    format!(
+        "; {}, {}, {}, {}, {}",
+        count(s.crc_errors, "CRC error", "CRC errors"),
+        count(s.header_errors, "header error", "header errors"),
+        count(s.bad_length, "bad length", "bad lengths"),
+        count(s.truncated, "truncated frame", "truncated frames"),
+        count(s.garbage_bytes, "garbage byte", "garbage bytes")
+    )
 }
 
 impl fmt::Display for ImportReport {
@@ -117,12 +139,14 @@ impl fmt::Display for ImportReport {
             writeln!(f, "{d}")?;
         }
         if let Some(t) = &self.timing {
-            writeln!(f, "import: {t}")?;
+            for line in t.lines() {
+                writeln!(f, "import: {line}")?;
+            }
         }
         writeln!(
             f,
-            "imported {} samples ({:.1} s at {:.2} Hz) from {} into {}",
-            self.samples,
+            "imported {} ({:.1} s at {:.2} Hz) from {} into {}",
+            count(self.samples as u64, "sample", "samples"),
             self.duration_s,
             self.sample_rate_hz,
             self.input.display(),
@@ -170,11 +194,11 @@ impl fmt::Display for ExportReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "exported {} samples to {} ({} CRC errors, {} resyncs in the log)",
-            self.samples,
+            "exported {} to {} ({}, {} in the log)",
+            count(self.samples as u64, "sample", "samples"),
             self.output.display(),
-            self.crc_errors,
-            self.resyncs
+            count(self.crc_errors, "CRC error", "CRC errors"),
+            count(self.resyncs, "resync", "resyncs")
         )
     }
 }
@@ -217,13 +241,13 @@ impl fmt::Display for SimulateReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "simulated {} instants (seed {}): {} frames ({} dropped, {} duplicated), {} bytes → {}",
-            self.instants,
+            "simulated {} (seed {}): {} ({} dropped, {} duplicated), {} → {}",
+            count(self.instants, "instant", "instants"),
             self.seed,
-            self.frames,
+            count(self.frames, "frame", "frames"),
             self.dropped,
             self.duplicated,
-            self.bytes,
+            count(self.bytes, "byte", "bytes"),
             self.output.display()
         )
     }

@@ -1,0 +1,23 @@
+//! Small helpers for the text people read (summaries, errors, reports), not for machine-readable
+//! output (JSON keys, CSV headers stay as they are).
+
+/// `n` and the noun in the number that fits it: `count(1, "gap", "gaps")` is "1 gap",
+/// `count(0, "gap", "gaps")` "0 gaps". Both forms are given, so irregular plurals ("1 entry",
+/// "2 entries") and phrases ("1 sample stamped", "3 samples stamped") read right too.
+pub fn count(n: impl Into<u64>, one: &str, many: &str) -> String {
+    let n = n.into();
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_is_singular_everything_else_plural() {
+        assert_eq!(count(0u64, "gap", "gaps"), "0 gaps");
+        assert_eq!(count(1u64, "gap", "gaps"), "1 gap");
+        assert_eq!(count(2u32, "gap", "gaps"), "2 gaps");
+        assert_eq!(count(1u8, "entry", "entries"), "1 entry");
+    }
+}
