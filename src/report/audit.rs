@@ -194,7 +194,8 @@ pub fn load_recording(path: &Path) -> Result<(Descriptor, Vec<Sample>), String> 
         Ok((d.unwrap_or_default(), s))
     } else if name.ends_with(".ulg") {
         let pc = crate::frame::detect::ProtocolConfig::auto();
-        let f = crate::io::convert::read_any(path, &pc).map_err(|e| e.to_string())?;
+        // As `imuprep import` reads it: time faults and rate over the whole file.
+        let (f, _) = crate::io::convert::read_any_whole(path, &pc).map_err(|e| e.to_string())?;
         if f.samples.is_empty() {
             return Err("no IMU samples decoded".into());
         }
