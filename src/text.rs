@@ -9,6 +9,17 @@ pub fn count(n: impl Into<u64>, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }
 
+/// `v` with at most `places` decimals, trailing zeros dropped (100 → "100", 104.26409 →
+/// "104.264" at 3): a rate or range for people, not the float's every digit.
+pub fn trim_decimals(v: f64, places: usize) -> String {
+    let s = format!("{v:.places$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -19,5 +30,13 @@ mod tests {
         assert_eq!(count(1u64, "gap", "gaps"), "1 gap");
         assert_eq!(count(2u32, "gap", "gaps"), "2 gaps");
         assert_eq!(count(1u8, "entry", "entries"), "1 entry");
+    }
+
+    #[test]
+    fn decimals_are_trimmed_not_rounded_away() {
+        assert_eq!(trim_decimals(100.0, 3), "100");
+        assert_eq!(trim_decimals(104.26409, 3), "104.264");
+        assert_eq!(trim_decimals(248.5580, 3), "248.558");
+        assert_eq!(trim_decimals(2.5, 2), "2.5");
     }
 }

@@ -345,7 +345,7 @@ impl fmt::Display for FitReport {
             "ARIMA identification on {} samples ({:.0} s at {} Hz; sigma in the channel's unit, rad/s or m/s²):",
             self.samples,
             self.samples as f64 / rate,
-            crate::runtime::trim_decimals(rate, 3)
+            crate::text::trim_decimals(rate, 3)
         )?;
         writeln!(
             f,
