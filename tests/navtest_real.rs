@@ -71,7 +71,9 @@ fn drive_raw_30s_outages_agree_with_the_reference_filter() {
     for e in &run.errors {
         // The harness reports the start on the IMU clock before the drive's −0.125 s offset.
         assert!(
-            starts.iter().any(|s| (s - e.outage.start_rel_s).abs() < 0.2),
+            starts
+                .iter()
+                .any(|s| (s - e.outage.start_rel_s).abs() < 0.2),
             "{}",
             e.outage.start_rel_s
         );
