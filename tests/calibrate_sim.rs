@@ -52,8 +52,7 @@ fn simulate_and_calibrate(dir: &Path, seed: u64, sets: &[&str]) -> (String, Stri
         "--out-dir",
         out.to_str().unwrap(),
     ]);
-    let json: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let json: Value = common::read_json(out.join("report.json"));
     (log.display().to_string(), text, json)
 }
 
