@@ -32,8 +32,7 @@ fn allan_writes_report_plot_and_exports_the_daemon_loads() {
     ] {
         assert!(d.join(f).exists(), "{f} not written:\n{out}");
     }
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let r: serde_json::Value = common::read_json(&json);
     assert_eq!(r["channels"].as_array().unwrap().len(), 6);
     let svg = std::fs::read_to_string(d.join("allan.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("Allan deviation"));

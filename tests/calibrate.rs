@@ -141,8 +141,7 @@ fn a_tumbled_log_is_calibrated_and_the_daemon_applies_the_config() {
         text.contains("result: calibration kept: bias + scale + misalignment"),
         "{text}"
     );
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let json: serde_json::Value = common::read_json(out.join("report.json"));
     let fitted = &json["accel"]["fitted"];
     assert!(
         text.contains("result (gyro): gyro calibration kept: scale + misalignment"),

@@ -22,7 +22,7 @@ fn calibrate(csv: &std::path::Path, pos: &std::path::Path) -> serde_json::Value 
     ]);
     eprintln!("{text}");
     assert!(text.contains("gyro scale about the vertical from GNSS course"));
-    serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
+    common::read_json(out.join("report.json"))
 }
 
 /// `calibrate` of the rtklibexplorer record `name` (`drive_0708`, `walk_0827`) with its RTK

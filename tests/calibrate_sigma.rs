@@ -8,22 +8,20 @@
 //! cargo test --release --test calibrate_sigma -- --ignored --nocapture
 //! ```
 
+mod common;
+
+use common::{CalibTruth, calib_truth, rms, tumble_scenario};
 use imuprep::analysis::calib::fit::{CalibSettings, calibrate_accel};
 use imuprep::analysis::calib::gyro::{
     GyroCalibration, GyroInterval, NoiseParts, calibrate_gyro, gyro_intervals,
 };
 use imuprep::analysis::calib::still::{StillSettings, still_stretches};
 use imuprep::sim::Simulator;
-use imuprep::sim::scenario::Scenario;
 use imuprep::stage::bias::settings::CalibrationSettings;
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 const SEEDS: u64 = 40;
 const RATE: f64 = 100.0;
-
-fn a_of(ppm: [f64; 3], mrad: [[f64; 3]; 3]) -> Matrix3<f64> {
-    Matrix3::from_fn(|i, j| f64::from(u8::from(i == j)) * (1.0 + ppm[i] * 1e-6) + mrad[i][j] * 1e-3)
-}
 
 /// ΔR of a motion through K.
 fn rotation(k: &Matrix3<f64>, iv: &GyroInterval) -> Rotation3<f64> {
@@ -51,10 +49,6 @@ fn z_of(g: &GyroCalibration, m: &Matrix3<f64>) -> Vec<f64> {
         .collect()
 }
 
-fn rms(v: &[f64]) -> f64 {
-    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
-}
-
 fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0f64, |m, z| m.max(z.abs()))
 }
@@ -62,19 +56,11 @@ fn max_abs(v: &[f64]) -> f64 {
 #[test]
 #[ignore = "about 12 minutes: the measurement behind docs/calibrate.md's table of the gyro's σ"]
 fn each_part_of_the_gyro_noise_model_and_the_sigma_it_gives() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("replay/tumble.toml");
-    let scn = Scenario::from_toml_str(&std::fs::read_to_string(path).unwrap()).unwrap();
-    let e = &scn.errors;
-    let (sf, mis) = (
-        e.scale_factor.as_ref().unwrap(),
-        e.misalignment.as_ref().unwrap(),
-    );
-    let a = a_of(sf.accel_ppm, mis.accel_mrad);
-    let l = (a * a.transpose()).cholesky().unwrap().l();
-    let m = a_of(sf.gyro_ppm, mis.gyro_mrad) * (l.try_inverse().unwrap() * a).transpose();
+    let scn = tumble_scenario();
+    let CalibTruth { l, gyro_m: m, bias } = calib_truth(&scn);
     let k_true = m.try_inverse().unwrap();
     let true_accel = CalibrationSettings {
-        bias: (Vector3::from(e.turn_on_bias.as_ref().unwrap().accel_mg) * 9.80665e-3).into(),
+        bias: bias.into(),
         scale: [l[(0, 0)], l[(1, 1)], l[(2, 2)]],
         misalignment: std::array::from_fn(|i| std::array::from_fn(|j| l[(i, j)] / l[(i, i)])),
     }

@@ -5,15 +5,13 @@
 
 mod common;
 
-use common::run_cli;
-use imuprep::sim::scenario::{MotionConfig, Scenario};
+use common::{CalibTruth, TUMBLE, calib_truth, rms, run_cli, tumble_scenario};
+use imuprep::sim::scenario::MotionConfig;
 use imuprep::sim::{Simulator, Trajectory};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use serde_json::Value;
 use std::path::Path;
 
-const SCENARIO: &str = "replay/tumble.toml";
-const MG: f64 = 9.80665e-3;
 /// Seeds of the recovery and clean runs: the scenario's own and four more. Each run is about
 /// 4 minutes of 100 Hz data (253.5 s).
 const SEEDS: [u64; 5] = [20240617, 1, 2, 3, 4];
@@ -26,42 +24,6 @@ const SEEDS: [u64; 5] = [20240617, 1, 2, 3, 4];
 /// largest is 3.22 (gyro, seed 1).
 const Z_TOL: f64 = 4.0;
 
-fn scenario() -> Scenario {
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENARIO))
-        .expect("replay/tumble.toml");
-    Scenario::from_toml_str(&text).unwrap()
-}
-
-/// raw = A·true for one triad: A = I + diag(scale ppm) + misalignment (mrad).
-fn a_of(ppm: [f64; 3], mrad: [[f64; 3]; 3]) -> Matrix3<f64> {
-    Matrix3::from_fn(|i, j| f64::from(u8::from(i == j)) * (1.0 + ppm[i] * 1e-6) + mrad[i][j] * 1e-3)
-}
-
-/// The scenario's truth in the form `calibrate` can identify (docs/calibrate.md): the
-/// accelerometer's L = chol(A Aᵀ) (gravity fixes only A Aᵀ; its frame is the accelerometer's x
-/// axis and x–y plane), the gyro's M = G Qᵀ with Q = L⁻¹A the rotation from the body to that
-/// frame; and the accelerometer bias, m/s².
-struct Truth {
-    l: Matrix3<f64>,
-    gyro_m: Matrix3<f64>,
-    bias: Vector3<f64>,
-}
-
-fn truth(scn: &Scenario) -> Truth {
-    let e = &scn.errors;
-    let s = e.scale_factor.as_ref().unwrap();
-    let m = e.misalignment.as_ref().unwrap();
-    let a = a_of(s.accel_ppm, m.accel_mrad);
-    let g = a_of(s.gyro_ppm, m.gyro_mrad);
-    let l = (a * a.transpose()).cholesky().unwrap().l();
-    let q = l.try_inverse().unwrap() * a;
-    Truth {
-        l,
-        gyro_m: g * q.transpose(),
-        bias: Vector3::from(e.turn_on_bias.as_ref().unwrap().accel_mg) * MG,
-    }
-}
-
 fn f(v: &Value) -> f64 {
     v.as_f64().unwrap()
 }
@@ -73,7 +35,7 @@ fn simulate_and_calibrate(dir: &Path, seed: u64, sets: &[&str]) -> (String, Stri
     let seed_s = seed.to_string();
     let mut args = vec![
         "simulate",
-        SCENARIO,
+        TUMBLE,
         "-o",
         log.to_str().unwrap(),
         "--seed",
@@ -90,13 +52,12 @@ fn simulate_and_calibrate(dir: &Path, seed: u64, sets: &[&str]) -> (String, Stri
         "--out-dir",
         out.to_str().unwrap(),
     ]);
-    let json: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let json: Value = common::read_json(out.join("report.json"));
     (log.display().to_string(), text, json)
 }
 
 /// (fitted − true) / σ of the nine accelerometer and nine gyro parameters.
-fn z_scores(json: &Value, t: &Truth) -> (Vec<f64>, Vec<f64>) {
+fn z_scores(json: &Value, t: &CalibTruth) -> (Vec<f64>, Vec<f64>) {
     let fa = &json["accel"]["fitted"];
     let sa = &fa["settings"];
     let mut za = Vec::new();
@@ -127,14 +88,10 @@ fn z_scores(json: &Value, t: &Truth) -> (Vec<f64>, Vec<f64>) {
     (za, zg)
 }
 
-fn rms(v: &[f64]) -> f64 {
-    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
-}
-
 #[test]
 fn the_simulated_tumble_is_calibrated_to_its_truth() {
-    let scn = scenario();
-    let t = truth(&scn);
+    let scn = tumble_scenario();
+    let t = calib_truth(&scn);
     let dir = tempfile::tempdir().unwrap();
     let (mut all_a, mut all_g) = (Vec::new(), Vec::new());
     for seed in SEEDS {
@@ -176,7 +133,7 @@ fn the_simulated_tumble_is_calibrated_to_its_truth() {
 
 #[test]
 fn the_daemon_with_the_written_config_brings_every_stop_to_g() {
-    let scn = scenario();
+    let scn = tumble_scenario();
     let seed = SEEDS[0];
     let dir = tempfile::tempdir().unwrap();
     let (log, _, json) = simulate_and_calibrate(dir.path(), seed, &[]);
@@ -245,7 +202,7 @@ fn a_tumble_without_scale_or_misalignment_keeps_only_the_accelerometer_bias() {
     // The scenario's turn-on bias stays: the accelerometer may keep exactly `bias` (and it must
     // be the truth), the gyro nothing (its bias comes from the still stretches). Without the
     // bias too, nothing is kept and no config is written.
-    let t = truth(&scenario());
+    let t = calib_truth(&tumble_scenario());
     let dir = tempfile::tempdir().unwrap();
     let off = [
         "errors.scale_factor.enabled=false",

@@ -42,7 +42,7 @@ fn replay_summary(log: &str, cfg: &Path) -> serde_json::Value {
         "--summary-json",
         summary.to_str().unwrap(),
     ]);
-    serde_json::from_str(&std::fs::read_to_string(summary).unwrap()).unwrap()
+    common::read_json(summary)
 }
 
 /// What a replay with fitted models must show.

@@ -1,4 +1,7 @@
 //! Every shipped config validates; mistakes are all reported, with their key paths.
+
+mod common;
+
 use imuprep::config::Config;
 use std::ffi::OsStr;
 use std::path::Path;
@@ -159,8 +162,7 @@ fn a_run_without_cleaning_stages_says_so_in_the_summary_and_the_health_data() {
         err.contains("cleaning   : NONE — no cleaning stage is enabled"),
         "{err}"
     );
-    let h: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    let h: serde_json::Value = common::read_json(&summary);
     assert_eq!(h["cleaning_stages"], serde_json::json!([]), "{h}");
     // With the defaults the stages are listed and nothing is said.
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_imuprep"))
@@ -171,8 +173,7 @@ fn a_run_without_cleaning_stages_says_so_in_the_summary_and_the_health_data() {
         .output()
         .unwrap();
     assert!(!String::from_utf8_lossy(&out.stderr).contains("cleaning   : NONE"));
-    let h: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    let h: serde_json::Value = common::read_json(&summary);
     assert_eq!(
         h["cleaning_stages"],
         serde_json::json!(["gross_error", "bias"])

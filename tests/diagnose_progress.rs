@@ -38,8 +38,7 @@ fn diagnose_never_reports_the_same_effect_twice() {
         .output()
         .unwrap();
     assert!(diag.status.success(), "{diag:?}");
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let report: serde_json::Value = common::read_json(out.join("report.json"));
     let its = report["channels"][0]["iterations"].as_array().unwrap();
     let effects: Vec<String> = its.iter().map(|i| i["effect"].to_string()).collect();
     eprintln!("gy iterations: {effects:#?}");

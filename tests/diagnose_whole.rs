@@ -44,8 +44,7 @@ fn diagnose(log: &Path, out: &Path) -> (BiasModelFile, serde_json::Value, String
         out.to_str().unwrap(),
     ]);
     let m = BiasModelFile::load(&out.join("bias.toml")).expect("a valid bias model");
-    let j =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let j = common::read_json(out.join("report.json"));
     (m, j, text)
 }
 

@@ -16,7 +16,7 @@ fn bundled_drive_meets_the_bias_targets_and_keeps_every_turn() {
         "--json",
         json.to_str().unwrap(),
     ]);
-    let res: Vec<Value> = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let res: Vec<Value> = common::read_json(&json);
     let f = |v: &Value, k: &str| v[k].as_f64().unwrap();
     let mut turns = 0;
     for ch in &res {

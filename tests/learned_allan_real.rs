@@ -48,8 +48,7 @@ fn allan_json(log: &Path, dir: &Path) -> Vec<(String, Vec<Point>)> {
         "--json",
         json.to_str().unwrap(),
     ]);
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    let v: serde_json::Value = common::read_json(json);
     v["channels"]
         .as_array()
         .unwrap()

@@ -145,8 +145,7 @@ fn evaluate_drive(dir: &Path, tag: &str, model: &BiasModelFile) -> [Scores; 3] {
         args.extend(["--set", s]);
     }
     run(&args);
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v: serde_json::Value = common::read_json(&json);
     GYROS.map(|name| {
         let ch = v
             .as_array()

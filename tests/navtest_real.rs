@@ -71,9 +71,11 @@ fn drive_raw_30s_outages_agree_with_the_reference_filter() {
     for e in &run.errors {
         // The harness reports the start on the IMU clock before the drive's −0.125 s offset.
         assert!(
-            starts.iter().any(|s| (s - e.start_rel_s).abs() < 0.2),
+            starts
+                .iter()
+                .any(|s| (s - e.outage.start_rel_s).abs() < 0.2),
             "{}",
-            e.start_rel_s
+            e.outage.start_rel_s
         );
     }
     let mut ours: Vec<f64> = run.errors.iter().map(|e| e.horiz_m).collect();

@@ -158,8 +158,7 @@ fn allan_analyses_only_the_present_channels_and_says_which_are_absent() {
         "--json",
         full_json.to_str().unwrap(),
     ]);
-    let full_v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&full_json).unwrap()).unwrap();
+    let full_v: serde_json::Value = common::read_json(&full_json);
     for (label, cols) in [("gyro", [0usize, 1, 2]), ("accel", [3, 4, 5])] {
         let log = log_of(dir.path(), label, &cols);
         let out = dir.path().join(format!("allan_{label}"));
@@ -173,8 +172,7 @@ fn allan_analyses_only_the_present_channels_and_says_which_are_absent() {
             json.to_str().unwrap(),
         ]);
         no_nan_in(&out);
-        let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let v: serde_json::Value = common::read_json(&json);
         let chans = v["channels"].as_array().unwrap();
         assert_eq!(chans.len(), 3, "{label}");
         let skipped = v["skipped"].as_array().unwrap();

@@ -371,8 +371,7 @@ fn replay_to_consumer<T>(
     let res = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&res.stderr).into_owned();
     assert!(!err.contains("panicked"), "{err}");
-    let h: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    let h: serde_json::Value = common::read_json(&summary);
     (got, err, res.status, h)
 }
 

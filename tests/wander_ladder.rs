@@ -70,8 +70,7 @@ fn diagnose_wander(
         "--out-dir",
         out.to_str().unwrap(),
     ]);
-    let j: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let j: serde_json::Value = common::read_json(out.join("report.json"));
     j["channels"]
         .as_array()
         .unwrap()

@@ -7,7 +7,7 @@ use crate::sim::{Emission, Scenario, SimError, Simulator};
 use std::path::Path;
 
 /// What a simulation run wrote.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
 pub struct SimLogSummary {
     pub instants: u64,
     pub frames: u64,

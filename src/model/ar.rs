@@ -16,7 +16,7 @@
 
 use super::{ModelError, check_ar_input, mean};
 use crate::stats::NumError;
-use crate::stats::ar_poly::levinson;
+use crate::stats::ar_poly::{levinson, levinson_step};
 
 /// A fitted AR(p) model.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -108,22 +108,12 @@ pub fn yule_walker_orders(x: &[f64], p: usize) -> Result<Vec<ArFit>, ModelError>
     if r[0].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(ModelError::Numeric(NumError::Constant));
     }
-    // The recursion of `levinson_durbin`, keeping each order's (phi, E_m).
+    // The Durbin–Levinson recursion, keeping each order's (phi, E_m).
     let mut fits: Vec<ArFit> = Vec::with_capacity(p);
     let mut phi: Vec<f64> = Vec::with_capacity(p);
     let mut e = r[0];
-    for m in 1..=p {
-        let mut num = r[m];
-        for i in 1..m {
-            num -= phi[i - 1] * r[m - i];
-        }
-        let k = num / e;
-        let prev = phi.clone();
-        for i in 1..m {
-            phi[i - 1] = prev[i - 1] - k * prev[m - i - 1];
-        }
-        phi.push(k);
-        e *= 1.0 - k * k;
+    for _ in 1..=p {
+        levinson_step(&r, &mut phi, &mut e);
         if e.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             break;
         }

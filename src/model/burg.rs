@@ -24,6 +24,7 @@ use super::ar::ArFit;
 use super::kernels::{BLOCK, CrossEnergy, sum};
 use super::{ModelError, check_ar_input};
 use crate::stats::NumError;
+use crate::stats::ar_poly::step_up;
 
 /// Fit AR(p) by Burg's method.
 pub fn burg(x: &[f64], p: usize) -> Result<ArFit, ModelError> {
@@ -98,12 +99,7 @@ fn burg_lattice(x: &[f64], p: usize) -> Result<(Vec<ArFit>, Option<ModelError>),
         let (num_next, den_next) = acc.finish();
         // stage-m energy sum_{n=m}^{N-1} f_m(n)^2 + b_m(n)^2
         let energy = den_next + fw[0] * fw[0] + bw[len - 1] * bw[len - 1];
-        // Levinson step-up (phi sign): phi_{i,m} = phi_{i,m-1} - k phi_{m-i,m-1}, phi_{m,m} = k
-        let prev = phi.clone();
-        for i in 1..m {
-            phi[i - 1] = prev[i - 1] - k * prev[m - i - 1];
-        }
-        phi.push(k);
+        step_up(&mut phi, k);
         fits.push(ArFit {
             coeffs: phi.clone(),
             noise_var: energy / (2.0 * len as f64),

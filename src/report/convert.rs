@@ -10,6 +10,7 @@ use super::{InputProblem, check_input};
 use crate::frame::detect::{ProtocolArgs, ProtocolConfig};
 use crate::io::convert::{ExportFormat, encode_stream, read_any, read_any_whole};
 use crate::io::csv::{self as csvio, ImportOptions};
+use crate::io::sim_log::SimLogSummary;
 use crate::text::count;
 
 /// `--col KEY=COLUMN` mappings → the importer's column names (keys: t gx gy gz ax ay az temp).
@@ -208,11 +209,9 @@ impl fmt::Display for ExportReport {
 pub struct SimulateReport {
     pub output: PathBuf,
     pub seed: u64,
-    pub instants: u64,
-    pub frames: u64,
-    pub dropped: u64,
-    pub duplicated: u64,
-    pub bytes: u64,
+    /// What the run wrote (its fields stand beside `output` and `seed` in the JSON).
+    #[serde(flatten)]
+    pub written: SimLogSummary,
 }
 
 /// Simulate `scenario` (with `--set` overrides) into a replay log and an optional truth sidecar.
@@ -225,29 +224,26 @@ pub fn simulate(
 ) -> Result<SimulateReport> {
     let scn = super::read_scenario(scenario, sets)?;
     let seed = crate::sim::log::effective_seed(&scn, seed);
-    let s = crate::io::sim_log::write_sim_log(&scn, seed, output, truth)?;
+    let written = crate::io::sim_log::write_sim_log(&scn, seed, output, truth)?;
     Ok(SimulateReport {
         output: output.to_path_buf(),
         seed,
-        instants: s.instants,
-        frames: s.frames,
-        dropped: s.dropped,
-        duplicated: s.duplicated,
-        bytes: s.bytes,
+        written,
     })
 }
 
 impl fmt::Display for SimulateReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let w = &self.written;
         writeln!(
             f,
             "simulated {} (seed {}): {} ({} dropped, {} duplicated), {} → {}",
-            count(self.instants, "instant", "instants"),
+            count(w.instants, "instant", "instants"),
             self.seed,
-            count(self.frames, "frame", "frames"),
-            self.dropped,
-            self.duplicated,
-            count(self.bytes, "byte", "bytes"),
+            count(w.frames, "frame", "frames"),
+            w.dropped,
+            w.duplicated,
+            count(w.bytes, "byte", "bytes"),
             self.output.display()
         )
     }

@@ -46,18 +46,27 @@ pub fn ar_is_stationary(phi: &[f64]) -> bool {
     is_stable(phi, 0.0)
 }
 
+/// One Levinson step-up, in place: the order-(m−1) coefficients `phi` become the order-m ones,
+/// `φ^{(m)}_i = φ^{(m−1)}_i − k φ^{(m−1)}_{m−i}` and `φ^{(m)}_m = k` (`phi` grows by one).
+pub fn step_up(phi: &mut Vec<f64>, k: f64) {
+    let n = phi.len();
+    for i in 0..n / 2 {
+        let (a, b) = (phi[i], phi[n - 1 - i]);
+        phi[i] = a - k * b;
+        phi[n - 1 - i] = b - k * a;
+    }
+    if n % 2 == 1 {
+        let c = phi[n / 2];
+        phi[n / 2] = c - k * c;
+    }
+    phi.push(k);
+}
+
 /// AR coefficients from reflection coefficients `k_1..k_p` (the Levinson step-up).
 pub fn reflection_to_ar(refl: &[f64]) -> Vec<f64> {
-    let p = refl.len();
-    let mut phi = vec![0.0; p];
-    let mut prev = vec![0.0; p];
-    for (m0, &k) in refl.iter().enumerate() {
-        let m = m0 + 1;
-        phi[m - 1] = k;
-        for i in 1..m {
-            phi[i - 1] = prev[i - 1] - k * prev[m - i - 1];
-        }
-        prev[..m].copy_from_slice(&phi[..m]);
+    let mut phi = Vec::with_capacity(refl.len());
+    for &k in refl {
+        step_up(&mut phi, k);
     }
     phi
 }
@@ -73,31 +82,35 @@ pub struct Levinson {
     pub refl: Vec<f64>,
 }
 
+/// One Durbin–Levinson step on the autocovariances `r` (`r.len() > m`): the order-(m−1)
+/// predictor `phi` and its error variance `e` become the order-m ones (m = `phi.len()` + 1);
+/// returns `k_m`. `e` must be positive for the step to mean anything (the callers check).
+pub fn levinson_step(r: &[f64], phi: &mut Vec<f64>, e: &mut f64) -> f64 {
+    let m = phi.len() + 1;
+    let mut num = r[m];
+    for i in 1..m {
+        num -= phi[i - 1] * r[m - i];
+    }
+    let k = num / *e;
+    step_up(phi, k);
+    *e *= 1.0 - k * k;
+    k
+}
+
 /// Durbin–Levinson on `r(0..=p)` (`r.len() > p`), stopping early — before step m — when `E_{m−1}`
 /// is not positive (a perfectly predictable or not positive-definite sequence): then
 /// `refl.len() < p`.
 pub fn levinson_partial(r: &[f64], p: usize) -> Levinson {
-    let mut phi = vec![0.0; p];
-    let mut prev = vec![0.0; p];
+    let mut phi = Vec::with_capacity(p);
     let mut refl = Vec::with_capacity(p);
     let mut e = r[0];
-    for m in 1..=p {
+    for _ in 1..=p {
         if e.partial_cmp(&0.0) != Some(Ordering::Greater) {
             break;
         }
-        let mut num = r[m];
-        for i in 1..m {
-            num -= prev[i - 1] * r[m - i];
-        }
-        let k = num / e;
-        phi[m - 1] = k;
-        for i in 1..m {
-            phi[i - 1] = prev[i - 1] - k * prev[m - i - 1];
-        }
-        e *= 1.0 - k * k;
-        refl.push(k);
-        prev[..m].copy_from_slice(&phi[..m]);
+        refl.push(levinson_step(r, &mut phi, &mut e));
     }
+    phi.resize(p, 0.0);
     Levinson { phi, var: e, refl }
 }
 
@@ -121,12 +134,7 @@ pub fn ar_autocovariance(phi: &[f64], sigma2: f64, max_lag: usize) -> Option<Vec
     // Step up: order-m predictor coefficients give gamma(m).
     let mut a: Vec<f64> = Vec::with_capacity(p);
     for m in 1..=p {
-        let km = k[m - 1];
-        let prev = a.clone();
-        for i in 0..m - 1 {
-            a[i] = prev[i] - km * prev[m - 2 - i];
-        }
-        a.push(km);
+        step_up(&mut a, k[m - 1]);
         gamma[m] = (1..=m).map(|i| a[i - 1] * gamma[m - i]).sum();
     }
     for lag in (p + 1)..gamma.len() {
@@ -139,6 +147,22 @@ pub fn ar_autocovariance(phi: &[f64], sigma2: f64, max_lag: usize) -> Option<Vec
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_in_place_step_up_is_the_textbook_one() {
+        // Orders 0..=5 (odd and even lengths, the middle coefficient of odd ones): the pairwise
+        // in-place update does the same one multiply and subtract per coefficient as
+        // φ_i − k φ_{m−i} on a copy, so the results are equal to the bit.
+        let k = 0.37;
+        for n in 0..=5 {
+            let prev: Vec<f64> = (0..n).map(|i| 0.3 - 0.11 * i as f64).collect();
+            let mut want: Vec<f64> = (0..n).map(|i| prev[i] - k * prev[n - 1 - i]).collect();
+            want.push(k);
+            let mut got = prev.clone();
+            step_up(&mut got, k);
+            assert_eq!(got, want, "order {n} -> {}", n + 1);
+        }
+    }
 
     #[test]
     fn stability_of_known_polynomials() {

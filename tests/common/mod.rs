@@ -335,3 +335,58 @@ pub fn judge_target(
         }
     }
 }
+
+/// `replay/tumble.toml`: the simulated tumble `imuprep calibrate` is tested on.
+pub const TUMBLE: &str = "replay/tumble.toml";
+
+/// The [`TUMBLE`] scenario.
+pub fn tumble_scenario() -> imuprep::sim::scenario::Scenario {
+    let text = std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(TUMBLE))
+        .expect("replay/tumble.toml");
+    imuprep::sim::scenario::Scenario::from_toml_str(&text).unwrap()
+}
+
+/// raw = A·true for one triad: A = I + diag(scale ppm) + misalignment (mrad).
+pub fn triad_a(ppm: [f64; 3], mrad: [[f64; 3]; 3]) -> nalgebra::Matrix3<f64> {
+    nalgebra::Matrix3::from_fn(|i, j| {
+        f64::from(u8::from(i == j)) * (1.0 + ppm[i] * 1e-6) + mrad[i][j] * 1e-3
+    })
+}
+
+/// A scenario's truth in the form `calibrate` can identify (docs/calibrate.md): the
+/// accelerometer's L = chol(A Aᵀ) (gravity fixes only A Aᵀ; its frame is the accelerometer's x
+/// axis and x–y plane), the gyro's M = G Qᵀ with Q = L⁻¹A the rotation from the body to that
+/// frame; and the accelerometer bias, m/s².
+pub struct CalibTruth {
+    pub l: nalgebra::Matrix3<f64>,
+    pub gyro_m: nalgebra::Matrix3<f64>,
+    pub bias: nalgebra::Vector3<f64>,
+}
+
+/// [`CalibTruth`] of a scenario with scale-factor, misalignment and turn-on bias errors.
+pub fn calib_truth(scn: &imuprep::sim::scenario::Scenario) -> CalibTruth {
+    let e = &scn.errors;
+    let s = e.scale_factor.as_ref().unwrap();
+    let m = e.misalignment.as_ref().unwrap();
+    let a = triad_a(s.accel_ppm, m.accel_mrad);
+    let g = triad_a(s.gyro_ppm, m.gyro_mrad);
+    let l = (a * a.transpose()).cholesky().unwrap().l();
+    let q = l.try_inverse().unwrap() * a;
+    CalibTruth {
+        l,
+        gyro_m: g * q.transpose(),
+        bias: nalgebra::Vector3::from(e.turn_on_bias.as_ref().unwrap().accel_mg) * 9.80665e-3,
+    }
+}
+
+/// Root mean square of `v`.
+pub fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+/// The JSON file at `path`, parsed (panics naming the file when it is missing or not that JSON).
+pub fn read_json<T: serde::de::DeserializeOwned>(path: impl AsRef<std::path::Path>) -> T {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}

@@ -27,6 +27,7 @@
 
 use serde::Serialize;
 
+use crate::stats::robust::upper_median;
 use crate::stats::special::normal_sf;
 
 /// Longest time between two GNSS epochs inside a segment, s: across a longer gap the course
@@ -187,8 +188,7 @@ pub fn course_scale(
     }
     // IMU gaps (an interval over 5× the median): the trapezoid would bridge them blind.
     let mut dts: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-    dts.sort_by(f64::total_cmp);
-    let long = 5.0 * dts.get(dts.len() / 2).copied().unwrap_or(0.0);
+    let long = 5.0 * upper_median(&mut dts);
     let gaps: Vec<(f64, f64)> = t
         .windows(2)
         .filter(|w| w[1] - w[0] > long)

@@ -247,18 +247,27 @@ impl Whitener {
 
     /// L⁻¹ applied to each column of `m` (2 rows per motion).
     pub fn apply_columns(&self, m: &DMatrix<f64>) -> DMatrix<f64> {
-        let mut out = DMatrix::zeros(m.nrows(), m.ncols());
-        for c in 0..m.ncols() {
-            let x: Vec<Vector2<f64>> = (0..self.blocks.len())
-                .map(|k| Vector2::new(m[(2 * k, c)], m[(2 * k + 1, c)]))
-                .collect();
-            for (k, v) in self.apply(&x).iter().enumerate() {
-                out[(2 * k, c)] = v.x;
-                out[(2 * k + 1, c)] = v.y;
-            }
-        }
-        out
+        columns_as_pairs(m, |x| self.apply(x))
     }
+}
+
+/// `apply` (a map of the stacked 2-vectors, one per motion) on each column of `m`, whose rows
+/// `2k, 2k + 1` are motion k's.
+fn columns_as_pairs(
+    m: &DMatrix<f64>,
+    apply: impl Fn(&[Vector2<f64>]) -> Vec<Vector2<f64>>,
+) -> DMatrix<f64> {
+    let mut out = DMatrix::zeros(m.nrows(), m.ncols());
+    for c in 0..m.ncols() {
+        let x: Vec<Vector2<f64>> = (0..m.nrows() / 2)
+            .map(|k| Vector2::new(m[(2 * k, c)], m[(2 * k + 1, c)]))
+            .collect();
+        for (k, v) in apply(&x).iter().enumerate() {
+            out[(2 * k, c)] = v.x;
+            out[(2 * k + 1, c)] = v.y;
+        }
+    }
+    out
 }
 
 /// The whitening of the stacked held-out residuals (the leave-one-motion-out test, module
@@ -458,19 +467,7 @@ mod tests {
         }
         let full = sigma + &a * a.transpose();
         let w = HeldOutWhitener::new(&sel, None);
-        let cols = |m: &DMatrix<f64>| {
-            let mut out = DMatrix::zeros(m.nrows(), m.ncols());
-            for c in 0..m.ncols() {
-                let x: Vec<Vector2<f64>> = (0..n)
-                    .map(|k| Vector2::new(m[(2 * k, c)], m[(2 * k + 1, c)]))
-                    .collect();
-                for (k, v) in w.apply(&x).iter().enumerate() {
-                    out[(2 * k, c)] = v.x;
-                    out[(2 * k + 1, c)] = v.y;
-                }
-            }
-            out
-        };
+        let cols = |m: &DMatrix<f64>| columns_as_pairs(m, |x| w.apply(x));
         let white = cols(&cols(&full).transpose());
         let err = (white - DMatrix::<f64>::identity(2 * n, 2 * n)).abs().max();
         assert!(err < 1e-10, "{err}");

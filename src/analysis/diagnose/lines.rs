@@ -22,6 +22,7 @@
 
 use super::blocks::Blocks;
 use crate::analysis::spectrum::PairSums;
+use crate::stats::robust::upper_median;
 use crate::stats::special::chi2_sf;
 use rustfft::{FftPlanner, num_complex::Complex};
 use serde::Serialize;
@@ -121,12 +122,7 @@ pub fn line_candidates(
             .filter(|i| i.abs_diff(j) > guard)
             .map(|i| avg[i])
             .collect();
-        if v.is_empty() {
-            return f64::NAN;
-        }
-        let mid = v.len() / 2;
-        v.select_nth_unstable_by(mid, f64::total_cmp);
-        v[mid] / med_corr
+        upper_median(&mut v) / med_corr
     };
     let mut out: Vec<LineCandidate> = Vec::new();
     for j in lo..hi {

@@ -39,6 +39,7 @@ use crate::analysis::quantisation::{Quantisation, quantisation};
 use crate::model::bias_model::Effect;
 use crate::model::{ArFit, burg, burg_orders};
 use crate::stats::check_series;
+use crate::stats::robust::upper_median;
 use serde::Serialize;
 
 /// Settings of the whole-log diagnosis.
@@ -331,10 +332,7 @@ pub fn diagnose_whole(
             rejected.push(t);
             continue;
         }
-        let med = |mut v: Vec<f64>| {
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
-        };
+        let med = |mut v: Vec<f64>| upper_median(&mut v);
         let f = med(present.iter().map(|b| b.freq_hz).collect());
         let a = med(present.iter().map(|b| b.amplitude).collect());
         let first = present[0];

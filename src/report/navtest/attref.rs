@@ -151,9 +151,9 @@ pub fn att_ref_report(
         for l in super::LENGTHS {
             let e: Vec<(f64, Option<f64>)> = errs
                 .iter()
-                .filter(|(w, e)| w == v && e.length_s == l)
+                .filter(|(w, e)| w == v && e.outage.length_s == l)
                 .filter_map(|(_, e)| {
-                    let r = refs.get(e.scored).copied().flatten()?;
+                    let r = refs.get(e.outage.scored).copied().flatten()?;
                     Some(errors(e.att_end_deg, &r, &offset_deg))
                 })
                 .collect();
@@ -186,6 +186,7 @@ pub fn att_ref_report(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::report::navtest::outages::Outage;
 
     fn epoch(t: f64, vn: f64, ve: f64, q: u8) -> PosEpoch {
         PosEpoch {
@@ -232,10 +233,13 @@ mod tests {
 
     fn err(v: f64, scored: usize, att: [f64; 3]) -> OutageError {
         OutageError {
-            length_s: v,
-            start_rel_s: 0.0,
-            start: 0.0,
-            end: 0.0,
+            outage: Outage {
+                length_s: v,
+                start_rel_s: 0.0,
+                start: 0.0,
+                end: 0.0,
+                scored,
+            },
             horiz_m: 0.0,
             vert_m: 0.0,
             heading_deg: 0.0,
@@ -244,7 +248,6 @@ mod tests {
             accel_bias_start: [0.0; 3],
             att_start_deg: [0.0; 3],
             att_end_deg: att,
-            scored,
         }
     }
 

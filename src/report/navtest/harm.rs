@@ -76,7 +76,10 @@ pub fn harm_check(
     let mut listed = vec![];
     for l in LENGTHS {
         let pick = |v: &[OutageError]| -> Vec<OutageError> {
-            v.iter().filter(|e| e.length_s == l).copied().collect()
+            v.iter()
+                .filter(|e| e.outage.length_s == l)
+                .copied()
+                .collect()
         };
         let (ea, eb) = (pick(a), pick(b));
         let h = |v: &[OutageError]| median_p95(v.iter().map(|e| e.horiz_m).collect());
@@ -94,7 +97,7 @@ pub fn harm_check(
                 .iter()
                 .filter_map(|x| {
                     eb.iter()
-                        .find(|y| y.start_rel_s == x.start_rel_s)
+                        .find(|y| y.outage.start_rel_s == x.outage.start_rel_s)
                         .map(|y| (x, y))
                 })
                 .filter(|(x, y)| y.horiz_m > x.horiz_m)
@@ -119,9 +122,10 @@ fn explain(
     cleaned: &[Sample],
     t_off: f64,
 ) -> HarmOutage {
+    let o = &a.outage;
     let (i0, i1) = (
-        raw.t.partition_point(|&t| t < a.start),
-        raw.t.partition_point(|&t| t <= a.end),
+        raw.t.partition_point(|&t| t < o.start),
+        raw.t.partition_point(|&t| t <= o.end),
     );
     let n = i1.saturating_sub(i0).max(1);
     let (mut chg, mut chg_f) = ([0.0; 3], [0.0; 3]);
@@ -135,7 +139,7 @@ fn explain(
     let mut chg_rep = [0.0; 3];
     for s in cleaned {
         let t = s.t_s() + t_off;
-        if t >= a.start && t <= a.end {
+        if t >= o.start && t <= o.end {
             samples += 1;
             let rep = s.flags & (flags::REPLACED | flags::REPLACED_ANY) != 0;
             replaced += usize::from(rep);
@@ -151,8 +155,8 @@ fn explain(
     }
     let diff = [0, 1, 2].map(|k| b.gyro_bias_start_dps[k] - a.gyro_bias_start_dps[k]);
     HarmOutage {
-        length_s: a.length_s,
-        start_rel_s: a.start_rel_s,
+        length_s: o.length_s,
+        start_rel_s: o.start_rel_s,
         a_m: a.horiz_m,
         b_m: b.horiz_m,
         replaced,
@@ -172,14 +176,18 @@ fn explain(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::report::navtest::outages::Outage;
     use nalgebra::Vector3;
 
     fn err(length_s: f64, start_rel_s: f64, horiz_m: f64, bias_z: f64) -> OutageError {
         OutageError {
-            length_s,
-            start_rel_s,
-            start: start_rel_s,
-            end: start_rel_s + length_s,
+            outage: Outage {
+                length_s,
+                start_rel_s,
+                start: start_rel_s,
+                end: start_rel_s + length_s,
+                scored: 0,
+            },
             horiz_m,
             vert_m: 0.0,
             heading_deg: 0.0,
@@ -188,7 +196,6 @@ mod tests {
             accel_bias_start: [0.0; 3],
             att_start_deg: [0.0; 3],
             att_end_deg: [0.0; 3],
-            scored: 0,
         }
     }
 

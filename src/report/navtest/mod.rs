@@ -289,7 +289,7 @@ pub fn run_record(
             .collect();
         let keep = |e: &[OutageError]| -> Vec<OutageError> {
             e.iter()
-                .filter(|x| held_out(m, x.start, x.end))
+                .filter(|x| held_out(m, x.outage.start, x.outage.end))
                 .copied()
                 .collect()
         };

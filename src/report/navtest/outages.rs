@@ -95,11 +95,9 @@ fn fix_of(e: &PosEpoch) -> Option<GnssFix> {
 /// Errors at the end of one outage.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct OutageError {
-    pub length_s: f64,
-    pub start_rel_s: f64,
-    /// The outage window, GPST s (as [`Outage`]).
-    pub start: f64,
-    pub end: f64,
+    /// The outage (its fields stand beside the errors in the JSON).
+    #[serde(flatten)]
+    pub outage: Outage,
     pub horiz_m: f64,
     pub vert_m: f64,
     pub heading_deg: f64,
@@ -112,8 +110,6 @@ pub struct OutageError {
     pub att_start_deg: [f64; 3],
     /// The coasting filter's roll, pitch, yaw at the scored epoch, degrees.
     pub att_end_deg: [f64; 3],
-    /// Index of the scored GNSS epoch (as [`Outage::scored`]).
-    pub scored: usize,
 }
 
 /// What a coasting copy takes from the GNSS-aided (no-outage) filter at every IMU epoch of
@@ -282,15 +278,11 @@ pub fn run_filter_with(
                     let end = c.nav.euler();
                     let da = (end - r).map(|x| wrap_deg(x.to_degrees()));
                     errors.push(OutageError {
-                        length_s: o.length_s,
-                        start_rel_s: o.start_rel_s,
-                        start: o.start,
-                        end: o.end,
+                        outage: *o,
                         gyro_bias_start_dps: coasting[k].2.gyro_bias_dps,
                         accel_bias_start: coasting[k].2.accel_bias,
                         att_start_deg: coasting[k].2.att_deg,
                         att_end_deg: [end[0], end[1], end[2]].map(f64::to_degrees),
-                        scored: j,
                         horiz_m: d.xy().norm(),
                         vert_m: d[2].abs(),
                         heading_deg: da[2].abs(),
@@ -358,7 +350,7 @@ pub fn rows(record: &str, variant: &str, errs: &[OutageError]) -> Vec<Row> {
     LENGTHS
         .iter()
         .map(|&l| {
-            let e: Vec<&OutageError> = errs.iter().filter(|e| e.length_s == l).collect();
+            let e: Vec<&OutageError> = errs.iter().filter(|e| e.outage.length_s == l).collect();
             let col = |f: fn(&OutageError) -> f64| median_p95(e.iter().map(|x| f(x)).collect());
             let [horiz_median_m, horiz_p95_m] = col(|x| x.horiz_m);
             let [vert_median_m, vert_p95_m] = col(|x| x.vert_m);

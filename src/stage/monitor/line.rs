@@ -12,6 +12,7 @@
 //! the last frequency seen: a line may drift, e.g. with a fan's speed) is the same effect,
 //! tracked, not a new one.
 
+use crate::stats::robust::upper_median;
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 use std::sync::Arc;
@@ -226,9 +227,7 @@ impl LineDetector {
             if nb.len() < NEIGHBOURS {
                 continue;
             }
-            let mid = nb.len() / 2;
-            let (_, m, _) = nb.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
-            let reference = *m / self.median_norm;
+            let reference = upper_median(&mut nb) / self.median_norm;
             if reference > 0.0 && p / reference >= self.k {
                 out.push((bin, p / reference));
             }

@@ -124,6 +124,25 @@ struct Channel {
     whiteness: WhitenessDetector,
 }
 
+impl Channel {
+    /// A sample that cannot be used (not still, or a bad value): the detectors that bridge short
+    /// skips skip it; the line detector's segment is broken.
+    fn skip(&mut self) {
+        self.level.skip();
+        self.line.interrupt();
+        self.wander.skip();
+        self.whiteness.skip();
+    }
+
+    /// The still run is broken (a gap): every detector starts a new run.
+    fn interrupt(&mut self) {
+        self.level.interrupt();
+        self.line.interrupt();
+        self.wander.interrupt();
+        self.whiteness.interrupt();
+    }
+}
+
 /// The monitor's health: its counters since the start and its status now.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct MonitorHealth {
@@ -358,15 +377,9 @@ impl MonitorStage {
         if !s.has(flags::STILL) || s.has(flags::GAP) {
             for c in &mut self.ch {
                 if s.has(flags::GAP) {
-                    c.level.interrupt();
-                    c.line.interrupt();
-                    c.wander.interrupt();
-                    c.whiteness.interrupt();
+                    c.interrupt();
                 } else {
-                    c.level.skip();
-                    c.line.interrupt();
-                    c.wander.skip();
-                    c.whiteness.skip();
+                    c.skip();
                 }
             }
             return;
@@ -377,10 +390,7 @@ impl MonitorStage {
             let v = s.channel(i);
             let bad = flags::replaced_ch(i) | flags::sat_ch(i) | flags::SENSOR_FAULT;
             if !v.is_finite() || s.flags & bad != 0 {
-                c.level.skip();
-                c.line.interrupt();
-                c.wander.skip();
-                c.whiteness.skip();
+                c.skip();
                 continue;
             }
             let alarm = |t_ns, finding, score| Alarm {
