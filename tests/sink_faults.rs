@@ -322,7 +322,7 @@ async fn stuck_pty_inline_sink_never_freezes_the_run_and_its_drops_show_as_they_
 fn stdout_closed_by_its_consumer_counts_every_unwritten_sample_as_dropped() {
     use std::io::Read;
     let n = 20_000;
-    let ((), err, status, h) = replay_to_consumer(n, 21, |_, mut out| {
+    let ((), err, status, h) = replay_to_consumer(n, 21, |_, mut out, _| {
         let mut first = [0u8; 100];
         out.read_exact(&mut first).unwrap();
         drop(out); // like `head -c 100`: the pipe's read end closes
@@ -346,11 +346,12 @@ fn stdout_closed_by_its_consumer_counts_every_unwritten_sample_as_dropped() {
 }
 
 /// `imuprep replay LOG --out stdout:csv` (a recorded file at speed 0) into `consumer`, which
-/// gets the child's stdout; returns (what `consumer` returned, stderr, exit status, summary).
+/// gets the child's stdout and its stderr as it arrives; returns (what `consumer` returned,
+/// stderr, exit status, summary).
 fn replay_to_consumer<T>(
     n: usize,
     seed: u64,
-    consumer: impl FnOnce(&mut std::process::Child, std::process::ChildStdout) -> T,
+    consumer: impl FnOnce(&mut std::process::Child, std::process::ChildStdout, &Stderr) -> T,
 ) -> (T, String, std::process::ExitStatus, serde_json::Value) {
     use std::process::{Command, Stdio};
     let dir = tempfile::tempdir().unwrap();
@@ -367,12 +368,63 @@ fn replay_to_consumer<T>(
         .spawn()
         .unwrap();
     let out = child.stdout.take().unwrap();
-    let got = consumer(&mut child, out);
-    let res = child.wait_with_output().unwrap();
-    let err = String::from_utf8_lossy(&res.stderr).into_owned();
+    let stderr = Stderr::collect(child.stderr.take().unwrap());
+    let got = consumer(&mut child, out, &stderr);
+    let status = child.wait().unwrap();
+    let err = stderr.finish();
     assert!(!err.contains("panicked"), "{err}");
     let h: serde_json::Value = common::read_json(&summary);
-    (got, err, res.status, h)
+    (got, err, status, h)
+}
+
+/// A child's stderr, read on a thread as it arrives, so a test can wait for what the child
+/// says instead of sleeping for a time a loaded machine may not keep.
+struct Stderr {
+    text: std::sync::Arc<std::sync::Mutex<String>>,
+    reader: std::thread::JoinHandle<()>,
+}
+
+impl Stderr {
+    fn collect(mut from: std::process::ChildStderr) -> Self {
+        use std::io::Read;
+        let text = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
+        let sink = text.clone();
+        let reader = std::thread::spawn(move || {
+            let mut buf = [0u8; 4096];
+            while let Ok(k) = from.read(&mut buf) {
+                if k == 0 {
+                    break;
+                }
+                sink.lock()
+                    .unwrap()
+                    .push_str(&String::from_utf8_lossy(&buf[..k]));
+            }
+        });
+        Self { text, reader }
+    }
+
+    /// Wait until stderr contains `what`; panics after `limit` (a hung child, not a slow one:
+    /// the limit is far beyond any run's time).
+    fn wait_for(&self, what: &str, limit: Duration) {
+        let t0 = std::time::Instant::now();
+        while !self.text.lock().unwrap().contains(what) {
+            assert!(
+                t0.elapsed() < limit,
+                "{what:?} not said within {limit:?}: {}",
+                self.text.lock().unwrap()
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// Everything the child wrote, once it has closed stderr.
+    fn finish(self) -> String {
+        self.reader.join().unwrap();
+        std::sync::Arc::try_unwrap(self.text)
+            .unwrap()
+            .into_inner()
+            .unwrap()
+    }
 }
 
 /// `imuprep replay LOG --out stdout:csv | (sleep 1.5; cat)`: an offline replay at speed 0 waits
@@ -383,11 +435,12 @@ fn replay_to_consumer<T>(
 fn offline_replay_at_speed_0_waits_for_a_slow_stdout_consumer_and_drops_nothing() {
     use std::io::Read;
     // 30 000 samples of CSV (~2.6 MB): far beyond a pipe's 64 KiB and the sink's 64-batch
-    // queue, so the replay has to wait for the consumer; its 1.5-s sleep is 3 stall times
-    // (0.5 s), so the wait passes the stall time on any machine.
+    // queue, so the replay has to wait for the consumer. The consumer reads nothing until the
+    // replay says it is waiting (once a wait passes the 0.5-s stall time), however slowly a
+    // loaded machine runs it; 60 s is a hung replay, not a slow one.
     let n = 30_000;
-    let (text, err, status, h) = replay_to_consumer(n, 33, |_, mut out| {
-        std::thread::sleep(Duration::from_millis(1500));
+    let (text, err, status, h) = replay_to_consumer(n, 33, |_, mut out, stderr| {
+        stderr.wait_for("waiting for sink stdout", Duration::from_secs(60));
         let mut text = String::new();
         out.read_to_string(&mut text).unwrap();
         text
@@ -412,10 +465,9 @@ fn offline_replay_at_speed_0_waits_for_a_slow_stdout_consumer_and_drops_nothing(
 #[test]
 fn offline_replay_waiting_for_its_consumer_stops_on_sigint() {
     let n = 30_000;
-    let (_, err, status, h) = replay_to_consumer(n, 34, |child, out| {
-        // Hold the read end open, read nothing: the replay waits. SIGINT once it says so
-        // (stderr is read only at the end, so give the 0.5-s stall time three times over).
-        std::thread::sleep(Duration::from_millis(1500));
+    let (_, err, status, h) = replay_to_consumer(n, 34, |child, out, stderr| {
+        // Hold the read end open, read nothing: the replay waits. SIGINT once it says so.
+        stderr.wait_for("waiting for sink stdout", Duration::from_secs(60));
         assert_eq!(
             unsafe { libc::kill(child.id() as i32, libc::SIGINT) },
             0,
