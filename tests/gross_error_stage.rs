@@ -306,6 +306,90 @@ fn a_smooth_knock_passes_and_a_square_glitch_of_the_same_size_is_replaced() {
 }
 
 #[test]
+fn the_opt_in_level_test_passes_a_short_break_at_a_level_the_channel_held() {
+    // gz swings ±0.5 rad/s once per second (200 Hz stamps: a 1-s level window is 200 samples;
+    // its robust σ is ≈ 0.5 × 1.05) under 0.01 rad/s noise. A one-sample break of 0.3 at a
+    // zero crossing is far off the interpolation — a gross error by shape alone — but lies
+    // ≈ 0.6 level σ from the median of the second before. With the level test on
+    // (level_window_s = 1) it passes flagged suspect, and a 3.0 break (≈ 6 level σ) is still
+    // replaced; with the default (off) both are replaced. (This is also why the test is off by
+    // default: on smooth manoeuvres such a break is a glitch — docs/real-data.md.)
+    let sigma = 0.01;
+    let mut rng = Rng::new(33);
+    let swing = |i: usize| 0.5 * (2.0 * std::f64::consts::PI * i as f64 / 200.0).sin();
+    let mut x: Vec<Sample> = (0..1000)
+        .map(|i| sample(i as u32, swing(i) + sigma * rng.normal()))
+        .collect();
+    let (held, beyond) = (400, 700); // zero crossings of the swing
+    let v = x[held].channel(GZ) + 0.3;
+    x[held].set_channel(GZ, v);
+    let v = x[beyond].channel(GZ) + 3.0;
+    x[beyond].set_channel(GZ, v);
+    let on = GrossErrorSettings {
+        level_window_s: 1.0,
+        ..GrossErrorSettings::default()
+    };
+    let mut st = stage(on, sigma);
+    st.record_verdicts();
+    let out = run_through(&mut st, &x);
+    let verdicts = st.take_verdicts();
+    let at = |i: usize| {
+        verdicts
+            .iter()
+            .find(|v| v.start == i as u64)
+            .copied()
+            .unwrap()
+    };
+    let (h, b) = (at(held), at(beyond));
+    eprintln!("held: {h:?}\nbeyond: {b:?}");
+    let bars = GrossErrorSettings::default().thresholds();
+    assert!(!replaced(&out[held]) && suspect(&out[held]), "{h:?}");
+    assert!(h.level_veto && h.level.is_some_and(|d| d < 1.0), "{h:?}");
+    assert!(
+        h.evidence.is_some_and(|e| e.rejection(1, &bars).is_none()),
+        "{h:?}"
+    );
+    assert!(replaced(&out[beyond]) && b.gross, "{b:?}");
+    assert!(b.level.is_some_and(|d| d > 4.0), "{b:?}");
+    let mut st = stage(GrossErrorSettings::default(), sigma);
+    st.record_verdicts();
+    let out = run_through(&mut st, &x);
+    assert!(replaced(&out[held]) && replaced(&out[beyond]));
+    assert!(
+        st.take_verdicts()
+            .iter()
+            .all(|v| v.level.is_none() && !v.level_veto)
+    );
+}
+
+#[test]
+fn the_level_test_is_off_by_default_because_it_spares_spikes_on_smooth_manoeuvres() {
+    // The synthetic drive of `synthetic_drive_with_spikes_meets_the_issue_targets` with the
+    // level test on (level_window_s = 1): a 6–30 σ_n spike on a 0.5 rad/s yaw ramp lies within
+    // the level the ramp swept through in the second before, so the test vetoes it although the
+    // ramp is smooth at the sample scale. Measured: recall 0.867 (F1 0.929) against 0.952 with
+    // the default; the issue-4 bound there is F1 ≥ 0.97. docs/real-data.md, "Sensor classes we
+    // do not have".
+    let spec = SyntheticSpec {
+        ramp_min_samples: 200,
+        ..SyntheticSpec::drive_gyro_quiet_start(300_000, 12, 12.0)
+    };
+    let stream = synthetic_stream(&spec);
+    let on = GrossErrorSettings {
+        level_window_s: 1.0,
+        ..GrossErrorSettings::default()
+    };
+    let sc = score_run(&run_stage(&stream.observed, &on, GZ).unwrap(), &stream);
+    let base = score_run(
+        &run_stage(&stream.observed, &GrossErrorSettings::default(), GZ).unwrap(),
+        &stream,
+    );
+    eprintln!("level test on: {sc:?}\ndefault: {base:?}");
+    assert!(sc.recall < 0.9 && base.recall > 0.95, "{sc:?} {base:?}");
+    assert!(sc.f1 < 0.97, "{sc:?}");
+}
+
+#[test]
 fn neighbouring_isolated_outliers_do_not_mask_each_other() {
     // Two pairs of 12σ outliers two samples apart on gz (as at a 2 % contamination): the later
     // one of a pair lies in the earlier one's context after it, where it used to inflate the

@@ -58,6 +58,10 @@
 
 /// Least jaggedness of a gross event of three samples or more (see [`Evidence::jaggedness`]).
 const JAGGED: f64 = 0.45;
+/// Fewest samples on which the smoothness test judges an event (module docs: a half-sine of
+/// three samples is as jagged as a glitch can be smooth). A shorter event's shape cannot tell
+/// motion from a glitch; the stage then asks for the level test as well (`verdict.rs`).
+pub const SMOOTH_MIN: usize = 4;
 /// Points on each side used by the interpolation of an event of up to three samples.
 const FIT_SIDE: usize = 3;
 /// Most points on each side the interpolation of a run may use (see [`confirm_with`]).
@@ -439,7 +443,7 @@ impl Evidence {
             Some(Rejection::Edge)
         } else if edge < 0.5 * k.edge_stand_out * self.z_context {
             Some(Rejection::EdgeStandOut)
-        } else if len >= 4 && self.jaggedness < JAGGED {
+        } else if len >= SMOOTH_MIN && self.jaggedness < JAGGED {
             // Four samples or more: a smooth excursion is motion, whatever its size.
             Some(Rejection::Smooth)
         } else {

@@ -18,7 +18,11 @@
 //!    moving), and
 //!    not a break covering under a third of an event the gate itself called motion (a level
 //!    change, the release rule). Around a one-sample event, a later isolated candidate is left
-//!    out of the context (`verdict.rs`).
+//!    out of the context (`verdict.rs`). Opt-in (`level_window_s` > 0, off by default): a
+//!    judged part shorter than the smoothness test needs (`confirm::SMOOTH_MIN` = 4 samples)
+//!    must also lie at least `level_k` robust σ from the level the channel held over the last
+//!    `level_window_s` of its own time stamps (the *level test*; measured in
+//!    `docs/real-data.md`).
 //! 3. **Output.** A confirmed event is replaced (default: by the two-sided interpolation) and
 //!    flagged `REPLACED` + per-channel bit. An unconfirmed one passes unchanged, flagged
 //!    per-channel `SUSPECT`: weak evidence never changes a value. Bad values are always
@@ -140,6 +144,12 @@ pub struct EventVerdict {
     pub shock: bool,
     /// The gate called it motion and the break covers under a third of it.
     pub motion_break: bool,
+    /// The level test's distance of the judged part from the recent level, in robust σ of the
+    /// level (`None`: not applied — a judged part of `confirm::SMOOTH_MIN` samples or more, not
+    /// judged, the test off, or too little history).
+    pub level: Option<f64>,
+    /// The level test vetoed it (`level` < `level_k`).
+    pub level_veto: bool,
     /// Confirmed gross (the judged part replaced).
     pub gross: bool,
 }
@@ -174,6 +184,13 @@ pub struct GrossErrorStage {
     max_delay: u64,
     /// Every event's verdict, oldest first, once `record_verdicts` asked for them.
     verdicts: Option<Vec<EventVerdict>>,
+    /// Time between successive measurements: the sum of the intervals (ns) that do not end in a
+    /// gap, their count, and the last measurement's time stamp.
+    span_ns: u64,
+    intervals: u64,
+    last_t: Option<u64>,
+    /// Scratch for the level test (allocated once).
+    level_buf: Box<[f64; RING]>,
 }
 
 impl GrossErrorStage {
@@ -226,6 +243,10 @@ impl GrossErrorStage {
             delayed: 0,
             max_delay: 0,
             verdicts: None,
+            span_ns: 0,
+            intervals: 0,
+            last_t: None,
+            level_buf: Box::new([0.0; RING]),
         })
     }
 
@@ -348,6 +369,14 @@ impl GrossErrorStage {
             self.on_gap(s.seq);
         }
         self.last_seq = Some(s.seq);
+        if let Some(l) = self.last_t
+            && !s.has(flags::GAP)
+            && s.t_ns > l
+        {
+            self.span_ns += s.t_ns - l;
+            self.intervals += 1;
+        }
+        self.last_t = Some(s.t_ns);
         let idx = self.n_in;
         let slot = (idx % RING as u64) as usize;
         let mut warming = false;

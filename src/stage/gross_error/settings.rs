@@ -117,6 +117,17 @@ pub struct GrossErrorSettings {
     pub context_samples: usize,
     /// Samples after an event the confirmation waits for (default 4).
     pub post_samples: usize,
+    /// Level test, opt-in (s; default 0 = off): the time before an event over which the
+    /// channel's own level is read, from the stream's own time stamps. An event judged on fewer
+    /// samples than the smoothness test needs (`confirm::SMOOTH_MIN`, 4) is then confirmed only
+    /// if its samples lie at least `level_k` robust σ of those values from their median: a value
+    /// the signal itself held within that time is taken as no evidence of a gross error. Off by
+    /// default: measured in `docs/real-data.md` ("Sensor classes we do not have"), it spares
+    /// real motion on lower-rate copies but also spikes on smooth synthetic manoeuvres.
+    pub level_window_s: f64,
+    /// Level test: least distance of a short event from the recent level, in robust σ of the
+    /// level over `level_window_s` (default 4; used only when the test is on).
+    pub level_k: f64,
     /// |gyro| beyond this is no measurement of any MEMS gyro: treated as a bad value, flagged
     /// saturated and replaced (rad/s; default 60 ≈ 3400 °/s).
     pub plausible_gyro_rad_s: f64,
@@ -158,6 +169,8 @@ impl Default for GrossErrorSettings {
             run_fit_side: 3,
             context_samples: 32,
             post_samples: 4,
+            level_window_s: 0.0,
+            level_k: 4.0,
             plausible_gyro_rad_s: 60.0,
             plausible_accel_m_s2: 4000.0,
             identify: IdentifySettings::default(),
@@ -195,6 +208,7 @@ impl GrossErrorSettings {
             ("edge_k", self.edge_k),
             ("stand_out", self.stand_out),
             ("edge_stand_out", self.edge_stand_out),
+            ("level_k", self.level_k),
         ] {
             if !(pos(v) && v <= 50.0) {
                 e.push(format!("{name} = {v} must be in (0, 50]"));
@@ -264,6 +278,12 @@ impl GrossErrorSettings {
                 self.warmup_max_s
             ));
         }
+        if !(self.level_window_s.is_finite() && (0.0..=60.0).contains(&self.level_window_s)) {
+            e.push(format!(
+                "level_window_s = {} must be in [0, 60] s (0 = off)",
+                self.level_window_s
+            ));
+        }
         if self.lookahead_samples > MAX_LOOKAHEAD {
             e.push(format!(
                 "lookahead_samples = {} must be at most {MAX_LOOKAHEAD}",
@@ -323,5 +343,47 @@ impl GrossErrorSettings {
             ));
         }
         SettingsErrors::check("gross_error", e, ValidGrossErrorSettings::checked(self))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_level_test_keys_are_validated_and_off_by_default() {
+        let d = GrossErrorSettings::default();
+        assert_eq!((d.level_window_s, d.level_k), (0.0, 4.0));
+        assert!(d.clone().validate().is_ok());
+        for (w, k, bad) in [
+            (1.0, 4.0, None),
+            (
+                -1.0,
+                4.0,
+                Some("level_window_s = -1 must be in [0, 60] s (0 = off)"),
+            ),
+            (
+                61.0,
+                4.0,
+                Some("level_window_s = 61 must be in [0, 60] s (0 = off)"),
+            ),
+            (
+                f64::NAN,
+                4.0,
+                Some("level_window_s = NaN must be in [0, 60] s (0 = off)"),
+            ),
+            (1.0, 0.0, Some("level_k = 0 must be in (0, 50]")),
+        ] {
+            let s = GrossErrorSettings {
+                level_window_s: w,
+                level_k: k,
+                ..d.clone()
+            };
+            match (s.validate(), bad) {
+                (Ok(_), None) => {}
+                (Err(e), Some(msg)) => assert!(e.to_string().contains(msg), "{e}"),
+                (r, want) => panic!("{w} {k}: {r:?}, wanted {want:?}"),
+            }
+        }
     }
 }

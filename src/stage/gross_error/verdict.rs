@@ -1,13 +1,15 @@
 //! The verdict on one pending event (`resolve`): gather its context, trim it to the part that
 //! breaks the signal, confirm it two-sidedly (`confirm.rs`), rule out a shock seen on other
-//! axes and a break inside a manoeuvre the gate itself called motion, and write the verdict —
-//! replaced or suspect — into the held samples.
+//! axes, a break inside a manoeuvre the gate itself called motion, and a short break at a level
+//! the channel itself held within the last `level_window_s` (the level test), and write the
+//! verdict — replaced or suspect — into the held samples.
 
 use super::confirm;
 use super::gate::{Mode, RAW_KEEP};
 use super::{GrossErrorStage, MAX_EVENT, RING, Replacement, at_ring};
 use super::{MAX_CONTEXT, MAX_POST};
 use crate::sample::flags;
+use crate::stats::robust::{median, sigma_from_abs_dev, upper_median};
 
 /// A partner channel of the several-axes test is sharp beyond this many times its roughness.
 const SHOCK_K: f64 = 4.0;
@@ -16,6 +18,12 @@ pub(super) const RATE_WINDOW: f64 = 5000.0;
 /// A partner whose own confirmed gross errors are so frequent that one falls within the
 /// 3-sample window by chance with at least this probability is no evidence of a common cause.
 const CHANCE: f64 = 3e-3;
+/// Most measurements the level test reads (half the ring; the rest holds the event and the
+/// samples after it: at most `MAX_LOOKAHEAD` = 1000).
+const LEVEL_MAX: usize = 1024;
+/// Fewest measurements the level test reads: fewer, and it makes no veto (the guard's own
+/// minimum history is 16 increments, `guard::GUARD_N`).
+const LEVEL_MIN: usize = 16;
 
 impl GrossErrorStage {
     /// Judge the oldest pending event of channel `c` with the context that has arrived (samples
@@ -110,8 +118,18 @@ impl GrossErrorStage {
         // that breaks the signal is under a third of it: that break is the sharp part of the
         // manoeuvre, not a gross error riding on it.
         let motion_break = ev.motion && 3 * (keep - lead) < m;
+        // Opt-in (`level_window_s` > 0): a judged part too short for the smoothness test must
+        // also lie off the level the channel held over the last `level_window_s` (the level
+        // test, below): its shape cannot tell a short real transient from a glitch.
+        let level = if evidence.is_some() && keep - lead < confirm::SMOOTH_MIN {
+            self.level_distance(c, ev.start + lead as u64, upto, &event[lead..keep])
+        } else {
+            None
+        };
+        let level_veto = level.is_some_and(|d| d < self.s.level_k);
         let gross = !shock
             && !motion_break
+            && !level_veto
             && evidence.is_some_and(|e| e.gross(keep - lead, &self.s.thresholds()));
         if let Some(log) = self.verdicts.as_mut() {
             log.push(super::EventVerdict {
@@ -123,6 +141,8 @@ impl GrossErrorStage {
                 evidence,
                 shock,
                 motion_break,
+                level,
+                level_veto,
                 gross,
             });
         }
@@ -180,6 +200,62 @@ impl GrossErrorStage {
             }
             self.ch[c].gate.resume_from(&recent);
         }
+    }
+
+    /// The level window in measurements: `level_window_s` of the stream's own time (its mean
+    /// interval between measurements, intervals that end in a gap left out), at most
+    /// [`LEVEL_MAX`]; `None` when the test is off or no interval has been seen.
+    fn level_window(&self) -> Option<usize> {
+        if self.s.level_window_s <= 0.0 || self.intervals == 0 || self.span_ns == 0 {
+            return None;
+        }
+        let dt = self.span_ns as f64 * 1e-9 / self.intervals as f64;
+        Some(((self.s.level_window_s / dt).round() as usize).clamp(1, LEVEL_MAX))
+    }
+
+    /// The level test's distance (module docs of `settings.rs`, `level_window_s`): how far the
+    /// judged samples `judged` (the first at index `a`) lie from the level channel `c` held
+    /// over the level window before them — the median over the samples of |x − m| / σ_L, m the
+    /// median and σ_L the robust σ of the window's best values so far (replacements in, bad
+    /// values out), σ_L no lower than the confirmation's floor. `None` (no veto) with fewer than
+    /// [`LEVEL_MIN`] values: at the start of a stream the shape tests decide alone.
+    fn level_distance(&mut self, c: usize, a: u64, upto: u64, judged: &[f64]) -> Option<f64> {
+        let w = self.level_window()?;
+        // The ring holds the last RING measurements up to `upto`.
+        let room = (RING as u64).saturating_sub(upto.saturating_sub(a) + 1);
+        let w = (w as u64).min(room).min(a) as usize;
+        if w < LEVEL_MIN {
+            return None;
+        }
+        let floor = self.sigma_floor(c);
+        let buf = &mut self.level_buf[..];
+        let mut n = 0;
+        for i in a - w as u64..a {
+            let v = at_ring(&self.ch[c].ring, i);
+            if v.is_finite() {
+                buf[n] = v;
+                n += 1;
+            }
+        }
+        if n < LEVEL_MIN {
+            return None;
+        }
+        let med = upper_median(&mut buf[..n]);
+        for v in buf[..n].iter_mut() {
+            *v = (*v - med).abs();
+        }
+        let sd = sigma_from_abs_dev(&mut buf[..n]).max(floor);
+        let mut d = [0.0f64; MAX_EVENT];
+        let m = judged.len().min(MAX_EVENT);
+        for (o, x) in d.iter_mut().zip(judged) {
+            // A non-finite value is as far off as it gets.
+            *o = if x.is_finite() {
+                (x - med).abs() / sd
+            } else {
+                f64::INFINITY
+            };
+        }
+        Some(median(&mut d[..m]))
     }
 
     /// Several-axes test on the other channels' *raw* values (a partner judged first and
