@@ -457,3 +457,56 @@ fn mavlink_accel_after_the_hold_window_is_declared_present_again_and_survives_a_
         );
     }
 }
+
+/// Both holds at the start of a MAVLink stream: the channel set's (the first 5 messages carry
+/// no accel) and the period's (the first 16 samples). A gap at interval 3 (messages 3 and 4
+/// dropped) is flagged on the next sample and the sequence counts the 2 missing; every other
+/// sample comes out once, in order, the HEARTBEAT after the second, the descriptor (200 Hz,
+/// accel present) after the 16th, at every chunking.
+#[test]
+fn mavlink_gap_at_interval_3_is_flagged_behind_the_channel_hold() {
+    let (sent, all) = late_accel_stream(5);
+    // Split the stream into its messages and drop messages 3 and 4 (v2 frame: 12 + len).
+    let mut frames = Vec::new();
+    let mut at = 0;
+    while at < all.len() {
+        let n = 12 + all[at + 1] as usize;
+        frames.push(&all[at..at + n]);
+        at += n;
+    }
+    // Frame 2 is the HEARTBEAT; messages 3 and 4 are frames 4 and 5.
+    let b: Vec<u8> = frames
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| !(4..6).contains(k))
+        .flat_map(|(_, f)| f.iter().copied())
+        .collect();
+    let kept: Vec<usize> = (0..40).filter(|i| !(3..5).contains(i)).collect();
+    for chunk in [1, 13, 100, b.len()] {
+        let mut d = MavlinkDecoder::default();
+        let (items, st) = imuprep::frame::protocol::decode_chunked(&mut d, &b, chunk);
+        let got: Vec<&Sample> = items.iter().filter_map(|x| x.sample()).collect();
+        let t: Vec<u64> = got.iter().map(|s| s.t_ns).collect();
+        let want_t: Vec<u64> = kept.iter().map(|&i| sent[i].t_ns).collect();
+        assert_eq!(t, want_t, "chunk {chunk}");
+        let seqs: Vec<usize> = got.iter().map(|s| s.seq as usize).collect();
+        assert_eq!(seqs, kept, "chunk {chunk}");
+        let gaps: Vec<u32> = got
+            .iter()
+            .filter(|s| s.has(flags::GAP))
+            .map(|s| s.seq)
+            .collect();
+        assert_eq!(gaps, [5], "chunk {chunk}");
+        assert_eq!((st.gaps, st.missing_frames), (1, 2));
+        // Order: 2 samples, the HEARTBEAT, 14 samples, the descriptor.
+        assert!(matches!(items[2], Decoded::Other(_)), "chunk {chunk}");
+        match items[17] {
+            Decoded::Descriptor(d) => {
+                assert!((d.sample_rate_hz - 200.0).abs() < 1e-9);
+                assert_eq!(d.absent, 0, "accel present");
+            }
+            ref x => panic!("chunk {chunk}: {x:?}"),
+        }
+        assert_eq!(items.len(), 38 + 2);
+    }
+}

@@ -682,3 +682,56 @@ fn replay_writes_an_lz4_bag_from_the_command_line() {
         "the bag's 60 /imu/data samples, cleaned"
     );
 }
+
+/// The MCAP decoder learns the period from the first 15 intervals; a gap among them (3 samples
+/// missing before the 4th, interval 3) is flagged and counted, the sequence counts the missing
+/// samples, every sample comes out once in order with the descriptor right after the 16th,
+/// at every chunking. Before the first samples were held, this gap went unflagged.
+#[test]
+fn a_gap_among_the_first_intervals_of_a_bag_is_flagged() {
+    let idx: Vec<u64> = (0..40u64).filter(|i| !(3..6).contains(i)).collect();
+    let v: Vec<Sample> = idx
+        .iter()
+        .map(|&i| {
+            let mut s = Sample {
+                t_ns: 1_000_000_000 + i * 10_000_000,
+                ..Sample::default()
+            };
+            s.set_channels(&[i as f64 * 1e-2, 0.1, -0.1, 0.2, -0.2, -9.8]);
+            s
+        })
+        .collect();
+    let bag = encode_bag(&Descriptor::default(), &v, McapSinkOptions::default()).unwrap();
+    for chunk in [1, 7, 64, 4096, bag.len()] {
+        let mut d = McapDecoder::default();
+        let (items, st) = run(&mut d, &bag, chunk);
+        let got = samples(&items);
+        let ids: Vec<u64> = got
+            .iter()
+            .map(|s| (s.gyro[0] * 100.0).round() as u64)
+            .collect();
+        assert_eq!(ids, idx, "chunk {chunk}");
+        let seqs: Vec<u64> = got.iter().map(|s| s.seq as u64).collect();
+        assert_eq!(
+            seqs, idx,
+            "chunk {chunk}: the sequence counts the missing samples"
+        );
+        let gaps: Vec<u64> = got
+            .iter()
+            .filter(|s| s.has(flags::GAP))
+            .map(|s| s.seq as u64)
+            .collect();
+        assert_eq!(gaps, [6], "chunk {chunk}");
+        assert_eq!((st.gaps, st.missing_frames, st.samples), (1, 3, 37));
+        // The descriptor (100 Hz) right after the 16th sample, as before the hold.
+        let at = items
+            .iter()
+            .position(|x| matches!(x, Decoded::Descriptor(_)))
+            .unwrap();
+        let before = items[..at].iter().filter(|x| x.sample().is_some()).count();
+        assert_eq!(before, 16, "chunk {chunk}");
+        assert!(
+            matches!(items[at], Decoded::Descriptor(d) if (d.sample_rate_hz - 100.0).abs() < 1e-9)
+        );
+    }
+}

@@ -380,6 +380,21 @@ impl MavlinkDecoder {
         Some(Decoded::Other(frame))
     }
 
+    /// The next item from the bytes (before the hold of the first samples for the period).
+    fn next_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
+        self.f
+            .begin(buf)
+            .or_else(|| self.next_held())
+            .or_else(|| self.step(buf))
+    }
+
+    /// Every byte decoded: what is still held for the channel set goes out with the channels
+    /// seen so far.
+    fn held_back(&mut self) -> Option<Decoded> {
+        self.settle.settle();
+        self.next_held()
+    }
+
     /// One frame from the front of `buf`, or `None` when more bytes are needed.
     fn step(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
         loop {
@@ -440,20 +455,10 @@ impl ProtocolDecoder for MavlinkDecoder {
     fn protocol(&self) -> Protocol {
         Protocol::Mavlink
     }
-    fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        self.f
-            .begin(buf)
-            .or_else(|| self.next_held())
-            .or_else(|| self.step(buf))
-    }
+    super::framing::decode_through_hold!();
     fn end_of_input(&mut self) {
         // A frame with an unknown id at the very end is trusted without a frame after it.
         self.eof = true;
-    }
-    fn held(&mut self) -> Option<Decoded> {
-        // Every byte decoded: what is still held goes out with the channels seen so far.
-        self.settle.settle();
-        self.next_held()
     }
     fn discard_tail(&mut self, buf: &mut BytesMut) {
         let start = matches!(buf.first(), Some(&(STX_V1 | STX_V2)));

@@ -418,6 +418,16 @@ impl McapDecoder {
         }
     }
 
+    /// The next item from the bytes (before the hold of the first samples for the period).
+    fn next_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
+        self.f.begin(buf).or_else(|| self.step(buf))
+    }
+
+    /// Nothing is held back at end of input but the first samples ([`Stamper`]).
+    fn held_back(&mut self) -> Option<Decoded> {
+        None
+    }
+
     fn step(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
         loop {
             if let Some(d) = self.next_in_chunk() {
@@ -538,9 +548,7 @@ impl ProtocolDecoder for McapDecoder {
     fn protocol(&self) -> Protocol {
         Protocol::Mcap
     }
-    fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        self.f.begin(buf).or_else(|| self.step(buf))
-    }
+    super::framing::decode_through_hold!();
     fn discard_tail(&mut self, buf: &mut BytesMut) {
         // A record cut short: count it once, then look for records after its first byte.
         let start = !self.f.in_garbage();

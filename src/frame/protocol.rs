@@ -308,30 +308,79 @@ pub fn flag_values(s: &mut Sample, d: Option<&Descriptor>, stats: &mut DecoderSt
 const BACKWARD_WINDOW_PERIODS: f64 = 1024.0;
 /// Intervals used to learn the nominal period when the protocol does not state the rate.
 const LEARN_INTERVALS: usize = 15;
+/// Samples held at most while the period is learned: the learning window (15 intervals).
+pub const HOLD_SAMPLES: usize = LEARN_INTERVALS + 1;
+/// Items (held samples and the messages between them) held at most, so a sparse IMU stream
+/// among many other messages cannot hold memory without bound: beyond it the samples go out
+/// judged as they come, as with nothing held.
+pub const HOLD_ITEMS: usize = 4096;
 
 /// Sequence from time, for protocols whose IMU messages carry a time stamp but no sample
 /// counter: each sample gets the next sequence number, a gap of k missing periods advances it by
 /// k more and flags `GAP`, a repeated or slightly older time stamp is flagged `DUPLICATE` (and
 /// keeps the last number), a large backward jump is a restart (`GAP`). The nominal period is the
 /// median of the first intervals unless the stream states its rate.
-#[derive(Clone, Debug, Default)]
+///
+/// Learning the period, the tracker holds the stream's first samples ([`Self::track`] leaves
+/// them unjudged, [`Self::holding`]) until it is known: the median of the positive intervals
+/// among the first [`HOLD_SAMPLES`] samples (15 intervals when none repeats or steps back).
+/// Then the caller judges the held samples in order ([`Self::judge`]) with that period, so a
+/// gap among the first intervals is flagged and counted like any other; from then on each
+/// sample is judged as it comes, nothing held. If those samples have no positive interval (one
+/// time stamp repeated), they are judged without a period, and the period is learned from the
+/// next 15 intervals as they are judged (as without a hold).
+#[derive(Clone, Debug)]
 pub struct TimeTracker {
     last_t_ns: Option<u64>,
     seq: u32,
     period_ns: f64,
     learn: Vec<u64>,
+    /// Samples are held while the period is learned (false: learned as they are judged).
+    hold: bool,
+    /// The time stamp of the last sample held (the learning intervals are between them).
+    hold_last: Option<u64>,
+    /// Samples tracked while holding and not judged yet.
+    held: usize,
+    /// The held samples can be judged now (the window is complete, or the input ended).
+    window_done: bool,
+}
+
+impl Default for TimeTracker {
+    fn default() -> Self {
+        TimeTracker {
+            last_t_ns: None,
+            seq: 0,
+            period_ns: 0.0,
+            learn: Vec::new(),
+            hold: true,
+            hold_last: None,
+            held: 0,
+            window_done: false,
+        }
+    }
 }
 
 impl TimeTracker {
+    /// Period learned from the time stamps, the first samples held meanwhile.
     pub fn new() -> Self {
         Self::default()
     }
 
-    /// Nominal period known in advance (from the stream's declared rate).
+    /// Period learned from the time stamps, each sample judged as it comes (nothing held: a
+    /// gap among the first intervals is not flagged).
+    pub fn without_hold() -> Self {
+        TimeTracker {
+            hold: false,
+            ..Self::default()
+        }
+    }
+
+    /// Nominal period known in advance (from the stream's declared rate): nothing held.
     pub fn with_rate_hz(rate_hz: f64) -> Self {
         let mut t = Self::default();
         if rate_hz > 0.0 && rate_hz.is_finite() {
             t.period_ns = 1e9 / rate_hz;
+            t.hold = false;
         }
         t
     }
@@ -341,8 +390,72 @@ impl TimeTracker {
         (self.period_ns > 0.0).then(|| 1e9 / self.period_ns)
     }
 
-    /// Set `s.seq` and the time-fault flags; count them.
+    /// Samples tracked while holding, not judged yet: the caller holds them.
+    #[inline]
+    pub fn holding(&self) -> usize {
+        self.held
+    }
+
+    /// The held samples are to be judged now ([`Self::judge`] on each, in order, then
+    /// [`Self::judged`]).
+    #[inline]
+    pub fn window_done(&self) -> bool {
+        self.window_done
+    }
+
+    /// The held samples have been judged.
+    pub fn judged(&mut self) {
+        self.held = 0;
+        self.window_done = false;
+    }
+
+    /// No more samples will come for the held ones (end of input), or too much is held
+    /// ([`HOLD_ITEMS`], then `stop`: nothing is held after): judge them with what is known,
+    /// the rule of a stream too short to learn from (no period unless learned).
+    pub fn end_hold(&mut self, stop: bool) {
+        if self.held > 0 {
+            self.window_done = true;
+        }
+        if stop && self.hold {
+            // Learned from as they are judged, as if nothing had been held.
+            self.hold = false;
+            self.learn.clear();
+        }
+    }
+
+    /// Set `s.seq` and the time-fault flags; count them. While the period is being learned
+    /// (and samples are held), the sample's interval is only learned from: its sequence
+    /// number and flags are set by [`Self::judge`] once the period is known.
+    #[inline]
     pub fn track(&mut self, s: &mut Sample, stats: &mut DecoderStats) {
+        if !self.hold || self.period_ns > 0.0 {
+            self.judge(s, stats);
+            return;
+        }
+        let t = s.t_ns;
+        if let Some(prev) = self.hold_last
+            && t > prev
+        {
+            self.learn.push(t - prev);
+        }
+        self.hold_last = Some(t);
+        self.held += 1;
+        if self.learn.len() >= LEARN_INTERVALS || self.held >= HOLD_SAMPLES {
+            let mut v = std::mem::take(&mut self.learn);
+            if !v.is_empty() {
+                v.sort_unstable();
+                self.period_ns = v[v.len() / 2] as f64;
+            }
+            // Held once: without a positive interval (one time stamp repeated) the period is
+            // learned from the next intervals as they are judged.
+            self.hold = false;
+            self.window_done = true;
+        }
+    }
+
+    /// Judge `s` against the last sample judged: sequence number and time-fault flags (the
+    /// period learned here, from intervals as they come, if it is not known yet).
+    pub fn judge(&mut self, s: &mut Sample, stats: &mut DecoderStats) {
         let t = s.t_ns;
         let Some(last) = self.last_t_ns else {
             self.last_t_ns = Some(t);
@@ -372,7 +485,7 @@ impl TimeTracker {
             return;
         }
         let dt = t - last;
-        if self.period_ns <= 0.0 {
+        if self.period_ns <= 0.0 && !self.hold {
             self.learn.push(dt);
             if self.learn.len() >= LEARN_INTERVALS {
                 let mut v = std::mem::take(&mut self.learn);
@@ -433,16 +546,100 @@ mod tests {
 
     #[test]
     fn time_tracker_learns_the_period() {
-        let mut tr = TimeTracker::new();
+        // Without a hold (as before): the period from the first 15 intervals, judged as they
+        // come, so a gap among them (interval 3 here, 12 ms) is not flagged.
+        let mut tr = TimeTracker::without_hold();
         let mut st = DecoderStats::default();
-        for i in 0..20u64 {
+        let ts: Vec<u64> = (0..20u64).map(|i| if i >= 3 { i + 2 } else { i }).collect();
+        for &i in &ts {
             let mut x = s(i * 4_000_000);
             tr.track(&mut x, &mut st);
+            assert!(!x.has(flags::GAP));
         }
         assert_eq!(tr.rate_hz(), Some(250.0));
-        let mut x = s(19 * 4_000_000 + 12_000_000);
+        assert_eq!(tr.holding(), 0);
+        let mut x = s(21 * 4_000_000 + 12_000_000);
         tr.track(&mut x, &mut st);
         assert!(x.has(flags::GAP));
         assert_eq!(st.missing_frames, 2);
+    }
+
+    #[test]
+    fn time_tracker_holds_the_first_samples_and_judges_them_with_the_learned_period() {
+        // 250 Hz, 2 samples missing before the 4th (interval 3: 12 ms).
+        let ts: Vec<u64> = (0..20u64).map(|i| if i >= 3 { i + 2 } else { i }).collect();
+        let mut tr = TimeTracker::new();
+        let mut st = DecoderStats::default();
+        let mut held = Vec::new();
+        for (k, &i) in ts.iter().enumerate() {
+            let mut x = s(i * 4_000_000);
+            tr.track(&mut x, &mut st);
+            if k < HOLD_SAMPLES {
+                // Held: not judged yet, nothing counted.
+                assert_eq!(tr.holding(), k + 1);
+                assert_eq!(tr.window_done(), k + 1 == HOLD_SAMPLES);
+                assert_eq!((x.seq, x.flags, st.gaps), (0, 0, 0));
+                held.push(x);
+                if tr.window_done() {
+                    assert_eq!(tr.rate_hz(), Some(250.0));
+                    for h in held.iter_mut() {
+                        tr.judge(h, &mut st);
+                    }
+                    tr.judged();
+                }
+            } else {
+                // Judged as it comes.
+                assert_eq!(tr.holding(), 0);
+                assert_eq!(x.seq as u64, i);
+                held.push(x);
+            }
+        }
+        let seqs: Vec<u64> = held.iter().map(|x| x.seq as u64).collect();
+        assert_eq!(seqs, ts, "the sequence counts the missing samples");
+        let gaps: Vec<usize> = (0..held.len())
+            .filter(|&k| held[k].has(flags::GAP))
+            .collect();
+        assert_eq!(gaps, vec![3]);
+        assert_eq!((st.gaps, st.missing_frames), (1, 2));
+    }
+
+    #[test]
+    fn time_tracker_learns_from_fewer_intervals_when_the_first_samples_repeat() {
+        // 16 samples, 4 of them repeating the time before: 11 positive intervals of 10 ms and
+        // one of 30 ms (2 missing), learned on the 16th sample (the hold is at most 16).
+        let ms = [
+            0, 10, 10, 20, 30, 30, 60, 70, 80, 80, 90, 100, 110, 110, 120, 130,
+        ];
+        let mut tr = TimeTracker::new();
+        let mut st = DecoderStats::default();
+        let mut v: Vec<Sample> = ms.iter().map(|m| s(m * 1_000_000)).collect();
+        for x in v.iter_mut() {
+            tr.track(x, &mut st);
+        }
+        assert!(tr.window_done());
+        assert_eq!(tr.rate_hz(), Some(100.0));
+        for x in v.iter_mut() {
+            tr.judge(x, &mut st);
+        }
+        tr.judged();
+        let seqs: Vec<u32> = v.iter().map(|x| x.seq).collect();
+        assert_eq!(seqs, [0, 1, 1, 2, 3, 3, 6, 7, 8, 8, 9, 10, 11, 11, 12, 13]);
+        assert_eq!((st.gaps, st.missing_frames, st.duplicates), (1, 2, 4));
+        // One time stamp 16 times: no period, judged without one; nothing held after.
+        let mut tr = TimeTracker::new();
+        let mut st = DecoderStats::default();
+        let mut v = vec![s(5); HOLD_SAMPLES];
+        for x in v.iter_mut() {
+            tr.track(x, &mut st);
+        }
+        assert!(tr.window_done() && tr.rate_hz().is_none());
+        for x in v.iter_mut() {
+            tr.judge(x, &mut st);
+        }
+        tr.judged();
+        assert_eq!(st.duplicates, HOLD_SAMPLES as u64 - 1);
+        let mut x = s(10);
+        tr.track(&mut x, &mut st);
+        assert_eq!((tr.holding(), x.seq), (0, 1));
     }
 }

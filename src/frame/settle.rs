@@ -19,11 +19,12 @@ use super::protocol::{Carrier, Decoded, mark_absent};
 use crate::sample::{ALL_CHANNELS, Sample};
 use std::collections::VecDeque;
 
-/// Samples held at most: the descriptor is learned on the 16th (15 intervals).
-pub const HOLD_SAMPLES: usize = 16;
+/// Samples held at most: the descriptor is learned on the 16th (15 intervals), the same window
+/// as the period's hold ([`super::protocol::HOLD_SAMPLES`]).
+pub const HOLD_SAMPLES: usize = super::protocol::HOLD_SAMPLES;
 /// Items (samples and the messages between them) held at most, so a sparse IMU stream among
-/// many other messages cannot hold memory without bound.
-pub const HOLD_ITEMS: usize = 4096;
+/// many other messages cannot hold memory without bound (as the period's hold).
+pub const HOLD_ITEMS: usize = super::protocol::HOLD_ITEMS;
 
 /// What is held, in input order.
 pub enum Held {

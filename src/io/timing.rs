@@ -185,9 +185,9 @@ pub fn derive_sequence(samples: &mut [Sample]) -> TimeFaults {
 
 /// [`derive_sequence`] over a whole recording a streaming decoder has already sequenced from its
 /// time stamps (UBX, MAVLink, ULog, MCAP: no sample counter). The decoder learns the period from
-/// the first intervals of the stream and judges each interval as it comes, so a gap among those
-/// first intervals goes unflagged (the PX4 sample's first interval, 36 ms at 250 Hz, is one), and
-/// its period is their median, not this module's rule. With the whole recording at hand, the
+/// the first intervals of the stream (holding those samples meanwhile, so a gap among them is
+/// flagged too), and its period is their median, not this module's rule, which can judge an
+/// interval near 1.5 periods differently. With the whole recording at hand, the
 /// `GAP` and `DUPLICATE` flags it set are cleared and derived afresh, exactly as for a CSV of
 /// the same stream (no other code sets those two flags on these protocols' samples).
 pub fn rederive_sequence(samples: &mut [Sample]) -> TimeFaults {

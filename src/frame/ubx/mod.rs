@@ -386,6 +386,30 @@ impl UbxDecoder {
         }
     }
 
+    /// The next item from the bytes (before the hold of the first samples for the period).
+    fn next_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
+        if let Some(d) = self.f.begin(buf) {
+            return Some(d);
+        }
+        loop {
+            if let Some(d) = self.ready.pop_front() {
+                return Some(d);
+            }
+            if let Some(d) = self.next_raw() {
+                return Some(d);
+            }
+            if buf.is_empty() || !self.step(buf) {
+                return self.ready.pop_front();
+            }
+        }
+    }
+
+    /// At end of input: an ESF-MEAS half whose partner never came (a partial sample).
+    fn held_back(&mut self) -> Option<Decoded> {
+        self.flush_meas();
+        self.ready.pop_front()
+    }
+
     /// Find and handle one message at the front of `buf`; false = need more bytes.
     fn step(&mut self, buf: &mut BytesMut) -> bool {
         if !self.f.seek(buf, port::is_start) {
@@ -419,27 +443,7 @@ impl ProtocolDecoder for UbxDecoder {
     fn protocol(&self) -> Protocol {
         Protocol::Ubx
     }
-    fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        if let Some(d) = self.f.begin(buf) {
-            return Some(d);
-        }
-        loop {
-            if let Some(d) = self.ready.pop_front() {
-                return Some(d);
-            }
-            if let Some(d) = self.next_raw() {
-                return Some(d);
-            }
-            if buf.is_empty() || !self.step(buf) {
-                return self.ready.pop_front();
-            }
-        }
-    }
-    fn held(&mut self) -> Option<Decoded> {
-        // An ESF-MEAS half whose partner never came: a partial sample.
-        self.flush_meas();
-        self.ready.pop_front()
-    }
+    crate::frame::framing::decode_through_hold!();
     fn discard_tail(&mut self, buf: &mut BytesMut) {
         // The front cannot complete: count it truncated and look for a message inside it.
         let start = buf.first().is_some_and(|&b| port::is_start(b));

@@ -314,6 +314,22 @@ impl UlogDecoder {
         self.sample_from(t, [gv[0], gv[1], gv[2], av[0], av[1], av[2]], temp, 0, c)
     }
 
+    /// The next item from the bytes (before the hold of the first samples for the period).
+    fn next_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
+        self.f.arrived(buf);
+        if let Some(p) = self.pending.take() {
+            return Some(p);
+        }
+        self.step(buf)
+    }
+
+    /// At end of input: an unpaired gyro or accel message (its bytes kept).
+    fn held_back(&mut self) -> Option<Decoded> {
+        let b = self.gyro.take().or_else(|| self.accel.take())?;
+        self.f.stats.partial_samples += 1;
+        Some(self.other(b))
+    }
+
     /// One item from the front of `buf`; `None` = need more bytes.
     fn step(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
         loop {
@@ -398,19 +414,7 @@ impl ProtocolDecoder for UlogDecoder {
     fn protocol(&self) -> Protocol {
         Protocol::Ulog
     }
-    fn decode_item(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
-        self.f.arrived(buf);
-        if let Some(p) = self.pending.take() {
-            return Some(p);
-        }
-        self.step(buf)
-    }
-    fn held(&mut self) -> Option<Decoded> {
-        // An unpaired gyro or accel message at the end: keep its bytes.
-        let b = self.gyro.take().or_else(|| self.accel.take())?;
-        self.f.stats.partial_samples += 1;
-        Some(self.other(b))
-    }
+    crate::frame::framing::decode_through_hold!();
     fn discard_tail(&mut self, buf: &mut BytesMut) {
         // ULog has no sync word to search for: the whole tail is one cut message.
         if !buf.is_empty() {
