@@ -248,3 +248,58 @@ fn diagnose_works_on_the_present_channels_and_names_the_absent_ones() {
         }
     }
 }
+
+/// A channel with a few missing values (empty cells, imported as NaN) once failed the whole fit
+/// ("gz: non-finite value at index 500", no file named, no model for the whole channels): it
+/// is left out with its count of non-finite samples, named in the report and both files'
+/// headers, and the whole channels get exactly the models the same data gives without the gap.
+#[test]
+fn fit_leaves_out_a_channel_with_missing_values_and_fits_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = log_of(dir.path(), "full", &[0, 1, 2, 3, 4, 5]);
+    let full_out = dir.path().join("fit_full");
+    common::run_cli(&["fit", &full, "--out-dir", full_out.to_str().unwrap()]);
+    // The same data with gz empty on three rows (5 s, 70 s, 150 s: all in the 180-s span).
+    let csv = common::channels_csv(&data(), &[0, 1, 2, 3, 4, 5], FS);
+    let holed: String = csv
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if [501, 7001, 15001].contains(&i) {
+                let mut f: Vec<&str> = l.split(',').collect();
+                f[3] = "";
+                f.join(",") + "\n"
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let log = common::import_csv(dir.path(), "holed", &holed);
+    let out = dir.path().join("fit_holed");
+    let text = common::run_cli(&[
+        "fit",
+        log.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        text.contains(
+            "gz   not fitted: 3 non-finite samples in the training span (first at 5.000 s"
+        ),
+        "{text}"
+    );
+    for file in ["arima.toml", "bias.toml"] {
+        let head = std::fs::read_to_string(out.join(file)).unwrap();
+        assert!(
+            head.starts_with("# imuprep fit: gz: no model: 3 non-finite samples"),
+            "{file}: {head}"
+        );
+        let got = blocks(&out.join(file));
+        let want: Vec<_> = blocks(&full_out.join(file))
+            .into_iter()
+            .filter(|(c, _)| c != "gz")
+            .collect();
+        assert_eq!(got, want, "{file}");
+    }
+    no_nan_in(&out);
+}
