@@ -260,3 +260,46 @@ fn diagnose_with_no_channel_diagnosable_fails_and_writes_nothing() {
         assert!(!out.join("report.txt").exists(), "{args:?}");
     }
 }
+
+/// Run imuprep; its exit code, stdout and stderr.
+fn run_out(args: &[&str]) -> (i32, String, String) {
+    let out = std::process::Command::new(common::bin())
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A native log of `n` synthetic samples in `dir`.
+fn short_log(dir: &Path, n: usize) -> String {
+    let mut b = bytes::BytesMut::new();
+    imuprep::io::log::encode_log(&common::descriptor(), &common::samples(n, 5), &mut b);
+    write(&dir.join(format!("short{n}.log")), &b)
+}
+
+/// `calibrate` on a log with no still stretch (10 samples) is "not identifiable", a result
+/// (exit 0); it once printed "held-out RMS of |f| - g ...: NaN -> NaN m/s²" in the report.
+#[test]
+fn calibrate_without_a_still_stretch_prints_no_nan() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = short_log(dir.path(), 10);
+    let out = dir.path().join("cal");
+    let (code, text, err) = run_out(&["calibrate", &log, "--out-dir", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        text.contains("result: not identifiable: no still stretch found"),
+        "{text}"
+    );
+    assert!(
+        text.contains("held-out RMS of |f| - g: not computed (no still stretch)"),
+        "{text}"
+    );
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    for t in [&text, &report] {
+        assert!(!t.contains("NaN"), "{t}");
+    }
+}

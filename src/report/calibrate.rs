@@ -292,14 +292,22 @@ impl CalibrateReport {
         }
         tests_text(&mut o, &a.not_identifiable, &a.candidates);
         let _ = writeln!(o, "\nresult: {}", a.verdict);
-        let _ = writeln!(
-            o,
-            "held-out RMS of |f| - g (per attitude group, leave-one-group-out): {:.4e} -> {:.4e} m/s²; in-sample over the stretches: {:.4e} -> {:.4e} m/s²",
-            a.held_out_rms_before_m_s2,
-            a.held_out_rms_after_m_s2,
-            a.fit_rms_before_m_s2,
-            a.fit_rms_after_m_s2
-        );
+        if a.held_out_rms_before_m_s2.is_finite() && a.fit_rms_before_m_s2.is_finite() {
+            let _ = writeln!(
+                o,
+                "held-out RMS of |f| - g (per attitude group, leave-one-group-out): {:.4e} -> {:.4e} m/s²; in-sample over the stretches: {:.4e} -> {:.4e} m/s²",
+                a.held_out_rms_before_m_s2,
+                a.held_out_rms_after_m_s2,
+                a.fit_rms_before_m_s2,
+                a.fit_rms_after_m_s2
+            );
+        } else {
+            // No still stretch: there is no |f| - g to take an RMS of (it once printed NaN).
+            let _ = writeln!(
+                o,
+                "held-out RMS of |f| - g: not computed (no still stretch)"
+            );
+        }
         if let Some(f) = &a.fitted {
             let s = &f.settings;
             let has = |g: &str| f.groups.iter().any(|k| k == g);
