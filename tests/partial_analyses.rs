@@ -303,3 +303,47 @@ fn fit_leaves_out_a_channel_with_missing_values_and_fits_the_others() {
     }
     no_nan_in(&out);
 }
+
+/// `compare` on a log with two missing gz values once failed as a whole with "non-finite value
+/// at index 1234" (no file, no channel); a log shorter than the paper's split said "record too
+/// short" naming neither. Now gz is skipped with its count and the other channels are compared;
+/// the short log's error names the log, the channel and its length.
+#[test]
+fn compare_skips_a_channel_with_missing_values_and_names_a_short_log() {
+    let dir = tempfile::tempdir().unwrap();
+    // 370 s at 100 Hz: the paper's split (3 min + 3 min + test) fits.
+    let mut r = Rng::new(77);
+    let long: Vec<[f64; 6]> = (0..37_000)
+        .map(|_| std::array::from_fn(|c| if c == 5 { 9.81 } else { 0.0 } + 1e-2 * r.normal()))
+        .collect();
+    let csv = common::channels_csv(&long, &[0, 1, 2, 3, 4, 5], FS);
+    let holed: String = csv
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            let mut f: Vec<&str> = l.split(',').collect();
+            if i == 1235 || i == 30001 {
+                f[3] = "";
+            }
+            f.join(",") + "\n"
+        })
+        .collect();
+    let log = common::import_csv(dir.path(), "holed", &holed);
+    let text = common::run_cli(&["compare", log.to_str().unwrap()]);
+    assert!(
+        text.contains("gz: skipped: 2 non-finite samples (first at 12.340 s of the log)"),
+        "{text}"
+    );
+    for c in ["gx", "gy", "ax", "ay", "az"] {
+        assert!(text.contains(&format!("channel {c} (")), "{c}: {text}");
+    }
+    // 200 s: too short for the split; the error names the log and what it holds.
+    let short = log_of(dir.path(), "short", &[0, 1, 2, 3, 4, 5]);
+    let err = fails(&["compare", &short]);
+    assert!(
+        err.contains(&format!(
+            "{short}: gx (200.0 s at 100 Hz): record too short"
+        )),
+        "{err}"
+    );
+}

@@ -167,20 +167,14 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
     // fit of the channels that are whole.
     let mut whole = Vec::with_capacity(present.len());
     for c in present {
-        let finite = |s: &&Sample| s.channel(c).is_finite();
-        match samples[..n].iter().find(|s| !finite(s)) {
+        match super::non_finite(&samples[..n], c) {
             None => whole.push(c),
-            Some(first) => absent.push((
+            Some((k, first_s)) => absent.push((
                 CHANNEL_NAMES[c].to_string(),
                 format!(
-                    "{} in the training span (first at {:.3} s of the log): ARIMA and bias \
-                     fits need a gap-free series; the stages learn this channel at warm-up",
-                    crate::text::count(
-                        samples[..n].iter().filter(|s| !finite(s)).count() as u64,
-                        "non-finite sample",
-                        "non-finite samples"
-                    ),
-                    first.t_s()
+                    "{} in the training span (first at {first_s:.3} s of the log): ARIMA and \
+                     bias fits need a gap-free series; the stages learn this channel at warm-up",
+                    crate::text::count(k as u64, "non-finite sample", "non-finite samples"),
                 ),
             )),
         }

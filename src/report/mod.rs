@@ -100,6 +100,14 @@ pub fn parse_channels(channels: &[String]) -> Result<Vec<usize>> {
 /// A channel left out of an analysis, and why.
 pub type LeftOut = (String, String);
 
+/// The non-finite samples (NaN/Inf: missing values, an all-NaN column) of channel `c` in
+/// `samples`: their count and the first one's time, s; `None` when every value is finite.
+pub fn non_finite(samples: &[Sample], c: usize) -> Option<(usize, f64)> {
+    let bad = |s: &&Sample| !s.channel(c).is_finite();
+    let first = samples.iter().find(bad)?;
+    Some((samples.iter().filter(bad).count(), first.t_s()))
+}
+
 /// The channels of `chans` a log's `samples` have, and why each other one is left out (a partial
 /// sensor's absent channels: [`Sample::absent`]). A channel absent in any sample is left out:
 /// the analyses need every sample of a channel. An error, naming the channels, when none of
