@@ -303,3 +303,32 @@ fn calibrate_without_a_still_stretch_prints_no_nan() {
         assert!(!t.contains("NaN"), "{t}");
     }
 }
+
+/// `audit` of a folder with nothing auditable once exited 1 — the status of a missed do-no-harm
+/// target — with "no recording under DIR could be audited" and no reason. Now it is an input
+/// problem (status 3) that says why: no recording file at all, or each file left out with its
+/// reason (a CSV that is not an IMU's; a log too short to audit).
+#[test]
+fn audit_of_a_folder_with_nothing_auditable_says_why_with_status_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let (code, _, err) = run_out(&["audit", empty.to_str().unwrap()]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("could be audited (no .log, .csv, .csv.gz or .ulg file in it)"),
+        "{err}"
+    );
+    let some = dir.path().join("some");
+    std::fs::create_dir(&some).unwrap();
+    write(&some.join("people.csv"), b"name,age\nbob,3\n");
+    short_log(&some, 200);
+    let (code, out, err) = run_out(&["audit", some.to_str().unwrap()]);
+    assert_eq!(code, 3, "{err}");
+    assert!(out.is_empty(), "no report claims a result: {out}");
+    assert!(err.contains("people.csv: no sensor column"), "{err}");
+    assert!(
+        err.contains("short200.log: 200 samples: too short to audit"),
+        "{err}"
+    );
+}
