@@ -332,3 +332,41 @@ fn audit_of_a_folder_with_nothing_auditable_says_why_with_status_3() {
         "{err}"
     );
 }
+
+/// A `.csv.gz` cut short (a copy interrupted): `import` once said only "FILE: incomplete
+/// deflate stream". It now says where the compressed stream stopped, that the file is
+/// truncated or corrupt, and that nothing was imported — and writes no log.
+#[test]
+fn import_of_a_truncated_gz_says_so_and_writes_nothing() {
+    use std::io::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = String::from("t,gx,gy,gz,ax,ay,az,temp\n");
+    let mut r = Rng::new(9);
+    for i in 0..20_000 {
+        csv += &format!(
+            "{:.2},{:.6},{:.6},{:.6},0.01,0.02,9.81,25\n",
+            i as f64 / 100.0,
+            r.normal(),
+            r.normal(),
+            r.normal()
+        );
+    }
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(csv.as_bytes()).unwrap();
+    let gz = gz.finish().unwrap();
+    let cut = write(&dir.path().join("cut.csv.gz"), &gz[..gz.len() / 2]);
+    let out = dir.path().join("cut.log");
+    let (code, _, err) = run_out(&["import", &cut, "-o", out.to_str().unwrap()]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains(&format!("{cut}:")), "names the file: {err}");
+    assert!(
+        err.contains("the compressed file ends early or is corrupt here (a truncated .gz?"),
+        "{err}"
+    );
+    assert!(err.contains("nothing was imported"), "{err}");
+    assert!(!out.exists());
+    // The whole file imports.
+    let whole = write(&dir.path().join("whole.csv.gz"), &gz);
+    let (code, _, err) = run_out(&["import", &whole, "-o", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+}
