@@ -370,3 +370,30 @@ fn import_of_a_truncated_gz_says_so_and_writes_nothing() {
     let (code, _, err) = run_out(&["import", &whole, "-o", out.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
 }
+
+/// `allan` and `fit` on a log too short for them (10 samples) once said only "series too
+/// short: need at least 16 samples, got 10" (allan) and "gx: series too short: ..." (fit),
+/// naming no file: the error now names the log and what it holds.
+#[test]
+fn allan_and_fit_on_a_too_short_log_name_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = short_log(dir.path(), 10);
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    let (code, _, err) = run_out(&["allan", &log, "--out-dir", out]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!("{log}: 10 samples (0.05 s at 200 Hz) after --skip-s 0: series too short: need at least 16")),
+        "{err}"
+    );
+    let (code, _, err) = run_out(&["fit", &log, "--out-dir", out]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!(
+            "{log}: ARIMA identification of gx on 10 samples (0.1 s at 200 Hz): series too short"
+        )),
+        "{err}"
+    );
+    assert!(!Path::new(out).join("report.txt").exists());
+    assert!(!Path::new(out).join("arima.toml").exists());
+}
