@@ -365,3 +365,32 @@ fn evaluate_on_a_record_shorter_than_a_drift_window_says_not_computed() {
         );
     }
 }
+
+/// A channel named twice (`allan --channel gx --channel gx`) was analysed twice and written
+/// twice into bias.toml, which the daemon then refused ("`gx` appears more than once"): it is
+/// analysed once, and the model loads.
+#[test]
+fn a_channel_named_twice_is_analysed_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let out = run(&[
+        "allan",
+        "replay/static_bench.log",
+        "--channel",
+        "gx",
+        "--channel",
+        "gx",
+        "--out-dir",
+        d,
+    ]);
+    assert_eq!(out.matches("\ngx (rad/s)").count(), 1, "{out}");
+    let model = std::fs::read_to_string(dir.path().join("bias.toml")).unwrap();
+    assert_eq!(model.matches("channel = \"gx\"").count(), 1, "{model}");
+    let cfg = dir.path().join("c.toml");
+    std::fs::write(
+        &cfg,
+        format!("[bias]\nenabled = true\nmodel = \"{d}/bias.toml\"\n"),
+    )
+    .unwrap();
+    replay_summary("replay/static_bench.log", &cfg);
+}

@@ -88,13 +88,17 @@ pub fn parse_channels(channels: &[String]) -> Result<Vec<usize>> {
     if channels.is_empty() {
         return Ok((0..6).collect());
     }
-    channels
-        .iter()
-        .map(|c| {
-            crate::sample::channel_index(c)
-                .with_context(|| format!("unknown channel {c:?} (gx gy gz ax ay az)"))
-        })
-        .collect()
+    let mut out = Vec::with_capacity(channels.len());
+    for c in channels {
+        let i = crate::sample::channel_index(c)
+            .with_context(|| format!("unknown channel {c:?} (gx gy gz ax ay az)"))?;
+        // A channel named twice is analysed once: twice, it was reported twice and written
+        // twice into bias.toml, which the daemon then refused ("`gx` appears more than once").
+        if !out.contains(&i) {
+            out.push(i);
+        }
+    }
+    Ok(out)
 }
 
 /// A channel left out of an analysis, and why.
