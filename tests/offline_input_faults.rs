@@ -397,3 +397,31 @@ fn allan_and_fit_on_a_too_short_log_name_it() {
     assert!(!Path::new(out).join("report.txt").exists());
     assert!(!Path::new(out).join("arima.toml").exists());
 }
+
+/// `calibrate --gnss` with a file that does not exist once ran the whole calibration, put
+/// "/x.pos: No such file or directory" in the report and exited 0: it now fails first, naming
+/// the flag and the file, and writes no report.
+#[test]
+fn calibrate_with_a_missing_gnss_file_fails_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.log");
+    let pos = dir.path().join("nope.pos");
+    let pos = pos.to_str().unwrap();
+    let out = dir.path().join("cal");
+    let (code, _, err) = run_out(&[
+        "calibrate",
+        log,
+        "--to-s",
+        "30",
+        "--gnss",
+        pos,
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!("--gnss {pos}: No such file")),
+        "{err}"
+    );
+    assert!(!out.join("report.txt").exists());
+}
