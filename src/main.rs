@@ -585,11 +585,24 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
 fn audit(dir: PathBuf, seed: u64, cfg: Config, json: Option<PathBuf>) -> Result<ExitCode> {
     let report = report::audit::audit_dir(&dir, seed, &cfg)
         .with_context(|| format!("cannot read {}", dir.display()))?;
-    anyhow::ensure!(
-        !report.recordings.is_empty(),
-        "no recording under {} could be audited",
-        dir.display()
-    );
+    if report.recordings.is_empty() {
+        // Nothing audited is an input problem (status 3), not a missed target (status 1); say
+        // what was looked at and why each file was left out.
+        let why = if report.skipped.is_empty() {
+            " (no .log, .csv, .csv.gz or .ulg file in it)".to_string()
+        } else {
+            report
+                .skipped
+                .iter()
+                .map(|s| format!("\n  skipped {}: {}", s.path.display(), s.reason))
+                .collect()
+        };
+        return Err(report::InputProblem(format!(
+            "no recording under {} could be audited{why}",
+            dir.display()
+        ))
+        .into());
+    }
     print!("{report}");
     maybe_json(json, &report)?;
     Ok(if report.missed().is_empty() {

@@ -335,3 +335,62 @@ fn evaluate_says_none_where_an_axis_has_no_manoeuvre() {
     assert!(line("gz").ends_with("% of 4"), "{out}");
     assert!(!out.contains("of 0"), "{out}");
 }
+
+/// A record shorter than the 60-s drift window (a 1-s static bench) once scored "60s drift rad
+/// -0.000e0 ... reduced NaN%": no 60-s window was there to measure. The drift and its reduction
+/// are now "n/a" in the text and null in the JSON; the 1-s score, which has its blocks, stays.
+#[test]
+fn evaluate_on_a_record_shorter_than_a_drift_window_says_not_computed() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("ev.json");
+    let out = run(&[
+        "evaluate",
+        "--scenario",
+        "replay/static_bench.toml",
+        "--set",
+        "motion.duration_s=1",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(!out.contains("NaN"), "{out}");
+    let gx = out.lines().find(|l| l.starts_with("gx ")).unwrap();
+    assert_eq!(gx.matches("n/a").count(), 3, "{gx}");
+    let v: serde_json::Value = common::read_json(&json);
+    for ch in v.as_array().unwrap() {
+        assert!(ch["drift_reduction"].is_null(), "{ch}");
+        assert!(ch["pipeline"]["rms_60s_drift_rad"].is_null(), "{ch}");
+        assert!(
+            ch["pipeline"]["rms_1s_mean_error"].as_f64().unwrap() > 0.0,
+            "{ch}"
+        );
+    }
+}
+
+/// A channel named twice (`allan --channel gx --channel gx`) was analysed twice and written
+/// twice into bias.toml, which the daemon then refused ("`gx` appears more than once"): it is
+/// analysed once, and the model loads.
+#[test]
+fn a_channel_named_twice_is_analysed_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let out = run(&[
+        "allan",
+        "replay/static_bench.log",
+        "--channel",
+        "gx",
+        "--channel",
+        "gx",
+        "--out-dir",
+        d,
+    ]);
+    assert_eq!(out.matches("\ngx (rad/s)").count(), 1, "{out}");
+    let model = std::fs::read_to_string(dir.path().join("bias.toml")).unwrap();
+    assert_eq!(model.matches("channel = \"gx\"").count(), 1, "{model}");
+    let cfg = dir.path().join("c.toml");
+    std::fs::write(
+        &cfg,
+        format!("[bias]\nenabled = true\nmodel = \"{d}/bias.toml\"\n"),
+    )
+    .unwrap();
+    replay_summary("replay/static_bench.log", &cfg);
+}

@@ -260,3 +260,168 @@ fn diagnose_with_no_channel_diagnosable_fails_and_writes_nothing() {
         assert!(!out.join("report.txt").exists(), "{args:?}");
     }
 }
+
+/// Run imuprep; its exit code, stdout and stderr.
+fn run_out(args: &[&str]) -> (i32, String, String) {
+    let out = std::process::Command::new(common::bin())
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A native log of `n` synthetic samples in `dir`.
+fn short_log(dir: &Path, n: usize) -> String {
+    let mut b = bytes::BytesMut::new();
+    imuprep::io::log::encode_log(&common::descriptor(), &common::samples(n, 5), &mut b);
+    write(&dir.join(format!("short{n}.log")), &b)
+}
+
+/// `calibrate` on a log with no still stretch (10 samples) is "not identifiable", a result
+/// (exit 0); it once printed "held-out RMS of |f| - g ...: NaN -> NaN m/s²" in the report.
+#[test]
+fn calibrate_without_a_still_stretch_prints_no_nan() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = short_log(dir.path(), 10);
+    let out = dir.path().join("cal");
+    let (code, text, err) = run_out(&["calibrate", &log, "--out-dir", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        text.contains("result: not identifiable: no still stretch found"),
+        "{text}"
+    );
+    assert!(
+        text.contains("held-out RMS of |f| - g: not computed (no still stretch)"),
+        "{text}"
+    );
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    for t in [&text, &report] {
+        assert!(!t.contains("NaN"), "{t}");
+    }
+}
+
+/// `audit` of a folder with nothing auditable once exited 1 — the status of a missed do-no-harm
+/// target — with "no recording under DIR could be audited" and no reason. Now it is an input
+/// problem (status 3) that says why: no recording file at all, or each file left out with its
+/// reason (a CSV that is not an IMU's; a log too short to audit).
+#[test]
+fn audit_of_a_folder_with_nothing_auditable_says_why_with_status_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let (code, _, err) = run_out(&["audit", empty.to_str().unwrap()]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("could be audited (no .log, .csv, .csv.gz or .ulg file in it)"),
+        "{err}"
+    );
+    let some = dir.path().join("some");
+    std::fs::create_dir(&some).unwrap();
+    write(&some.join("people.csv"), b"name,age\nbob,3\n");
+    short_log(&some, 200);
+    let (code, out, err) = run_out(&["audit", some.to_str().unwrap()]);
+    assert_eq!(code, 3, "{err}");
+    assert!(out.is_empty(), "no report claims a result: {out}");
+    assert!(err.contains("people.csv: no sensor column"), "{err}");
+    assert!(
+        err.contains("short200.log: 200 samples: too short to audit"),
+        "{err}"
+    );
+}
+
+/// A `.csv.gz` cut short (a copy interrupted): `import` once said only "FILE: incomplete
+/// deflate stream". It now says where the compressed stream stopped, that the file is
+/// truncated or corrupt, and that nothing was imported — and writes no log.
+#[test]
+fn import_of_a_truncated_gz_says_so_and_writes_nothing() {
+    use std::io::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = String::from("t,gx,gy,gz,ax,ay,az,temp\n");
+    let mut r = Rng::new(9);
+    for i in 0..20_000 {
+        csv += &format!(
+            "{:.2},{:.6},{:.6},{:.6},0.01,0.02,9.81,25\n",
+            i as f64 / 100.0,
+            r.normal(),
+            r.normal(),
+            r.normal()
+        );
+    }
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(csv.as_bytes()).unwrap();
+    let gz = gz.finish().unwrap();
+    let cut = write(&dir.path().join("cut.csv.gz"), &gz[..gz.len() / 2]);
+    let out = dir.path().join("cut.log");
+    let (code, _, err) = run_out(&["import", &cut, "-o", out.to_str().unwrap()]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains(&format!("{cut}:")), "names the file: {err}");
+    assert!(
+        err.contains("the compressed file ends early or is corrupt here (a truncated .gz?"),
+        "{err}"
+    );
+    assert!(err.contains("nothing was imported"), "{err}");
+    assert!(!out.exists());
+    // The whole file imports.
+    let whole = write(&dir.path().join("whole.csv.gz"), &gz);
+    let (code, _, err) = run_out(&["import", &whole, "-o", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+}
+
+/// `allan` and `fit` on a log too short for them (10 samples) once said only "series too
+/// short: need at least 16 samples, got 10" (allan) and "gx: series too short: ..." (fit),
+/// naming no file: the error now names the log and what it holds.
+#[test]
+fn allan_and_fit_on_a_too_short_log_name_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = short_log(dir.path(), 10);
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    let (code, _, err) = run_out(&["allan", &log, "--out-dir", out]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!("{log}: 10 samples (0.05 s at 200 Hz) after --skip-s 0: series too short: need at least 16")),
+        "{err}"
+    );
+    let (code, _, err) = run_out(&["fit", &log, "--out-dir", out]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!(
+            "{log}: ARIMA identification of gx on 10 samples (0.1 s at 200 Hz): series too short"
+        )),
+        "{err}"
+    );
+    assert!(!Path::new(out).join("report.txt").exists());
+    assert!(!Path::new(out).join("arima.toml").exists());
+}
+
+/// `calibrate --gnss` with a file that does not exist once ran the whole calibration, put
+/// "/x.pos: No such file or directory" in the report and exited 0: it now fails first, naming
+/// the flag and the file, and writes no report.
+#[test]
+fn calibrate_with_a_missing_gnss_file_fails_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.log");
+    let pos = dir.path().join("nope.pos");
+    let pos = pos.to_str().unwrap();
+    let out = dir.path().join("cal");
+    let (code, _, err) = run_out(&[
+        "calibrate",
+        log,
+        "--to-s",
+        "30",
+        "--gnss",
+        pos,
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!("--gnss {pos}: No such file")),
+        "{err}"
+    );
+    assert!(!out.join("report.txt").exists());
+}

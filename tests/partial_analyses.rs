@@ -248,3 +248,102 @@ fn diagnose_works_on_the_present_channels_and_names_the_absent_ones() {
         }
     }
 }
+
+/// A channel with a few missing values (empty cells, imported as NaN) once failed the whole fit
+/// ("gz: non-finite value at index 500", no file named, no model for the whole channels): it
+/// is left out with its count of non-finite samples, named in the report and both files'
+/// headers, and the whole channels get exactly the models the same data gives without the gap.
+#[test]
+fn fit_leaves_out_a_channel_with_missing_values_and_fits_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = log_of(dir.path(), "full", &[0, 1, 2, 3, 4, 5]);
+    let full_out = dir.path().join("fit_full");
+    common::run_cli(&["fit", &full, "--out-dir", full_out.to_str().unwrap()]);
+    // The same data with gz empty on three rows (5 s, 70 s, 150 s: all in the 180-s span).
+    let csv = common::channels_csv(&data(), &[0, 1, 2, 3, 4, 5], FS);
+    let holed: String = csv
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if [501, 7001, 15001].contains(&i) {
+                let mut f: Vec<&str> = l.split(',').collect();
+                f[3] = "";
+                f.join(",") + "\n"
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let log = common::import_csv(dir.path(), "holed", &holed);
+    let out = dir.path().join("fit_holed");
+    let text = common::run_cli(&[
+        "fit",
+        log.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        text.contains(
+            "gz   not fitted: 3 non-finite samples in the training span (first at 5.000 s"
+        ),
+        "{text}"
+    );
+    for file in ["arima.toml", "bias.toml"] {
+        let head = std::fs::read_to_string(out.join(file)).unwrap();
+        assert!(
+            head.starts_with("# imuprep fit: gz: no model: 3 non-finite samples"),
+            "{file}: {head}"
+        );
+        let got = blocks(&out.join(file));
+        let want: Vec<_> = blocks(&full_out.join(file))
+            .into_iter()
+            .filter(|(c, _)| c != "gz")
+            .collect();
+        assert_eq!(got, want, "{file}");
+    }
+    no_nan_in(&out);
+}
+
+/// `compare` on a log with two missing gz values once failed as a whole with "non-finite value
+/// at index 1234" (no file, no channel); a log shorter than the paper's split said "record too
+/// short" naming neither. Now gz is skipped with its count and the other channels are compared;
+/// the short log's error names the log, the channel and its length.
+#[test]
+fn compare_skips_a_channel_with_missing_values_and_names_a_short_log() {
+    let dir = tempfile::tempdir().unwrap();
+    // 370 s at 100 Hz: the paper's split (3 min + 3 min + test) fits.
+    let mut r = Rng::new(77);
+    let long: Vec<[f64; 6]> = (0..37_000)
+        .map(|_| std::array::from_fn(|c| if c == 5 { 9.81 } else { 0.0 } + 1e-2 * r.normal()))
+        .collect();
+    let csv = common::channels_csv(&long, &[0, 1, 2, 3, 4, 5], FS);
+    let holed: String = csv
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            let mut f: Vec<&str> = l.split(',').collect();
+            if i == 1235 || i == 30001 {
+                f[3] = "";
+            }
+            f.join(",") + "\n"
+        })
+        .collect();
+    let log = common::import_csv(dir.path(), "holed", &holed);
+    let text = common::run_cli(&["compare", log.to_str().unwrap()]);
+    assert!(
+        text.contains("gz: skipped: 2 non-finite samples (first at 12.340 s of the log)"),
+        "{text}"
+    );
+    for c in ["gx", "gy", "ax", "ay", "az"] {
+        assert!(text.contains(&format!("channel {c} (")), "{c}: {text}");
+    }
+    // 200 s: too short for the split; the error names the log and what it holds.
+    let short = log_of(dir.path(), "short", &[0, 1, 2, 3, 4, 5]);
+    let err = fails(&["compare", &short]);
+    assert!(
+        err.contains(&format!(
+            "{short}: gx (200.0 s at 100 Hz): record too short"
+        )),
+        "{err}"
+    );
+}

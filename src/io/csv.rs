@@ -345,12 +345,28 @@ pub fn read_csv_report(
         .has_headers(false)
         .flexible(true)
         .from_reader(open_text(path)?);
-    let io = |err: csv::Error| CsvError::Io {
-        path: path.into(),
-        err: err.into(),
+    // A read error inside a .gz is the compressed stream ending early or corrupt: said as such,
+    // with the line it stopped at (it once said only "incomplete deflate stream").
+    let gz = path.extension().is_some_and(|e| e == "gz");
+    let io = |err: csv::Error, line: u64| match err.kind() {
+        csv::ErrorKind::Io(_) if gz => CsvError::Row {
+            path: path.into(),
+            line: line as usize,
+            msg: format!(
+                "{err}: the compressed file ends early or is corrupt here (a truncated .gz? \
+                 `gzip -t` checks it); nothing was imported"
+            ),
+        },
+        _ => CsvError::Io {
+            path: path.into(),
+            err: err.into(),
+        },
     };
     let mut rec = csv::StringRecord::new();
-    if !rd.read_record(&mut rec).map_err(io)? {
+    if !rd
+        .read_record(&mut rec)
+        .map_err(|e| io(e, rd.position().line()))?
+    {
         return Err(CsvError::Empty { path: path.into() });
     }
     let header: Vec<String> = rec
@@ -379,7 +395,10 @@ pub fn read_csv_report(
     let mut empty = [0usize; 6];
     let mut first_empty: [Option<usize>; 6] = [None; 6];
     let mut holey_rows: Vec<(usize, u8)> = Vec::new();
-    while rd.read_record(&mut rec).map_err(io)? {
+    while rd
+        .read_record(&mut rec)
+        .map_err(|e| io(e, rd.position().line()))?
+    {
         let lineno = rec.position().map_or(0, |p| p.line() as usize);
         if rec.len() == 1 && rec[0].trim().is_empty() {
             continue;

@@ -4,7 +4,7 @@
 use std::fmt::{self, Write};
 use std::path::Path;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 
 use super::{load_span, parse_channels, present_channels};
 use crate::analysis::allan::plot::allan_svg;
@@ -26,7 +26,15 @@ pub fn allan(log: &Path, channels: &[String], skip_s: f64, out_dir: &Path) -> Re
     // A partial sensor's absent channels are said in the report, never analysed as NaN.
     let (chans, absent) = present_channels(log, &samples, &chans)?;
     let source = log.display().to_string();
-    let mut report = allan_report(&source, &samples, rate, &chans, &FitSettings::default())?;
+    let mut report = allan_report(&source, &samples, rate, &chans, &FitSettings::default())
+        .with_context(|| {
+            format!(
+                "{source}: {} ({:.2} s at {} Hz) after --skip-s {skip_s}",
+                crate::text::count(samples.len() as u64, "sample", "samples"),
+                samples.len() as f64 / rate,
+                crate::text::trim_decimals(rate, 3)
+            )
+        })?;
     report.skipped.extend(absent);
     let written = write_outputs(&report, out_dir).map_err(anyhow::Error::msg)?;
     let written = written

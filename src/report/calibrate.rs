@@ -92,6 +92,11 @@ pub fn calibrate(log: &Path, o: &CalibrateOptions) -> Result<CalibrateReport> {
         span.is_none_or(|s| s > 0.0),
         "--to-s must be after --from-s"
     );
+    // A --gnss file that cannot be opened is a mistake in the command, said before any work
+    // (it was once a line in a report that exited 0: a script never knew).
+    if let Some(p) = &o.gnss {
+        std::fs::File::open(p).with_context(|| format!("--gnss {}", p.display()))?;
+    }
     let (rate, samples) = load_span_to(log, o.from_s, span)?;
     let (present, left_out) = present_channels(log, &samples, &[3, 4, 5])?;
     ensure!(
@@ -164,11 +169,11 @@ pub fn calibrate(log: &Path, o: &CalibrateOptions) -> Result<CalibrateReport> {
         std::fs::write(&p, toml).with_context(|| format!("writing {}", p.display()))?;
         report.config_file = Some(p);
     }
-    std::fs::write(o.out_dir.join("report.txt"), report.to_text())?;
-    std::fs::write(
-        o.out_dir.join("report.json"),
-        serde_json::to_string_pretty(&report)?,
-    )?;
+    let txt = o.out_dir.join("report.txt");
+    std::fs::write(&txt, report.to_text()).with_context(|| format!("writing {}", txt.display()))?;
+    let json = o.out_dir.join("report.json");
+    std::fs::write(&json, serde_json::to_string_pretty(&report)?)
+        .with_context(|| format!("writing {}", json.display()))?;
     Ok(report)
 }
 
@@ -292,14 +297,22 @@ impl CalibrateReport {
         }
         tests_text(&mut o, &a.not_identifiable, &a.candidates);
         let _ = writeln!(o, "\nresult: {}", a.verdict);
-        let _ = writeln!(
-            o,
-            "held-out RMS of |f| - g (per attitude group, leave-one-group-out): {:.4e} -> {:.4e} m/s²; in-sample over the stretches: {:.4e} -> {:.4e} m/s²",
-            a.held_out_rms_before_m_s2,
-            a.held_out_rms_after_m_s2,
-            a.fit_rms_before_m_s2,
-            a.fit_rms_after_m_s2
-        );
+        if a.held_out_rms_before_m_s2.is_finite() && a.fit_rms_before_m_s2.is_finite() {
+            let _ = writeln!(
+                o,
+                "held-out RMS of |f| - g (per attitude group, leave-one-group-out): {:.4e} -> {:.4e} m/s²; in-sample over the stretches: {:.4e} -> {:.4e} m/s²",
+                a.held_out_rms_before_m_s2,
+                a.held_out_rms_after_m_s2,
+                a.fit_rms_before_m_s2,
+                a.fit_rms_after_m_s2
+            );
+        } else {
+            // No still stretch: there is no |f| - g to take an RMS of (it once printed NaN).
+            let _ = writeln!(
+                o,
+                "held-out RMS of |f| - g: not computed (no still stretch)"
+            );
+        }
         if let Some(f) = &a.fitted {
             let s = &f.settings;
             let has = |g: &str| f.groups.iter().any(|k| k == g);

@@ -4,7 +4,7 @@
 use std::fmt;
 use std::path::Path;
 
-use anyhow::{Result, anyhow, ensure};
+use anyhow::{Context, Result, anyhow, ensure};
 use serde::Serialize;
 
 use super::detector_compare::{self as dc, DetectorReport};
@@ -98,7 +98,35 @@ pub fn bias_models(
 ) -> Result<BiasCompareReport> {
     let (rate, samples) = load_span(log, skip_s)?;
     let chans = parse_channels(channels)?;
-    let (chans, skipped) = present_channels(log, &samples, &chans)?;
+    let (chans, mut skipped) = present_channels(log, &samples, &chans)?;
+    // A channel with NaN/Inf cannot be fitted: left out with the reason, the others compared.
+    let chans: Vec<usize> = chans
+        .into_iter()
+        .filter(|&c| match super::non_finite(&samples, c) {
+            None => true,
+            Some((k, first_s)) => {
+                skipped.push((
+                    CHANNEL_NAMES[c].to_string(),
+                    format!(
+                        "{} (first at {first_s:.3} s of the log): the model fits need a \
+                         gap-free series",
+                        crate::text::count(k as u64, "non-finite sample", "non-finite samples")
+                    ),
+                ));
+                false
+            }
+        })
+        .collect();
+    ensure!(
+        !chans.is_empty(),
+        "{}: no channel to compare: {}",
+        log.display(),
+        skipped
+            .iter()
+            .map(|(c, why)| format!("{c}: {why}"))
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
     let temp: Vec<f64> = samples.iter().filter_map(|s| s.temp_c).collect();
     let have_temp = temp_exo && temp.len() == samples.len();
     ensure!(
@@ -119,13 +147,17 @@ pub fn bias_models(
         } else {
             SensorKind::Accel
         };
-        out.push(compare_channel(
-            &y,
-            &exo,
-            CHANNEL_NAMES[c],
-            kind,
-            &settings,
-        )?);
+        let name = CHANNEL_NAMES[c];
+        out.push(
+            compare_channel(&y, &exo, name, kind, &settings).with_context(|| {
+                format!(
+                    "{}: {name} ({:.1} s at {} Hz)",
+                    log.display(),
+                    y.len() as f64 / rate,
+                    crate::text::trim_decimals(rate, 3),
+                )
+            })?,
+        );
     }
     Ok(BiasCompareReport {
         channels: out,

@@ -91,9 +91,24 @@ pub struct Manoeuvre {
     pub mean_error_before: f64,
 }
 
+/// RMS of `f` over the complete blocks of `n` samples; NaN (not computed: the JSON's null, the
+/// text's "n/a") when the record holds no complete block — a 1-s record once scored a 60-s
+/// drift of 0 and a reduction of NaN %.
 fn blocks(err: &[f64], n: usize, f: impl Fn(&[f64]) -> f64) -> f64 {
     let v: Vec<f64> = err.chunks_exact(n.max(1)).map(f).collect();
-    (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+/// `v` as `{:>w$.p$e}`, or right-aligned "n/a" when it was not computed.
+fn or_na(v: f64, w: usize, p: usize, pct: bool) -> String {
+    match (v.is_finite(), pct) {
+        (false, _) => format!("{:>w$}", "n/a"),
+        (true, false) => format!("{v:>w$.p$e}"),
+        (true, true) => format!("{:>w$.p$}%", 100.0 * v, w = w - 1),
+    }
 }
 
 fn scores(err: &[f64], rate: f64) -> Scores {
@@ -338,14 +353,18 @@ impl std::fmt::Display for EvaluateReport {
         for r in &self.channels {
             writeln!(
                 f,
-                "{:<3} {:>14.3e} {:>14.3e} {:>8.2} {:>14.3e} {:>14.3e} {:>8.1}%  {}",
+                "{:<3} {} {} {} {} {} {}  {}",
                 r.channel,
-                r.pipeline.rms_1s_mean_error,
-                r.baseline.rms_1s_mean_error,
-                r.improvement_1s,
-                r.pipeline.rms_60s_drift_rad,
-                r.baseline.rms_60s_drift_rad,
-                100.0 * r.drift_reduction,
+                or_na(r.pipeline.rms_1s_mean_error, 14, 3, false),
+                or_na(r.baseline.rms_1s_mean_error, 14, 3, false),
+                if r.improvement_1s.is_finite() {
+                    format!("{:>8.2}", r.improvement_1s)
+                } else {
+                    format!("{:>8}", "n/a")
+                },
+                or_na(r.pipeline.rms_60s_drift_rad, 14, 3, false),
+                or_na(r.baseline.rms_60s_drift_rad, 14, 3, false),
+                or_na(r.drift_reduction, 9, 1, true),
                 // With no manoeuvre on the axis there is no worst one: not "0.00%".
                 if r.manoeuvres == 0 {
                     "none on this axis".to_string()

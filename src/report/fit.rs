@@ -160,16 +160,51 @@ pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
     let n = ((o.train_s * rate).round() as usize).min(samples.len());
     std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let series = |c: usize| -> Vec<f64> { samples[..n].iter().map(|s| s.channel(c)).collect() };
-    let (present, absent) =
+    let (present, mut absent) =
         present_channels(log, &samples[..n], &(0..N_CHANNELS).collect::<Vec<_>>())?;
+    // A channel with NaN/Inf in the span (missing values, an all-NaN column) cannot be
+    // identified: it is left out with the reason, like an absent one, instead of failing the
+    // fit of the channels that are whole.
+    let mut whole = Vec::with_capacity(present.len());
+    for c in present {
+        match super::non_finite(&samples[..n], c) {
+            None => whole.push(c),
+            Some((k, first_s)) => absent.push((
+                CHANNEL_NAMES[c].to_string(),
+                format!(
+                    "{} in the training span (first at {first_s:.3} s of the log): ARIMA and \
+                     bias fits need a gap-free series; the stages learn this channel at warm-up",
+                    crate::text::count(k as u64, "non-finite sample", "non-finite samples"),
+                ),
+            )),
+        }
+    }
+    ensure!(
+        !whole.is_empty(),
+        "{}: no channel to fit: {}",
+        log.display(),
+        absent
+            .iter()
+            .map(|(c, why)| format!("{c}: {why}"))
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
+    let present = whole;
     let header = absent_header(&absent);
 
     let mut file = ArimaModelFile::default();
     let mut arima = Vec::new();
     for &c in &present {
         let name = CHANNEL_NAMES[c];
-        let id = identify(&series(c), &IdentifySettings::default())
-            .map_err(|e| anyhow!("{name}: {e}"))?;
+        let id = identify(&series(c), &IdentifySettings::default()).map_err(|e| {
+            anyhow!(
+                "{}: ARIMA identification of {name} on {} ({:.1} s at {} Hz): {e}",
+                log.display(),
+                crate::text::count(n as u64, "sample", "samples"),
+                n as f64 / rate,
+                crate::text::trim_decimals(rate, 3)
+            )
+        })?;
         let m = id.to_channel_model(name);
         arima.push(ArimaRow {
             channel: name.to_string(),

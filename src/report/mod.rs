@@ -88,17 +88,29 @@ pub fn parse_channels(channels: &[String]) -> Result<Vec<usize>> {
     if channels.is_empty() {
         return Ok((0..6).collect());
     }
-    channels
-        .iter()
-        .map(|c| {
-            crate::sample::channel_index(c)
-                .with_context(|| format!("unknown channel {c:?} (gx gy gz ax ay az)"))
-        })
-        .collect()
+    let mut out = Vec::with_capacity(channels.len());
+    for c in channels {
+        let i = crate::sample::channel_index(c)
+            .with_context(|| format!("unknown channel {c:?} (gx gy gz ax ay az)"))?;
+        // A channel named twice is analysed once: twice, it was reported twice and written
+        // twice into bias.toml, which the daemon then refused ("`gx` appears more than once").
+        if !out.contains(&i) {
+            out.push(i);
+        }
+    }
+    Ok(out)
 }
 
 /// A channel left out of an analysis, and why.
 pub type LeftOut = (String, String);
+
+/// The non-finite samples (NaN/Inf: missing values, an all-NaN column) of channel `c` in
+/// `samples`: their count and the first one's time, s; `None` when every value is finite.
+pub fn non_finite(samples: &[Sample], c: usize) -> Option<(usize, f64)> {
+    let bad = |s: &&Sample| !s.channel(c).is_finite();
+    let first = samples.iter().find(bad)?;
+    Some((samples.iter().filter(bad).count(), first.t_s()))
+}
 
 /// The channels of `chans` a log's `samples` have, and why each other one is left out (a partial
 /// sensor's absent channels: [`Sample::absent`]). A channel absent in any sample is left out:
