@@ -19,7 +19,9 @@
 //! Bursty host time stamps (a logger that stamps samples when a USB packet arrives: many within
 //! a millisecond, then a pause) break the median: it measures the spacing inside a burst, not the
 //! sensor. They are recognised when median-spaced samples would cover less than half of the
-//! recording's span ([`BURSTY_COVERAGE`]); the interval is then the mean, and only pauses longer
+//! recording's span ([`BURSTY_COVERAGE`]; pauses beyond [`BURSTY_GAP_FACTOR`] mean intervals,
+//! gaps under either rule, left out of the span: a 50-s stop in an 80-s log is a gap, not a
+//! burst pattern); the interval is then the mean, and only pauses longer
 //! than [`BURSTY_GAP_FACTOR`] mean intervals count as gaps (a pause between bursts is not one).
 
 use crate::sample::{Sample, flags};
@@ -124,9 +126,20 @@ pub fn derive_sequence(samples: &mut [Sample]) -> TimeFaults {
     let mean = pos.iter().map(|&d| d as f64).sum::<f64>() / pos.len() as f64;
     let mid = pos.len() / 2;
     let median = *pos.select_nth_unstable(mid).1 as f64;
-    // Span covered by forward time, and how much of it median-spaced samples would fill.
-    let span: f64 = pos.iter().map(|&d| d as f64).sum();
-    let coverage = median * pos.len() as f64 / span;
+    // Span covered by forward time, and how much of it median-spaced samples would fill. A
+    // pause that would be a gap even for bursty stamps (beyond BURSTY_GAP_FACTOR mean intervals)
+    // is left out of the span: a logger that stopped for longer than it ran is not bursty.
+    let long = BURSTY_GAP_FACTOR * mean;
+    let (span, n_span) = pos
+        .iter()
+        .map(|&d| d as f64)
+        .filter(|&d| d <= long)
+        .fold((0.0, 0usize), |(s, n), d| (s + d, n + 1));
+    let coverage = if span > 0.0 {
+        median * n_span as f64 / span
+    } else {
+        1.0
+    };
     tf.bursty = coverage < BURSTY_COVERAGE;
     tf.median_interval_s = median * 1e-9;
     tf.mean_interval_s = mean * 1e-9;
@@ -245,6 +258,20 @@ mod tests {
         assert_eq!(tf.nominal_rate_hz, 100.0);
         assert_eq!((tf.gaps, tf.missing), (1, 1000));
         assert!(!tf.bursty);
+    }
+
+    #[test]
+    fn a_gap_longer_than_the_data_is_a_gap_not_bursty_stamps() {
+        // 100 Hz: 20 s, a 50-s stop, 10 s more. Before, the stop made median-spaced samples
+        // cover 37 % of the span: read as bursty at 37.49 Hz (the mean), the stop 1 gap of 0.
+        let mut ms: Vec<u64> = (0..2000).map(|i| i * 10).collect();
+        ms.extend((0..1000).map(|i| 70_000 + i * 10));
+        let mut v = at(&ms);
+        let tf = derive_sequence(&mut v);
+        assert!(!tf.bursty, "{tf:?}");
+        assert_eq!(tf.nominal_rate_hz, 100.0);
+        // 50.01 s between the two samples around the stop: 5001 intervals, 5000 missing.
+        assert_eq!((tf.gaps, tf.missing), (1, 5000), "{tf:?}");
     }
 
     #[test]
