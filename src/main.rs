@@ -254,9 +254,13 @@ enum Cmd {
         /// Folder searched recursively for .csv, .csv.gz and .log recordings.
         #[arg(default_value = "../shared/data/real")]
         dir: PathBuf,
-        /// Seed of every injection.
+        /// First seed of the injections.
         #[arg(long, allow_negative_numbers = true, default_value_t = 12)]
         seed: u64,
+        /// How many seeds (SEED, SEED+1, …): each injection is made once per seed and scored
+        /// on the pooled counts, so a short recording's F1 does not hang on one draw.
+        #[arg(long, allow_negative_numbers = true, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..))]
+        seeds: u64,
         /// Audit this config's pipeline instead of the embedded default.
         #[arg(long)]
         config: Option<PathBuf>,
@@ -373,9 +377,16 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
         Cmd::Audit {
             dir,
             seed,
+            seeds,
             config,
             json,
-        } => audit(dir, seed, load_config(&config)?, json),
+        } => {
+            let seeds = report::audit::Seeds {
+                first: seed,
+                count: seeds,
+            };
+            audit(dir, seeds, load_config(&config)?, json)
+        }
         Cmd::Run {
             config,
             out,
@@ -582,8 +593,13 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
 }
 
 /// `audit`: the report on stdout; exit 1 when a target is missed.
-fn audit(dir: PathBuf, seed: u64, cfg: Config, json: Option<PathBuf>) -> Result<ExitCode> {
-    let report = report::audit::audit_dir(&dir, seed, &cfg)
+fn audit(
+    dir: PathBuf,
+    seeds: report::audit::Seeds,
+    cfg: Config,
+    json: Option<PathBuf>,
+) -> Result<ExitCode> {
+    let report = report::audit::audit_dir(&dir, seeds, &cfg)
         .with_context(|| format!("cannot read {}", dir.display()))?;
     if report.recordings.is_empty() {
         // Nothing audited is an input problem (status 3), not a missed target (status 1); say

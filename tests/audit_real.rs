@@ -15,14 +15,16 @@ mod common;
 use std::path::Path;
 
 use imuprep::config::Config;
-use imuprep::report::audit::audit_dir;
+use imuprep::report::audit::{Seeds, audit_dir};
 
 /// (recording prefix, channel, target text prefix, regression bound): the measured value must
 /// stay on the right side of the bound (same direction as the target's limit).
 const KNOWN_MISSES: &[(&str, &str, &str, f64)] = &[
-    // Dense contamination and injections: weak single-sample evidence stays unreplaced by design
-    // (measured 2026-11-24, after the one-strong-partner shock rule and the neighbour exclusion:
-    // MPU6050 recall 0.849; F1 comma2k19 0.923, drive 0.915, walk 0.917, x-IMU3 0.937).
+    // Dense contamination and injections: weak single-sample evidence stays unreplaced by design.
+    // Pooled over the audit's five seeds 12–16 (measured 2026-11-29; seed 12 alone, the audit
+    // until then, gave MPU6050 0.849, comma2k19 0.923, drive 0.919, walk 0.917, x-IMU3 0.937):
+    // MPU6050 recall 0.853; F1 comma2k19 0.916, drive 0.910, walk 0.925, x-IMU3 0.880 (its
+    // seeds 0.796–0.937: seed 12 was its best draw).
     ("mpu6050_static", "gyro", "2 % outliers > 8σ, recall", 0.83),
     ("comma2k19", "all", "injected spikes and runs, F1", 0.90),
     (
@@ -37,7 +39,7 @@ const KNOWN_MISSES: &[(&str, &str, &str, f64)] = &[
         "injected spikes and runs, F1",
         0.90,
     ),
-    ("ximu3", "all", "injected spikes and runs, F1", 0.92),
+    ("ximu3", "all", "injected spikes and runs, F1", 0.86),
     // Real samples the confirmation still calls breaks: one 2-sample event in the PX4 warm-up
     // (1.2e-4), one 3-sample wobble of the x-IMU3's az (2.2e-4).
     // The PX4 CSV and its ULog original (the same samples).
@@ -70,7 +72,7 @@ fn every_real_recording_meets_the_do_no_harm_targets_or_a_known_bound() {
         return;
     }
     let cfg = Config::default_embedded().unwrap();
-    let report = audit_dir(dir, 12, &cfg).unwrap();
+    let report = audit_dir(dir, Seeds::DEFAULT, &cfg).unwrap();
     eprint!("{report}");
     // 7 CSV recordings and the two PX4 ULog files long enough for the warm-ups (the other three
     // hold 1300–2400 samples and are listed as skipped).

@@ -18,7 +18,7 @@ mod common;
 
 use imuprep::config::Config;
 use imuprep::frame::Descriptor;
-use imuprep::report::audit::{audit_recording, inject_outliers, load_recording, run_config};
+use imuprep::report::audit::{Seeds, audit_recording, inject_outliers, load_recording, run_config};
 use imuprep::rng::{Rng, ar_series};
 use imuprep::sample::{Sample, flags};
 use imuprep::stage::gross_error::GrossErrorStage;
@@ -218,7 +218,8 @@ fn the_static_benches_outliers_are_missed_near_the_bar_of_their_own_roughness() 
         }
         // The stage alone (stale repeats share an index here: neither bench has any) scores
         // what the audit's full pipeline scores.
-        let audit = audit_recording(rec, &dir.join(rec), &desc, &raw, SEED, &cfg).unwrap();
+        let audit =
+            audit_recording(rec, &dir.join(rec), &desc, &raw, Seeds::one(SEED), &cfg).unwrap();
         let ar = audit.contamination_recall.unwrap();
         assert!((ar - r).abs() < 1e-9, "stage alone {r} vs audit {ar}");
     }

@@ -25,7 +25,9 @@
 //!   τ with K ≥ 9 the gyro output must be ≥ 50 % lower than raw on records of an hour or more
 //!   (where the model can see drift); shorter records report it without a target.
 //! - **Injections** (seeded; each on a copy of the recording, scored after the gross-error stage's
-//!   warm-up):
+//!   warm-up; made once per seed, by default the five seeds 12–16, and scored on the counts
+//!   pooled over them: one seed's draw of 50–600 events moves a short recording's F1 by several
+//!   hundredths):
 //!   - moving: spikes and runs (2..=10 samples, one third of events) of 6–30 local σ, one
 //!     channel at a time, ≥ 40 samples apart (gross errors are rare; each is judged on its own),
 //!     local σ = robust spread of the raw channel within ±100 samples (the `flag_review` scale);
@@ -46,8 +48,8 @@ use crate::io::csv::{ImportOptions, read_csv, read_log};
 use crate::sample::{CHANNEL_NAMES, Sample, flags};
 
 mod inject;
+pub use inject::{Counts, inject_bad_values, inject_outliers, inject_spikes};
 use inject::{flagged_bad, score};
-pub use inject::{inject_bad_values, inject_outliers, inject_spikes};
 
 /// Samples skipped before scoring injections (the gross-error stage's default warm-up).
 const SCORE_FROM: usize = 2000;
@@ -128,9 +130,20 @@ pub struct RecordingAudit {
     /// (flattened: the JSON keeps one object per recording).
     #[serde(flatten)]
     pub harm: HarmScore,
+    /// The injections' seeds; every injection is made once per seed and the runs' counts are
+    /// pooled (one seed's 50–600 events leave the F1 of a short recording uncertain by ±0.03).
+    pub seeds: Vec<u64>,
+    /// Moving: the injected spikes and runs, pooled over the seeds, and each seed's F1.
+    pub injected: Option<Counts>,
     pub injected_f1: Option<f64>,
+    pub injected_f1_per_seed: Vec<f64>,
+    /// Static: the 2 % gyro outliers, pooled over the seeds, and each seed's recall.
+    pub contamination: Option<Counts>,
     pub contamination_recall: Option<f64>,
     pub contamination_precision: Option<f64>,
+    pub contamination_recall_per_seed: Vec<f64>,
+    /// Bad values injected over all seeds (distinct positions per seed), and how many of them
+    /// reached the output unflagged or non-finite.
     pub bad_values_injected: usize,
     pub bad_values_unflagged: usize,
 }
@@ -466,13 +479,81 @@ pub fn score_harm(
     }
 }
 
-/// Audit one recording (already loaded) with `cfg`'s pipeline. `seed` drives every injection.
+/// The injections' seeds: `first`, `first + 1`, … (`count` of them, at least one).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Seeds {
+    pub first: u64,
+    pub count: u64,
+}
+
+impl Seeds {
+    /// `imuprep audit`'s default: seeds 12 to 16.
+    pub const DEFAULT: Seeds = Seeds {
+        first: 12,
+        count: 5,
+    };
+
+    /// One seed alone.
+    pub fn one(seed: u64) -> Seeds {
+        Seeds {
+            first: seed,
+            count: 1,
+        }
+    }
+
+    fn all(self) -> Vec<u64> {
+        (0..self.count.max(1))
+            .map(|k| self.first.wrapping_add(k))
+            .collect()
+    }
+}
+
+/// What one seed's injections gave.
+struct SeedRuns {
+    counts: Counts,
+    bad: usize,
+    unflagged: usize,
+}
+
+/// `f` of every item, on as many worker threads as the machine has cores (at most one per
+/// item); results in the items' order.
+fn for_each_parallel<T: Send>(items: &[u64], f: impl Fn(u64) -> T + Sync) -> Vec<T> {
+    use std::sync::Mutex;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let workers = std::thread::available_parallelism()
+        .map_or(1, usize::from)
+        .min(items.len());
+    let next = AtomicUsize::new(0);
+    let out: Vec<Mutex<Option<T>>> = items.iter().map(|_| Mutex::new(None)).collect();
+    std::thread::scope(|s| {
+        for _ in 0..workers {
+            s.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(&item) = items.get(i) else { break };
+                    let r = f(item);
+                    *out[i].lock().unwrap_or_else(|e| e.into_inner()) = Some(r);
+                }
+            });
+        }
+    });
+    out.into_iter()
+        .map(|m| {
+            m.into_inner()
+                .unwrap_or_else(|e| e.into_inner())
+                .expect("every item was processed")
+        })
+        .collect()
+}
+
+/// Audit one recording (already loaded) with `cfg`'s pipeline; every injection is made once per
+/// seed of `seeds` and scored on the pooled counts.
 pub fn audit_recording(
     name: &str,
     path: &Path,
     desc: &Descriptor,
     raw: &[Sample],
-    seed: u64,
+    seeds: Seeds,
     cfg: &Config,
 ) -> Result<RecordingAudit, String> {
     let n = raw.len();
@@ -494,36 +575,60 @@ pub fn audit_recording(
         ));
     };
 
-    // Injections.
-    let mut injected_f1 = None;
-    let (mut contamination_recall, mut contamination_precision) = (None, None);
-    match class {
-        Class::Moving => {
-            let mut x = raw.to_vec();
-            let labels = inject_spikes(&mut x, seed);
-            let o = run_config(cfg, desc, &x)?;
-            let (f1, _, _) = score(&o, &labels, &[0, 1, 2, 3, 4, 5]);
-            injected_f1 = Some(f1);
-            target("all", "injected spikes and runs, F1", f1, 0.95, false);
-        }
-        Class::Static => {
-            let mut x = raw.to_vec();
-            let labels = inject_outliers(&mut x, seed);
-            let o = run_config(cfg, desc, &x)?;
-            let (_, r, p) = score(&o, &labels, &[0, 1, 2]);
-            contamination_recall = Some(r);
-            contamination_precision = Some(p);
-            target("gyro", "2 % outliers > 8σ, recall", r, 0.9, false);
-            target("gyro", "2 % outliers > 8σ, precision", p, 0.9, false);
-        }
+    // Injections, pooled over the seeds (each seed's runs are independent: one worker per core).
+    let seed_list = seeds.all();
+    let per_seed = for_each_parallel(&seed_list, |seed| -> Result<SeedRuns, String> {
+        let mut x = raw.to_vec();
+        let (labels, chans): (_, &[usize]) = match class {
+            Class::Moving => (inject_spikes(&mut x, seed), &[0, 1, 2, 3, 4, 5]),
+            Class::Static => (inject_outliers(&mut x, seed), &[0, 1, 2]),
+        };
+        let counts = score(&run_config(cfg, desc, &x)?, &labels, chans);
+        let mut x = raw.to_vec();
+        let bad = inject_bad_values(&mut x, seed);
+        let o = run_config(cfg, desc, &x)?;
+        let unflagged = bad
+            .iter()
+            .filter(|&&(i, c)| !flagged_bad(&o[i], c) || !o[i].channel(c).is_finite())
+            .count();
+        Ok(SeedRuns {
+            counts,
+            bad: bad.len(),
+            unflagged,
+        })
+    })
+    .into_iter()
+    .collect::<Result<Vec<_>, _>>()?;
+    let mut pooled = Counts::default();
+    for r in &per_seed {
+        pooled.add(r.counts);
     }
-    let mut x = raw.to_vec();
-    let bad = inject_bad_values(&mut x, seed);
-    let o = run_config(cfg, desc, &x)?;
-    let unflagged = bad
-        .iter()
-        .filter(|&&(i, c)| !flagged_bad(&o[i], c) || !o[i].channel(c).is_finite())
-        .count();
+    let bad_injected = per_seed.iter().map(|r| r.bad).sum();
+    let unflagged = per_seed.iter().map(|r| r.unflagged).sum::<usize>();
+    let (injected, contamination) = match class {
+        Class::Moving => (Some(pooled), None),
+        Class::Static => (None, Some(pooled)),
+    };
+    let f1_per_seed = match class {
+        Class::Moving => per_seed.iter().map(|r| r.counts.f1()).collect(),
+        Class::Static => Vec::new(),
+    };
+    let recall_per_seed = match class {
+        Class::Moving => Vec::new(),
+        Class::Static => per_seed.iter().map(|r| r.counts.recall()).collect(),
+    };
+    let injected_f1 = injected.map(|k| k.f1());
+    if let Some(f1) = injected_f1 {
+        target("all", "injected spikes and runs, F1", f1, 0.95, false);
+    }
+    let (contamination_recall, contamination_precision) = match contamination {
+        Some(k) => (Some(k.recall()), Some(k.precision())),
+        None => (None, None),
+    };
+    if let (Some(r), Some(p)) = (contamination_recall, contamination_precision) {
+        target("gyro", "2 % outliers > 8σ, recall", r, 0.9, false);
+        target("gyro", "2 % outliers > 8σ, precision", p, 0.9, false);
+    }
     target(
         "all",
         "NaN/Inf/1e30 passed unflagged or non-finite",
@@ -540,16 +645,21 @@ pub fn audit_recording(
         rate_hz: rate,
         duration_s,
         harm,
+        seeds: seed_list,
+        injected,
         injected_f1,
+        injected_f1_per_seed: f1_per_seed,
+        contamination,
         contamination_recall,
         contamination_precision,
-        bad_values_injected: bad.len(),
+        contamination_recall_per_seed: recall_per_seed,
+        bad_values_injected: bad_injected,
         bad_values_unflagged: unflagged,
     })
 }
 
 /// Audit every recording under `dir` (a file that does not import is listed as skipped).
-pub fn audit_dir(dir: &Path, seed: u64, cfg: &Config) -> std::io::Result<AuditReport> {
+pub fn audit_dir(dir: &Path, seeds: Seeds, cfg: &Config) -> std::io::Result<AuditReport> {
     let mut report = AuditReport {
         dir: dir.to_path_buf(),
         recordings: Vec::new(),
@@ -562,7 +672,7 @@ pub fn audit_dir(dir: &Path, seed: u64, cfg: &Config) -> std::io::Result<AuditRe
             .to_string_lossy()
             .into_owned();
         let res =
-            load_recording(&p).and_then(|(d, s)| audit_recording(&name, &p, &d, &s, seed, cfg));
+            load_recording(&p).and_then(|(d, s)| audit_recording(&name, &p, &d, &s, seeds, cfg));
         match res {
             Ok(r) => report.recordings.push(r),
             Err(reason) => report.skipped.push(Skipped { path: p, reason }),
@@ -616,11 +726,30 @@ impl std::fmt::Display for AuditReport {
                         .map_or("–".to_string(), |v| format!("{v:+.1} %")),
                 )?;
             }
-            if let Some(f1) = r.injected_f1 {
-                writeln!(f, "injected spikes and runs: F1 {f1:.4}")?;
+            let seeds = seed_span(&r.seeds);
+            if let (Some(k), Some(f1)) = (r.injected, r.injected_f1) {
+                writeln!(
+                    f,
+                    "injected spikes and runs: F1 {f1:.4} ({seeds}: {} labelled channel-samples, {} missed, {} false; F1 per seed {})",
+                    k.tp + k.fn_,
+                    k.fn_,
+                    k.fp,
+                    range(&r.injected_f1_per_seed)
+                )?;
             }
-            if let (Some(rc), Some(p)) = (r.contamination_recall, r.contamination_precision) {
-                writeln!(f, "2 % gyro outliers: recall {rc:.4}, precision {p:.4}")?;
+            if let (Some(k), Some(rc), Some(p)) = (
+                r.contamination,
+                r.contamination_recall,
+                r.contamination_precision,
+            ) {
+                writeln!(
+                    f,
+                    "2 % gyro outliers: recall {rc:.4}, precision {p:.4} ({seeds}: {} outliers, {} missed, {} false; recall per seed {})",
+                    k.tp + k.fn_,
+                    k.fn_,
+                    k.fp,
+                    range(&r.contamination_recall_per_seed)
+                )?;
             }
             writeln!(
                 f,
@@ -647,6 +776,26 @@ impl std::fmt::Display for AuditReport {
             )?;
         }
         Ok(())
+    }
+}
+
+/// "seed 12" or "seeds 12–16 pooled".
+fn seed_span(seeds: &[u64]) -> String {
+    match seeds {
+        [one] => format!("seed {one}"),
+        [first, .., last] => format!("seeds {first}–{last} pooled"),
+        [] => "no seed".to_string(),
+    }
+}
+
+/// "0.9012–0.9378" (the smallest and largest), or the one value.
+fn range(v: &[f64]) -> String {
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if v.len() < 2 {
+        format!("{lo:.4}")
+    } else {
+        format!("{lo:.4}–{hi:.4}")
     }
 }
 

@@ -5,6 +5,7 @@ use super::SCORE_FROM;
 use crate::rng::Rng;
 use crate::sample::{N_CHANNELS, Sample, flags};
 use crate::stats::robust::robust_sigma;
+use serde::Serialize;
 
 /// Least spacing of injected spikes and runs, samples (any channel).
 const SPIKE_GAP: usize = 40;
@@ -112,30 +113,50 @@ pub(super) fn flagged_bad(s: &Sample, c: usize) -> bool {
     s.flags & (flags::NON_FINITE | flags::replaced_ch(c) | flags::sat_ch(c)) != 0
 }
 
-/// F1, recall and precision of the replaced flags against labels, after `SCORE_FROM`.
-pub(super) fn score(
-    out: &[Sample],
-    labels: &[[bool; N_CHANNELS]],
-    chans: &[usize],
-) -> (f64, f64, f64) {
-    let (mut tp, mut fp, mut fn_) = (0u64, 0u64, 0u64);
+/// Replaced flags against labels, after `SCORE_FROM`: true and false positives, misses.
+/// Counts, not ratios, so that several seeds' runs pool into one estimate.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Counts {
+    pub tp: u64,
+    pub fp: u64,
+    pub fn_: u64,
+}
+
+impl Counts {
+    pub fn recall(&self) -> f64 {
+        self.tp as f64 / (self.tp + self.fn_).max(1) as f64
+    }
+    pub fn precision(&self) -> f64 {
+        self.tp as f64 / (self.tp + self.fp).max(1) as f64
+    }
+    pub fn f1(&self) -> f64 {
+        let (p, r) = (self.precision(), self.recall());
+        if p + r > 0.0 {
+            2.0 * p * r / (p + r)
+        } else {
+            0.0
+        }
+    }
+    pub fn add(&mut self, o: Counts) {
+        self.tp += o.tp;
+        self.fp += o.fp;
+        self.fn_ += o.fn_;
+    }
+}
+
+/// Count the replaced flags of `chans` in `out` against `labels`, after `SCORE_FROM`.
+pub(super) fn score(out: &[Sample], labels: &[[bool; N_CHANNELS]], chans: &[usize]) -> Counts {
+    let mut k = Counts::default();
     for (s, l) in out.iter().zip(labels).skip(SCORE_FROM) {
         for &c in chans {
             let r = s.flags & flags::replaced_ch(c) != 0;
             match (r, l[c]) {
-                (true, true) => tp += 1,
-                (true, false) => fp += 1,
-                (false, true) => fn_ += 1,
+                (true, true) => k.tp += 1,
+                (true, false) => k.fp += 1,
+                (false, true) => k.fn_ += 1,
                 _ => {}
             }
         }
     }
-    let p = tp as f64 / (tp + fp).max(1) as f64;
-    let r = tp as f64 / (tp + fn_).max(1) as f64;
-    let f1 = if p + r > 0.0 {
-        2.0 * p * r / (p + r)
-    } else {
-        0.0
-    };
-    (f1, r, p)
+    k
 }
