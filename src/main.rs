@@ -71,13 +71,16 @@ enum Cmd {
         /// Column mapping, repeatable: --col gx=gyro_x_dps (keys: t gx gy gz ax ay az temp).
         #[arg(long = "col")]
         cols: Vec<String>,
-        /// Unit of the gyro columns (default: read from the column name; canonical = rad/s).
+        /// Unit of the gyro columns (default: the column name's; else checked against the data:
+        /// range, and the turning of gravity's direction; canonical names = rad/s when they cannot tell).
         #[arg(long, value_enum)]
         gyro_unit: Option<GyroUnit>,
-        /// Unit of the accel columns (default: read from the column name; canonical = m/s2).
+        /// Unit of the accel columns (default: the column name's; else the data's median |f|:
+        /// ≈ 1 is g, ≈ 9.8 m/s2).
         #[arg(long, value_enum)]
         accel_unit: Option<AccelUnit>,
-        /// Unit of the time column (default: read from the column name, else s).
+        /// Unit of the time column (default: the column name's; else s, or the first of ms, us, ns
+        /// giving 2 Hz–100 kHz).
         #[arg(long, value_enum)]
         time_unit: Option<TimeUnit>,
         /// Ignore the time column; time = row index / RATE (Hz).

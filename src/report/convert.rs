@@ -141,7 +141,11 @@ impl fmt::Display for ImportReport {
         }
         if let Some(t) = &self.timing {
             for line in t.lines() {
-                writeln!(f, "import: {line}")?;
+                if line.starts_with("WARNING:") {
+                    writeln!(f, "{line}")?;
+                } else {
+                    writeln!(f, "import: {line}")?;
+                }
             }
         }
         writeln!(

@@ -2,8 +2,14 @@
 //!
 //! Canonical CSV: header `t,gx,gy,gz,ax,ay,az,temp` in s, rad/s, m/s², °C; `temp` may be empty
 //! or missing; extra columns are ignored. A channel column empty in every row is an absent
-//! channel; an empty cell in a column with values elsewhere is a missing value (NaN, counted). Other layouts are matched by column name (e.g.
-//! `gyro_x_dps`, `Accelerometer X (g)`), with units read from the name or given as options.
+//! channel; an empty cell in a column with values elsewhere is a missing value (NaN, counted).
+//! Other layouts are matched by column name tokens ([`columns`]: `gyro_x_dps`, `Accelerometer X
+//! (g)`, EuRoC's `w_RS_S_x [rad s^-1]`, ROS's `field.angular_velocity.x`, `accX`, `gX`, `wx`,
+//! `rotationRateX`, ...). Units come from an option, else the column name; a unit neither
+//! states is checked against the data ([`units`]: the accelerometer's median |f|, the gyro's
+//! range and its agreement with the turning of gravity's direction, the time column's rate),
+//! never silently assumed; canonical and ROS names keep SI when the data cannot tell. Every
+//! decision is in [`ImportReport::units`], every contradiction of a stated unit a warning.
 
 use crate::frame::Descriptor;
 use crate::io::format::{CSV_HEADER, write_csv_row};
@@ -101,42 +107,18 @@ pub enum CsvError {
 
 const CANON: [&str; 8] = ["t", "gx", "gy", "gz", "ax", "ay", "az", "temp"];
 
-fn tokens(name: &str) -> Vec<String> {
-    name.to_ascii_lowercase()
-        .split(|c: char| !c.is_ascii_alphanumeric())
-        .filter(|t| !t.is_empty())
-        .map(str::to_string)
-        .collect()
-}
+pub mod columns;
+pub mod units;
 
-/// Units read from a column name: `dps`/`deg` → deg/s, `rps`/`rad` → rad/s; `g` → g,
-/// `mps2`/`ms2`/`m` → m/s²; `ms` → ms for time.
-fn gyro_unit_of(t: &[String]) -> Option<GyroUnit> {
-    if t.iter().any(|x| x == "dps" || x.starts_with("deg")) {
-        Some(GyroUnit::DegS)
-    } else if t.iter().any(|x| x == "rps" || x.starts_with("rad")) {
-        Some(GyroUnit::RadS)
-    } else {
-        None
-    }
-}
-fn accel_unit_of(t: &[String]) -> Option<AccelUnit> {
-    if t.iter().any(|x| x == "g") {
-        Some(AccelUnit::G)
-    } else if t.iter().any(|x| x == "mps2" || x == "ms2" || x == "m") {
-        Some(AccelUnit::MS2)
-    } else {
-        None
-    }
-}
+use columns::NameUnit;
 
-/// Resolved column indices and units.
+/// Resolved column indices and what the names say of the units.
 #[derive(Debug, Clone)]
 struct Layout {
     idx: [Option<usize>; 8],
-    gyro: GyroUnit,
-    accel: AccelUnit,
-    time: TimeUnit,
+    gyro: NameUnit<GyroUnit>,
+    accel: NameUnit<AccelUnit>,
+    time: Option<(TimeUnit, String)>,
     /// Channels without a column (bit `c` for channel `c`).
     absent: u8,
 }
@@ -147,45 +129,7 @@ fn detect(header: &[String], o: &ImportOptions, path: &Path) -> Result<Layout, C
         msg,
         header: header.join(","),
     };
-    let toks: Vec<Vec<String>> = header.iter().map(|h| tokens(h)).collect();
-    let mut idx = [None; 8];
-    for (k, canon) in CANON.iter().enumerate() {
-        if let Some(name) = &o.columns[k] {
-            idx[k] = Some(
-                header
-                    .iter()
-                    .position(|h| h.trim() == name)
-                    .ok_or_else(|| err(format!("no column named {name:?} (given for {canon})")))?,
-            );
-            continue;
-        }
-        if let Some(p) = header.iter().position(|h| h.trim() == *canon) {
-            idx[k] = Some(p);
-            continue;
-        }
-        // Vendor layouts: the first column whose name tokens match; "bias" columns are estimates
-        // of the sensor, not the sensor, so they never match.
-        let found = toks.iter().position(|t| {
-            if t.iter().any(|x| x == "bias") {
-                return false;
-            }
-            match k {
-                0 => {
-                    matches!(
-                        t.first().map(String::as_str),
-                        Some("t" | "time" | "timestamp" | "gpst" | "t_s")
-                    ) && !t.iter().any(|x| x == "tick")
-                }
-                7 => t.iter().any(|x| x.starts_with("temp")),
-                _ => {
-                    let family = if k <= 3 { "gyr" } else { "acc" };
-                    let axis = ["x", "y", "z"][(k - 1) % 3];
-                    t.iter().any(|x| x.starts_with(family)) && t.iter().any(|x| x == axis)
-                }
-            }
-        });
-        idx[k] = found;
-    }
+    let idx = columns::resolve(header, o).map_err(err)?;
     // A channel without a column is absent (a gyro-only or accel-only sensor, a single axis);
     // a file with none of the six has no sensor data at all.
     let absent = (0..6)
@@ -202,36 +146,11 @@ fn detect(header: &[String], o: &ImportOptions, path: &Path) -> Result<Layout, C
             "missing time column (name it \"t\", or pass --col t=NAME, or --rate HZ to time by index)".into(),
         ));
     }
-    // The tokens naming a triad's unit: those of its first present column, none when the triad
-    // is absent or that column has its canonical name (SI units then).
-    let unit_tokens = |ks: std::ops::RangeInclusive<usize>| {
-        let p = ks.into_iter().find_map(|k| idx[k].map(|p| (k, p)))?;
-        (header[p.1].trim() != CANON[p.0]).then(|| toks[p.1].as_slice())
-    };
-    let unit_err = |what: &str| {
-        err(format!(
-            "cannot tell the {what} unit from the column name: pass --{what}-unit"
-        ))
-    };
-    let gyro = o
-        .gyro_unit
-        .or_else(|| unit_tokens(1..=3).map_or(Some(GyroUnit::RadS), gyro_unit_of))
-        .ok_or_else(|| unit_err("gyro"))?;
-    let accel = o
-        .accel_unit
-        .or_else(|| unit_tokens(4..=6).map_or(Some(AccelUnit::MS2), accel_unit_of))
-        .ok_or_else(|| unit_err("accel"))?;
-    let time = o.time_unit.unwrap_or_else(|| match idx[0] {
-        Some(p) if toks[p].iter().any(|x| x == "ms") => TimeUnit::Ms,
-        Some(p) if toks[p].iter().any(|x| x == "ns") => TimeUnit::Ns,
-        Some(p) if toks[p].iter().any(|x| x == "us") => TimeUnit::Us,
-        _ => TimeUnit::S,
-    });
     Ok(Layout {
+        gyro: columns::gyro_named(header, &idx),
+        accel: columns::accel_named(header, &idx),
+        time: columns::time_named(header, &idx),
         idx,
-        gyro,
-        accel,
-        time,
         absent,
     })
 }
@@ -259,11 +178,25 @@ pub struct EmptyCells {
     pub first_line: usize,
 }
 
+/// Which column an import read for one of t, gx..az, temp.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct ColumnUse {
+    pub key: &'static str,
+    pub column: String,
+}
+
 /// What an import found besides the samples.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct ImportReport {
     /// Rows read (= samples).
     pub rows: u64,
+    /// The columns read (absent channels and, with `--rate`, the time column left out).
+    pub columns: Vec<ColumnUse>,
+    /// How the time, gyro and accel units were decided (stated, convention or inferred from the
+    /// data, with the evidence).
+    pub units: Vec<units::UnitFinding>,
+    /// The data contradicting a stated unit (never overridden: the flag to pass is named).
+    pub warnings: Vec<String>,
     /// Sequence and time faults derived from the time stamps (all zero with `--rate`).
     pub time: TimeFaults,
     /// Channels the file does not have (no column, or a column empty in every row): written as
@@ -321,6 +254,20 @@ impl std::fmt::Display for ImportReport {
                 crate::text::count(self.empty_rows, "row", "rows"),
                 line
             )?;
+        }
+        if !self.columns.is_empty() {
+            let each: Vec<String> = self
+                .columns
+                .iter()
+                .map(|c| format!("{}={}", c.key, c.column))
+                .collect();
+            write!(f, "\ncolumns: {}", each.join(", "))?;
+        }
+        for u in &self.units {
+            write!(f, "\n{u}")?;
+        }
+        for w in &self.warnings {
+            write!(f, "\nWARNING: {w}")?;
         }
         Ok(())
     }
@@ -382,14 +329,10 @@ pub fn read_csv_report(
         })
         .collect();
     let lay = detect(&header, o, path)?;
-    let gscale = if lay.gyro == GyroUnit::DegS {
-        std::f64::consts::PI / 180.0
-    } else {
-        1.0
-    };
-    let ascale = if lay.accel == AccelUnit::G { G0 } else { 1.0 };
     let mut out = Vec::new();
-    let mut t0: Option<f64> = None;
+    // The time column's numbers and each row's line (for errors), in the file's unit.
+    let mut raw_t: Vec<f64> = Vec::new();
+    let mut lines: Vec<usize> = Vec::new();
     // Empty cells per channel, and the line of the first; the rows with any empty channel cell
     // (line, mask of the empty channels), to find those left with no value at all.
     let mut empty = [0usize; 6];
@@ -436,36 +379,22 @@ pub fn read_csv_report(
             seq: out.len() as u32,
             ..Sample::default()
         };
-        let t_ns = if let Some(hz) = o.time_from_index_hz {
-            (out.len() as f64 / hz * 1e9).round()
+        // Time and channels are kept as the file has them until their units are decided over
+        // the whole file (below); the scaling is then the same product as before, value by value.
+        if let Some(hz) = o.time_from_index_hz {
+            s.t_ns = (out.len() as f64 / hz * 1e9).round() as u64;
         } else {
-            let raw = get(0)?.expect("time column resolved") * lay.time.ns_per_unit();
-            let base = if o.rebase_time {
-                *t0.get_or_insert(raw)
-            } else {
-                0.0
-            };
-            (raw - base).round()
-        };
-        if !(t_ns >= 0.0 && t_ns < u64::MAX as f64) {
-            return Err(CsvError::Row {
-                path: path.into(),
-                line: lineno,
-                msg: format!(
-                    "time {t_ns} ns is negative or not finite (use --rebase-time or --rate)"
-                ),
-            });
+            raw_t.push(get(0)?.expect("time column resolved"));
+            lines.push(lineno);
         }
-        s.t_ns = t_ns as u64;
         let mut ch = [f64::NAN; 6];
         let mut empty_here = 0u8;
         for (c, v) in ch.iter_mut().enumerate() {
             if lay.absent & (1 << c) != 0 {
                 continue;
             }
-            let scale = if c < 3 { gscale } else { ascale };
             match get(c + 1)? {
-                Some(x) => *v = x * scale,
+                Some(x) => *v = x,
                 None => {
                     empty[c] += 1;
                     first_empty[c].get_or_insert(lineno);
@@ -516,10 +445,29 @@ pub fn read_csv_report(
             header: header.join(","),
         });
     }
+    // No rows, nothing to decide (the caller says there is nothing to import).
+    let units = if out.is_empty() {
+        Default::default()
+    } else {
+        decide_units(&header, &lay, o, absent, &raw_t, &lines, &mut out, path)?
+    };
     for s in out.iter_mut() {
         s.absent = absent;
     }
     let mut report = ImportReport {
+        columns: (0..8)
+            .filter_map(|k| {
+                let p = lay.idx[k]?;
+                let unused = (k == 0 && o.time_from_index_hz.is_some())
+                    || ((1..7).contains(&k) && absent & (1 << (k - 1)) != 0);
+                (!unused).then(|| ColumnUse {
+                    key: CANON[k],
+                    column: header[p].clone(),
+                })
+            })
+            .collect(),
+        units: units.0,
+        warnings: units.1,
         rows: out.len() as u64,
         absent: channel_names_of(absent)
             .into_iter()
@@ -546,6 +494,98 @@ pub fn read_csv_report(
         absent,
     };
     Ok((d, out, report))
+}
+
+/// Decide the time, gyro and accel units (options, names, then the data: [`units`]), stamp the
+/// samples' time and scale their channels to rad/s and m/s². Returns how each was decided and
+/// the warnings (data contradicting a stated unit).
+#[allow(clippy::too_many_arguments)]
+fn decide_units(
+    header: &[String],
+    lay: &Layout,
+    o: &ImportOptions,
+    absent: u8,
+    raw_t: &[f64],
+    lines: &[usize],
+    out: &mut [Sample],
+    path: &Path,
+) -> Result<(Vec<units::UnitFinding>, Vec<String>), CsvError> {
+    let mut found = Vec::new();
+    let mut warnings = Vec::new();
+    let col_err = |msg: String| CsvError::Columns {
+        path: path.into(),
+        msg,
+        header: header.join(","),
+    };
+    // Time: the unit, then every stamp (rebased on the first if asked) as before.
+    if o.time_from_index_hz.is_none() {
+        let d = units::median_interval(raw_t);
+        let t = units::decide_time(o.time_unit, lay.time.as_ref(), d);
+        let k = t.unit.ns_per_unit();
+        let base = match raw_t.first() {
+            Some(first) if o.rebase_time => first * k,
+            _ => 0.0,
+        };
+        for ((s, &raw), &line) in out.iter_mut().zip(raw_t).zip(lines) {
+            let t_ns = (raw * k - base).round();
+            if !(t_ns >= 0.0 && t_ns < u64::MAX as f64) {
+                return Err(CsvError::Row {
+                    path: path.into(),
+                    line,
+                    msg: format!(
+                        "time {t_ns} ns is negative or not finite (use --rebase-time or --rate{})",
+                        if lay.time.is_none() && o.time_unit.is_none() {
+                            format!(
+                                "; time unit {}: {}",
+                                units::time_name(t.unit),
+                                t.finding.how
+                            )
+                        } else {
+                            String::new()
+                        }
+                    ),
+                });
+            }
+            s.t_ns = t_ns as u64;
+        }
+        found.push(t.finding);
+        warnings.extend(t.warning);
+    }
+    let t_s: Vec<f64> = out.iter().map(Sample::t_s).collect();
+    let first_col = |ks: std::ops::RangeInclusive<usize>| {
+        ks.into_iter()
+            .find_map(|k| lay.idx[k])
+            .map_or("", |p| header[p].as_str())
+    };
+    let norm = (absent & 0b111_000 == 0)
+        .then(|| units::accel_median_norm(out))
+        .flatten();
+    let mut gscale = 1.0;
+    if absent & 0b000_111 != 0b000_111 {
+        let ev = units::gyro_evidence(out, &t_s, norm.map(|x| x.0));
+        let g =
+            units::decide_gyro(o.gyro_unit, &lay.gyro, first_col(1..=3), &ev).map_err(col_err)?;
+        if g.unit == GyroUnit::DegS {
+            gscale = std::f64::consts::PI / 180.0;
+        }
+        found.push(g.finding);
+        warnings.extend(g.warning);
+    }
+    let mut ascale = 1.0;
+    if absent & 0b111_000 != 0b111_000 {
+        let a = units::decide_accel(o.accel_unit, &lay.accel, first_col(4..=6), norm)
+            .map_err(col_err)?;
+        if a.unit == AccelUnit::G {
+            ascale = G0;
+        }
+        found.push(a.finding);
+        warnings.extend(a.warning);
+    }
+    for s in out.iter_mut() {
+        s.gyro *= gscale;
+        s.accel *= ascale;
+    }
+    Ok((found, warnings))
 }
 
 /// Write samples as canonical CSV plus `seq` and `flags`.

@@ -1,0 +1,589 @@
+//! `imuprep import` of the CSV layouts a new user brings: EuRoC / TUM-VI `imu0/data.csv`, a ROS
+//! `rostopic echo -p` export of sensor_msgs/Imu, camelCase (`accX`, `GyrX`), short (`aX`, `gX`,
+//! `wx`) and iOS-style (`rotationRateX`) names; units the header does not state checked against
+//! the data (a canonical `t,gx,..` file holding g and deg/s is read as such and says so, a static
+//! one keeps SI); stated units the data contradict warned about, never overridden; two columns
+//! for one channel an error naming both; gravity, user acceleration, orientation and bias
+//! columns never taken for the sensor.
+//!
+//! Synthetic recordings are seeded: 40 s at 200 Hz of a sensor rolling ±20° about x (period 6 s,
+//! peak rate 21 °/s, so a deg/s gyro stays below the 35 "rad/s" over-range rule and the
+//! gravity-direction fit must decide), with white noise. Values are written with Rust's
+//! shortest round-trip formatting, so an import in the right unit reproduces the truth to
+//! 1e-9 (one unit conversion's rounding).
+mod common;
+
+use imuprep::io::csv::{ImportOptions, ImportReport, read_csv_report};
+use imuprep::rng::Rng;
+use imuprep::sample::Sample;
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+const FS: f64 = 200.0;
+const N: usize = 8000;
+const G0: f64 = 9.80665;
+const D2R: f64 = PI / 180.0;
+/// An EuRoC-like start, ns.
+const T0_NS: u64 = 1_403_636_579_758_555_392;
+
+/// One truth row: time (s from the start), gyro rad/s, specific force m/s².
+struct Row {
+    t: f64,
+    g: [f64; 3],
+    f: [f64; 3],
+}
+
+/// Roll φ = A sin(2πt/T) about x: ω = (φ', 0, 0), f = g (0, sin φ, cos φ); `amp_deg` 0 is a
+/// static bench.
+fn motion(amp_deg: f64, seed: u64) -> Vec<Row> {
+    let mut r = Rng::new(seed);
+    let w0 = 2.0 * PI / 6.0;
+    let a = amp_deg.to_radians();
+    (0..N)
+        .map(|i| {
+            let t = i as f64 / FS;
+            let phi = a * (w0 * t).sin();
+            Row {
+                t,
+                g: [
+                    a * w0 * (w0 * t).cos() + 0.002 * r.normal(),
+                    0.003 + 0.002 * r.normal(),
+                    -0.001 + 0.002 * r.normal(),
+                ],
+                f: [
+                    0.02 * r.normal(),
+                    G0 * phi.sin() + 0.02 * r.normal(),
+                    G0 * phi.cos() + 0.02 * r.normal(),
+                ],
+            }
+        })
+        .collect()
+}
+
+/// Write `header` and one line per row.
+fn write(
+    dir: &Path,
+    name: &str,
+    header: &str,
+    rows: &[Row],
+    line: impl Fn(usize, &Row) -> String,
+) -> PathBuf {
+    let mut s = String::from(header);
+    s.push('\n');
+    for (i, r) in rows.iter().enumerate() {
+        s += &line(i, r);
+        s.push('\n');
+    }
+    let p = dir.join(name);
+    std::fs::write(&p, s).unwrap();
+    p
+}
+
+fn join(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| format!("{x}"))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+fn deg(g: &[f64; 3]) -> [f64; 3] {
+    g.map(|x| x / D2R)
+}
+fn in_g(f: &[f64; 3]) -> [f64; 3] {
+    f.map(|x| x / G0)
+}
+
+fn import(p: &Path) -> (f64, Vec<Sample>, ImportReport) {
+    let (d, s, rep) = read_csv_report(p, &ImportOptions::default())
+        .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    (d.sample_rate_hz, s, rep)
+}
+
+/// The unit the import decided for `q` (gyro, accel, time) and its source.
+fn unit<'a>(rep: &'a ImportReport, q: &str) -> (&'a str, &'a str, &'a str) {
+    let u = rep
+        .units
+        .iter()
+        .find(|u| u.quantity == q)
+        .unwrap_or_else(|| panic!("no {q} unit in {rep}"));
+    (u.unit, u.source, u.how.as_str())
+}
+
+/// Every channel equals the truth within 1e-9 (rad/s, m/s²), the rate is 200 Hz within 1e-6.
+fn assert_truth(label: &str, rate: f64, s: &[Sample], rows: &[Row]) {
+    assert!((rate - FS).abs() < 1e-6, "{label}: rate {rate}");
+    assert_eq!(s.len(), rows.len(), "{label}");
+    for (k, (s, r)) in s.iter().zip(rows).enumerate() {
+        for c in 0..3 {
+            assert!(
+                (s.gyro[c] - r.g[c]).abs() < 1e-9,
+                "{label} row {k} g{c}: {} vs {}",
+                s.gyro[c],
+                r.g[c]
+            );
+            assert!(
+                (s.accel[c] - r.f[c]).abs() < 1e-9,
+                "{label} row {k} a{c}: {} vs {}",
+                s.accel[c],
+                r.f[c]
+            );
+        }
+    }
+}
+
+/// (unit, source) decided for `q`.
+fn us<'a>(rep: &'a ImportReport, q: &str) -> (&'a str, &'a str) {
+    let (u, s, _) = unit(rep, q);
+    (u, s)
+}
+
+fn columns(rep: &ImportReport) -> String {
+    rep.columns
+        .iter()
+        .map(|c| format!("{}={}", c.key, c.column))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+#[test]
+fn euroc_imu0_data_csv_imports_with_ns_time_and_bracketed_si_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 1);
+    let p = write(
+        dir.path(),
+        "data.csv",
+        "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]",
+        &rows,
+        |i, r| {
+            format!(
+                "{},{},{}",
+                T0_NS + i as u64 * 5_000_000,
+                join(&r.g),
+                join(&r.f)
+            )
+        },
+    );
+    let (rate, s, rep) = import(&p);
+    assert_truth("euroc", rate, &s, &rows);
+    assert_eq!(unit(&rep, "time").0, "ns", "{rep}");
+    assert_eq!(us(&rep, "gyro"), ("rad/s", "name"), "{rep}");
+    assert_eq!(us(&rep, "accel"), ("m/s²", "name"), "{rep}");
+    // ns stamps of 1.4e18 pass through f64: within 256 ns of the integer.
+    for (i, s) in s.iter().enumerate().step_by(997) {
+        let want = T0_NS + i as u64 * 5_000_000;
+        assert!(
+            s.t_ns.abs_diff(want) <= 256,
+            "row {i}: {} vs {want}",
+            s.t_ns
+        );
+    }
+    assert!(rep.warnings.is_empty(), "{rep}");
+}
+
+#[test]
+fn ros_imu_export_takes_angular_velocity_and_linear_acceleration_and_reads_percent_time_as_ns() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 2);
+    let mut h = String::from("%time,field.header.seq,field.header.stamp,field.header.frame_id");
+    for c in ["x", "y", "z", "w"] {
+        let _ = write!(h, ",field.orientation.{c}");
+    }
+    for (f, n) in [
+        ("orientation", 0),
+        ("angular_velocity", 1),
+        ("linear_acceleration", 2),
+    ] {
+        if n > 0 {
+            for c in ["x", "y", "z"] {
+                let _ = write!(h, ",field.{f}.{c}");
+            }
+        }
+        for j in 0..9 {
+            let _ = write!(h, ",field.{f}_covariance{j}");
+        }
+    }
+    let zeros = ["0"; 9].join(",");
+    let p = write(dir.path(), "ros.csv", &h, &rows, |i, r| {
+        let t = T0_NS + i as u64 * 5_000_000;
+        format!(
+            "{t},{i},{t},imu_link,0.1,0.2,0.3,0.9,{zeros},{},{zeros},{},{zeros}",
+            join(&r.g),
+            join(&r.f)
+        )
+    });
+    let (rate, s, rep) = import(&p);
+    assert_truth("ros", rate, &s, &rows);
+    assert_eq!(
+        columns(&rep),
+        "t=%time,gx=field.angular_velocity.x,gy=field.angular_velocity.y,gz=field.angular_velocity.z,\
+         ax=field.linear_acceleration.x,ay=field.linear_acceleration.y,az=field.linear_acceleration.z"
+    );
+    let (tu, ts, th) = unit(&rep, "time");
+    assert_eq!((tu, ts), ("ns", "data"), "{th}");
+    assert!(th.contains("as ns it gives 200 Hz"), "{th}");
+    // The motion tilts: the gravity-direction fit confirms the message's rad/s.
+    assert_eq!(us(&rep, "gyro"), ("rad/s", "data"), "{rep}");
+    assert_eq!(us(&rep, "accel"), ("m/s²", "data"), "{rep}");
+}
+
+/// (file, header, time as written, gyro in deg/s?, accel in g?)
+type Case = (&'static str, &'static str, fn(&Row) -> String, bool, bool);
+
+#[test]
+fn camel_case_and_short_layouts_import_in_g_and_deg_s_from_the_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 3);
+    let cases: [Case; 5] = [
+        (
+            "camel.csv",
+            "timestamp,accX,accY,accZ,gyroX,gyroY,gyroZ",
+            |r| format!("{}", r.t),
+            true,
+            true,
+        ),
+        (
+            "openlog.csv",
+            "time_ms,aX,aY,aZ,gX,gY,gZ,mX,mY,mZ",
+            |r| format!("{}", r.t * 1e3),
+            true,
+            true,
+        ),
+        (
+            "xsens.csv",
+            "Time,AccX,AccY,AccZ,GyrX,GyrY,GyrZ",
+            |r| format!("{}", r.t * 1e6),
+            true,
+            false,
+        ),
+        (
+            "wit.csv",
+            "time,ax,ay,az,wx,wy,wz",
+            |r| format!("{}", r.t),
+            false,
+            true,
+        ),
+        (
+            "ios.csv",
+            "timestamp,accelerationX,accelerationY,accelerationZ,rotationRateX,rotationRateY,rotationRateZ",
+            |r| format!("{}", r.t),
+            false,
+            true,
+        ),
+    ];
+    for (name, header, time, gdeg, ag) in cases {
+        let short = name == "openlog.csv";
+        let p = write(dir.path(), name, header, &rows, |_, r| {
+            let g = if gdeg { deg(&r.g) } else { r.g };
+            let f = if ag { in_g(&r.f) } else { r.f };
+            // Every header here has the accelerometer first.
+            format!(
+                "{},{},{}{}",
+                time(r),
+                join(&f),
+                join(&g),
+                if short { ",20,-3,41" } else { "" }
+            )
+        });
+        let (rate, s, rep) = import(&p);
+        assert_truth(name, rate, &s, &rows);
+        assert_eq!(
+            unit(&rep, "gyro").0,
+            if gdeg { "deg/s" } else { "rad/s" },
+            "{name}: {rep}"
+        );
+        assert_eq!(
+            unit(&rep, "accel").0,
+            if ag { "g" } else { "m/s²" },
+            "{name}: {rep}"
+        );
+        assert_eq!(unit(&rep, "gyro").1, "data", "{name}: {rep}");
+        assert!(rep.warnings.is_empty(), "{name}: {rep}");
+    }
+}
+
+#[test]
+fn a_canonical_file_holding_g_and_deg_s_with_tilting_motion_is_read_as_such_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 4);
+    let p = write(
+        dir.path(),
+        "canon.csv",
+        "t,gx,gy,gz,ax,ay,az",
+        &rows,
+        |_, r| format!("{},{},{}", r.t, join(&deg(&r.g)), join(&in_g(&r.f))),
+    );
+    let (rate, s, rep) = import(&p);
+    assert_truth("canonical g, deg/s", rate, &s, &rows);
+    let (gu, gs, gh) = unit(&rep, "gyro");
+    assert_eq!((gu, gs), ("deg/s", "data"), "{gh}");
+    // Peak 21 °/s: decided by the gravity-direction fit, not by over-range.
+    assert!(
+        gh.contains("gravity's direction turns with the integrated gyro"),
+        "{gh}"
+    );
+    let (au, as_, ah) = unit(&rep, "accel");
+    assert_eq!((au, as_), ("g", "data"), "{ah}");
+    assert!(ah.contains("median |f| = 1"), "{ah}");
+    // And the CLI prints it in import's summary.
+    let log = dir.path().join("canon.log");
+    let out = common::run_cli(&["import", p.to_str().unwrap(), "-o", log.to_str().unwrap()]);
+    assert!(
+        out.contains("import: gyro unit: deg/s (not stated;"),
+        "{out}"
+    );
+    assert!(
+        out.contains("import: accel unit: g (not stated; median |f| = 1"),
+        "{out}"
+    );
+}
+
+#[test]
+fn a_static_canonical_file_keeps_si() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(0.0, 5);
+    let p = write(
+        dir.path(),
+        "static.csv",
+        "t,gx,gy,gz,ax,ay,az",
+        &rows,
+        |_, r| format!("{},{},{}", r.t, join(&r.g), join(&r.f)),
+    );
+    let (rate, s, rep) = import(&p);
+    assert_truth("static SI", rate, &s, &rows);
+    let (gu, gs, gh) = unit(&rep, "gyro");
+    assert_eq!((gu, gs), ("rad/s", "convention"), "{gh}");
+    assert!(
+        gh.contains("canonical names mean rad/s") && gh.contains("too little tilting"),
+        "{gh}"
+    );
+    assert_eq!(unit(&rep, "accel").0, "m/s²", "{rep}");
+    // The same static bench under names without a unit: the data cannot tell, so it asks.
+    let p = write(
+        dir.path(),
+        "static_named.csv",
+        "time,gyroX,gyroY,gyroZ,accX,accY,accZ",
+        &rows,
+        |_, r| format!("{},{},{}", r.t, join(&r.g), join(&r.f)),
+    );
+    let e = read_csv_report(&p, &ImportOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cannot tell the gyro unit") && e.contains("pass --gyro-unit"),
+        "{e}"
+    );
+    // ... and an option always wins.
+    let o = ImportOptions {
+        gyro_unit: Some(imuprep::io::csv::GyroUnit::RadS),
+        ..ImportOptions::default()
+    };
+    let (_, _, rep) = read_csv_report(&p, &o).unwrap();
+    assert_eq!(us(&rep, "gyro"), ("rad/s", "option"));
+}
+
+#[test]
+fn stated_units_the_data_contradict_are_kept_with_a_warning_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 6);
+    // Names say rad/s and m/s²; the values are deg/s and g.
+    let p = write(
+        dir.path(),
+        "lying.csv",
+        "t_s,gyro_x_rps,gyro_y_rps,gyro_z_rps,acc_x_mps2,acc_y_mps2,acc_z_mps2",
+        &rows,
+        |_, r| format!("{},{},{}", r.t, join(&deg(&r.g)), join(&in_g(&r.f))),
+    );
+    let (_, s, rep) = import(&p);
+    assert_eq!(unit(&rep, "gyro").0, "rad/s", "stated: not overridden");
+    assert_eq!(unit(&rep, "accel").0, "m/s²", "stated: not overridden");
+    assert!((s[0].accel.norm() - 1.0).abs() < 0.1, "values as stated");
+    assert_eq!(rep.warnings.len(), 2, "{rep}");
+    assert!(
+        rep.warnings[0].contains("--gyro-unit deg/s"),
+        "{}",
+        rep.warnings[0]
+    );
+    assert!(
+        rep.warnings[1].contains("median |f| = ") && rep.warnings[1].contains("--accel-unit g"),
+        "{}",
+        rep.warnings[1]
+    );
+    let log = dir.path().join("lying.log");
+    let out = common::run_cli(&["import", p.to_str().unwrap(), "-o", log.to_str().unwrap()]);
+    assert!(
+        out.lines().any(|l| l.starts_with("WARNING: accel:")),
+        "{out}"
+    );
+    // An option that the data contradict: the same.
+    let p = write(
+        dir.path(),
+        "si.csv",
+        "t,gx,gy,gz,ax,ay,az",
+        &rows,
+        |_, r| format!("{},{},{}", r.t, join(&r.g), join(&r.f)),
+    );
+    let o = ImportOptions {
+        accel_unit: Some(imuprep::io::csv::AccelUnit::G),
+        ..ImportOptions::default()
+    };
+    let (_, _, rep) = read_csv_report(&p, &o).unwrap();
+    assert_eq!(us(&rep, "accel"), ("g", "option"));
+    assert!(
+        rep.warnings
+            .iter()
+            .any(|w| w.contains("--accel-unit says g") && w.contains("--accel-unit m/s2")),
+        "{rep}"
+    );
+}
+
+#[test]
+fn two_candidate_columns_for_one_channel_are_an_error_naming_both() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 7);
+    let p = write(
+        dir.path(),
+        "two.csv",
+        "timestamp,gyroX,gyroY,gyroZ,gyro_x_raw,accX,accY,accZ",
+        &rows,
+        |_, r| format!("{},{},{},{}", r.t, join(&r.g), r.g[0], join(&r.f)),
+    );
+    let out = common::import(&p, &dir.path().join("two.log"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("2 columns could be gx: \"gyroX\" and \"gyro_x_raw\"")
+            && err.contains("--col gx=NAME"),
+        "{err}"
+    );
+}
+
+#[test]
+fn gravity_user_acceleration_orientation_and_bias_columns_never_match() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 8);
+    let decoys = "userAccelerationX,userAccelerationY,userAccelerationZ,gravityX,gravityY,gravityZ,\
+                  field.orientation.x,field.orientation.y,field.orientation.z,gyro_bias_x,gyro_bias_y,gyro_bias_z,\
+                  FreeAcc_X,FreeAcc_Y,FreeAcc_Z,Mag_X,Mag_Y,Mag_Z";
+    let p = write(
+        dir.path(),
+        "ios.csv",
+        &format!(
+            "time,{decoys},accelerationX,accelerationY,accelerationZ,rotationRateX,rotationRateY,rotationRateZ"
+        ),
+        &rows,
+        |_, r| {
+            format!(
+                "{},{},{},{}",
+                r.t,
+                ["7"; 18].join(","),
+                join(&r.f),
+                join(&r.g)
+            )
+        },
+    );
+    let (rate, s, rep) = import(&p);
+    assert_truth("decoys", rate, &s, &rows);
+    assert_eq!(
+        columns(&rep),
+        "t=time,gx=rotationRateX,gy=rotationRateY,gz=rotationRateZ,ax=accelerationX,ay=accelerationY,az=accelerationZ"
+    );
+    // Only decoys: no sensor column at all.
+    let p = write(
+        dir.path(),
+        "decoys.csv",
+        &format!("time,{decoys}"),
+        &rows,
+        |_, r| format!("{},{}", r.t, ["7"; 18].join(",")),
+    );
+    let e = read_csv_report(&p, &ImportOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no sensor column"), "{e}");
+}
+
+#[test]
+fn time_in_ms_us_or_ns_without_a_unit_in_the_name_is_inferred_from_the_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 9);
+    for (u, per_s, name) in [
+        ("s", 1.0, "s"),
+        ("ms", 1e3, "ms"),
+        ("us", 1e6, "us"),
+        ("ns", 1e9, "ns"),
+    ] {
+        let p = write(
+            dir.path(),
+            &format!("{u}.csv"),
+            "timestamp,gx,gy,gz,ax,ay,az",
+            &rows,
+            |_, r| {
+                format!(
+                    "{},{},{}",
+                    // Whole ms, µs, ns (as loggers write them); seconds as they are.
+                    1000.0 * per_s
+                        + if per_s > 1.0 {
+                            (r.t * per_s).round()
+                        } else {
+                            r.t
+                        },
+                    join(&r.g),
+                    join(&r.f)
+                )
+            },
+        );
+        let (rate, _, rep) = import(&p);
+        assert!((rate - FS).abs() < 1e-6, "{u}: {rate} Hz; {rep}");
+        assert_eq!(unit(&rep, "time").0, name, "{rep}");
+    }
+}
+
+/// The walk recording rewritten in EuRoC layout (ns, rad/s, m/s², converted here) imports to
+/// the same samples as the original, to f32 precision.
+#[test]
+fn the_real_walk_in_euroc_layout_imports_to_the_same_samples_as_the_original() {
+    let Some(src) = common::real_data("rtklibexplorer_drive_walk/walk_0827_imu.csv") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(&src).unwrap();
+    let mut lines = text.lines();
+    let h: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |n: &str| h.iter().position(|x| *x == n).unwrap();
+    let (it, ig, ia) = (
+        col("gpst_s"),
+        ["gyro_x_dps", "gyro_y_dps", "gyro_z_dps"].map(col),
+        ["acc_x_g", "acc_y_g", "acc_z_g"].map(col),
+    );
+    let mut out = String::from(
+        "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n",
+    );
+    for l in lines.filter(|l| !l.is_empty()) {
+        let c: Vec<&str> = l.split(',').collect();
+        // gpst_s text → integer ns exactly.
+        let (sec, frac) = c[it].split_once('.').unwrap_or((c[it], ""));
+        let ns = sec.parse::<u64>().unwrap() * 1_000_000_000
+            + format!("{frac:0<9}")[..9].parse::<u64>().unwrap();
+        let g = ig.map(|i| c[i].parse::<f64>().unwrap() * D2R);
+        let a = ia.map(|i| c[i].parse::<f64>().unwrap() * G0);
+        let _ = writeln!(out, "{ns},{},{}", join(&g), join(&a));
+    }
+    let euroc = dir.path().join("walk_euroc.csv");
+    std::fs::write(&euroc, out).unwrap();
+    let (r0, s0, _) = import(&src);
+    let (r1, s1, rep) = import(&euroc);
+    assert_eq!(s0.len(), s1.len());
+    assert!((r0 - r1).abs() < 1e-3, "{r0} vs {r1} Hz");
+    assert!(rep.warnings.is_empty(), "{rep}");
+    let mut worst_t = 0u64;
+    for (k, (a, b)) in s0.iter().zip(&s1).enumerate() {
+        // gpst_s (1.76e9 s) as f64 × 1e9 and the ns integer as f64 each round by < 256 ns.
+        worst_t = worst_t.max(a.t_ns.abs_diff(b.t_ns));
+        assert_eq!(a.seq, b.seq, "row {k}");
+        assert_eq!(a.flags, b.flags, "row {k}");
+        for c in 0..3 {
+            assert_eq!(a.gyro[c] as f32, b.gyro[c] as f32, "row {k} g{c}");
+            assert_eq!(a.accel[c] as f32, b.accel[c] as f32, "row {k} a{c}");
+        }
+    }
+    assert!(worst_t <= 512, "time differs by {worst_t} ns");
+}
