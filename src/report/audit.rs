@@ -46,8 +46,8 @@ use crate::io::csv::{ImportOptions, read_csv, read_log};
 use crate::sample::{CHANNEL_NAMES, Sample, flags};
 
 mod inject;
-use inject::{flagged_bad, score};
-pub use inject::{inject_bad_values, inject_outliers, inject_spikes};
+use inject::flagged_bad;
+pub use inject::{inject_bad_values, inject_outliers, inject_spikes, score as score_injections};
 
 /// Samples skipped before scoring injections (the gross-error stage's default warm-up).
 const SCORE_FROM: usize = 2000;
@@ -502,7 +502,7 @@ pub fn audit_recording(
             let mut x = raw.to_vec();
             let labels = inject_spikes(&mut x, seed);
             let o = run_config(cfg, desc, &x)?;
-            let (f1, _, _) = score(&o, &labels, &[0, 1, 2, 3, 4, 5]);
+            let (f1, _, _) = score_injections(&o, &labels, &[0, 1, 2, 3, 4, 5]);
             injected_f1 = Some(f1);
             target("all", "injected spikes and runs, F1", f1, 0.95, false);
         }
@@ -510,7 +510,7 @@ pub fn audit_recording(
             let mut x = raw.to_vec();
             let labels = inject_outliers(&mut x, seed);
             let o = run_config(cfg, desc, &x)?;
-            let (_, r, p) = score(&o, &labels, &[0, 1, 2]);
+            let (_, r, p) = score_injections(&o, &labels, &[0, 1, 2]);
             contamination_recall = Some(r);
             contamination_precision = Some(p);
             target("gyro", "2 % outliers > 8σ, recall", r, 0.9, false);

@@ -112,12 +112,9 @@ pub(super) fn flagged_bad(s: &Sample, c: usize) -> bool {
     s.flags & (flags::NON_FINITE | flags::replaced_ch(c) | flags::sat_ch(c)) != 0
 }
 
-/// F1, recall and precision of the replaced flags against labels, after `SCORE_FROM`.
-pub(super) fn score(
-    out: &[Sample],
-    labels: &[[bool; N_CHANNELS]],
-    chans: &[usize],
-) -> (f64, f64, f64) {
+/// F1, recall and precision of the replaced flags against labels on channels `chans`, after
+/// `SCORE_FROM` (the gross-error stage's default warm-up).
+pub fn score(out: &[Sample], labels: &[[bool; N_CHANNELS]], chans: &[usize]) -> (f64, f64, f64) {
     let (mut tp, mut fp, mut fn_) = (0u64, 0u64, 0u64);
     for (s, l) in out.iter().zip(labels).skip(SCORE_FROM) {
         for &c in chans {
