@@ -19,7 +19,9 @@
 //! spikes and runs (`inject_spikes`, target F1 ≥ 0.95 on moving recordings), reported.
 //!
 //! What is missed is bounded at its measured value (`KNOWN_MISSES`, as tests/sensor_classes.rs
-//! does). `cargo test --release --test sensor_class_gait -- --nocapture` prints the table.
+//! does), with its cause in docs/real-data.md, "A foot-mounted walker at 400 Hz and 1 kHz
+//! (simulated)". `cargo test --release --test sensor_class_gait -- --nocapture` prints the
+//! table there.
 
 mod common;
 
@@ -50,25 +52,23 @@ const BIAS_K: f64 = 4.0;
 
 /// Targets missed, bounded at the measured value (rounded at the second significant digit,
 /// away from the target): (rate, channel, target prefix, bound). A listed miss that is met now
-/// fails too, so the list stays true. Every replaced event lies on a heel-strike or toe-off
-/// impact (`GrossErrorStage::record_verdicts`), which the several-axes test does not call a
-/// shock. Measured (of 9281 and 37125 samples): 100 Hz gx 3, gz 2, ax 3, ay 19, az 27; 400 Hz
-/// gx 35, gy 7, ax 21, az 12 (ay 3, under the target).
+/// fails too, so the list stays true. Cause (docs/real-data.md, "A foot-mounted walker"): at
+/// 100 Hz a heel strike's or toe-off's 6.5-ms pulse falls on one sample or none and its ringing
+/// on the next two or three, each a one- or two-sample break; the several-axes test cannot
+/// tell them from a corrupted frame (all six channels off on one sample only) or from a
+/// glitch riding on a shock (the other axes still ring, but less than a quarter as sharply
+/// as the event on their own scale). Measured: gx 1, ax 3, ay 10, az 15 of 9281 samples.
 const KNOWN_MISSES: &[(&str, &str, &str, f64)] = &[
-    ("100", "gx", "replaced per channel-sample", 3.3e-4),
-    ("100", "gz", "replaced per channel-sample", 2.2e-4),
+    ("100", "gx", "replaced per channel-sample", 1.1e-4),
     ("100", "ax", "replaced per channel-sample", 3.3e-4),
-    ("100", "ay", "replaced per channel-sample", 2.1e-3),
-    ("100", "az", "replaced per channel-sample", 3.0e-3),
-    ("400", "gx", "replaced per channel-sample", 9.5e-4),
-    ("400", "gy", "replaced per channel-sample", 1.9e-4),
-    ("400", "ax", "replaced per channel-sample", 5.7e-4),
-    ("400", "az", "replaced per channel-sample", 3.3e-4),
+    ("100", "ay", "replaced per channel-sample", 1.1e-3),
+    ("100", "az", "replaced per channel-sample", 1.7e-3),
 ];
 
-/// The audit's injected spikes and runs on the 400-Hz walk: F1 measured 0.8733 (recall 0.848,
-/// precision 0.900), below the 0.95 target: bounded here, rounded down.
-const INJECTED_F1_BOUND: f64 = 0.87;
+/// The audit's injected spikes and runs on the 400-Hz walk: F1 measured 0.9162 (recall 0.845,
+/// precision 1.000), below the 0.95 target as on every moving real recording (0.92–0.94 there):
+/// bounded here, rounded down.
+const INJECTED_F1_BOUND: f64 = 0.91;
 
 /// One simulated walk: the descriptor and samples as `imuprep replay` reads them from the log
 /// (f32 frames), the truth per sample and the walk's plan.
