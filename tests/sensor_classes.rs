@@ -656,8 +656,11 @@ fn the_misses_have_the_causes_the_docs_give() {
 /// The opt-in level test (`[gross_error.settings] level_window_s`, off by default) on the
 /// lower-rate copies that miss the replacement target: replaced channel-samples per channel with
 /// the default and with `level_window_s = 1`, printed with `-- --nocapture`. Measured: it never
-/// replaces more on any channel, and replaces 15 instead of 30 channel-samples over the four
-/// copies (drive rate/4 13 → 8, drive rate/2 7 → 2, walk rate/2 9 → 4, x-IMU3 rate/2 1 → 1).
+/// replaces more on any channel, and replaces 14 instead of 29 channel-samples over the four
+/// copies (drive rate/4 13 → 8, drive rate/2 7 → 2, walk rate/2 8 → 3, x-IMU3 rate/2 1 → 1;
+/// the walk's were 9 → 4 before the several-axes test was also run where an event's judged
+/// part starts: its gy event at 129.24 s breaks on its second sample, docs/real-data.md, "A
+/// foot-mounted walker").
 /// Why it stays off: docs/real-data.md, "Sensor classes we do not have".
 #[test]
 fn the_opt_in_level_test_on_the_lower_rate_copies() {
@@ -681,7 +684,7 @@ fn the_opt_in_level_test_on_the_lower_rate_copies() {
     for (name, k, want_off, want_on) in [
         ("rtklibexplorer_drive_walk/drive_0708_imu.csv", 4, 13, 8),
         ("rtklibexplorer_drive_walk/drive_0708_imu.csv", 2, 7, 2),
-        ("rtklibexplorer_drive_walk/walk_0827_imu.csv", 2, 9, 4),
+        ("rtklibexplorer_drive_walk/walk_0827_imu.csv", 2, 8, 3),
         ("ximu3_fusion_example/sensor_data.csv", 2, 1, 1),
     ] {
         let (desc, raw) = load_recording(&dir.join(name)).unwrap();
@@ -702,7 +705,7 @@ fn the_opt_in_level_test_on_the_lower_rate_copies() {
         total_off += sa;
         total_on += sb;
     }
-    assert_eq!((total_off, total_on), (30, 15));
+    assert_eq!((total_off, total_on), (29, 14));
 }
 
 /// The walk rounded to 4× its LSB (docs/real-data.md, "Sensor classes we do not have", item 2):

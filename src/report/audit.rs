@@ -48,7 +48,9 @@ use crate::io::csv::{ImportOptions, read_csv, read_log};
 use crate::sample::{CHANNEL_NAMES, Sample, flags};
 
 mod inject;
-pub use inject::{Counts, inject_bad_values, inject_outliers, inject_spikes};
+pub use inject::{
+    Counts, inject_bad_values, inject_outliers, inject_spikes, score as score_injections,
+};
 use inject::{flagged_bad, score};
 
 /// Samples skipped before scoring injections (the gross-error stage's default warm-up).

@@ -7,7 +7,8 @@
 //! the frame ([`Emission`]). Writing frames is the frame codec's job, not this module's.
 //!
 //! Measurement model per channel c (gyro rad/s, accel m/s², body frame FRD):
-//!   u  = true + road_vibration                                  (physical input)
+//!   u  = true + road_vibration                                  (physical input; for a gait
+//!                                                                  also its impacts)
 //!   x  = u + noise + turn_on_bias + S·u + M·u + K·f + Σ GM + AR + RW + temp(T) + lines + steps
 //!        + gross                                                 (S scale, M misalignment,
 //!                                                                  K g-sensitivity, f = u_accel)
@@ -22,6 +23,7 @@
 //! numbers whatever the other effects do, so switching one effect off leaves the others' noise
 //! unchanged.
 
+pub mod gait;
 pub mod gross;
 pub mod log;
 pub mod motion;
@@ -198,7 +200,7 @@ impl Simulator {
             .filter(|(_, m)| m.enabled)
             .map(|(i, m)| VibrationModeState::new(m, dt, fork(stream::ROAD_VIBRATION + i as u64)))
             .collect();
-        if !road.is_empty() {
+        if !road.is_empty() || traj.transient(0.0).is_some() {
             enabled |= Effect::RoadVibration.bit();
         }
 
@@ -485,6 +487,11 @@ impl Simulator {
         let mut u = true_signal;
         for mode in &mut self.road {
             let v = mode.step(motion.speed_m_s);
+            for c in 0..N_CHANNELS {
+                comps[Effect::RoadVibration as usize][c] += v[c];
+            }
+        }
+        if let Some(v) = self.traj.transient(t_s) {
             for c in 0..N_CHANNELS {
                 comps[Effect::RoadVibration as usize][c] += v[c];
             }

@@ -18,6 +18,8 @@
 //!
 //! **Tumble** (still stops joined by rotations about body-fixed axes): see `super::tumble`.
 //!
+//! **Gait** (a foot-mounted IMU on a walking pedestrian): see `super::gait`.
+//!
 //! Transitions are jerk-limited: a rate that goes from 0 to its plateau R does so along
 //! w(t) = (1 − cos(π t/τ))/2 over the edge time τ (and back down symmetrically), so
 //! acceleration and yaw rate are continuous with bounded derivative (max jerk = π R / (2τ)).
@@ -26,6 +28,7 @@
 //! A hill pitches the road along θ(t) = Θ (x − sin(2πx)/(2π)), x = t / transition (θ̇ is a
 //! raised cosine, continuous with its derivative), holds Θ, and comes back the same way.
 
+use super::gait::GaitPlan;
 use super::scenario::{Checker, EARTH_RATE_RAD_S, MotionConfig, STANDARD_GRAVITY_M_S2, Segment};
 use super::tumble::{TumblePlan, scheme_attitudes_deg};
 use nalgebra::{Rotation3, Vector3};
@@ -121,6 +124,12 @@ pub enum Trajectory {
     /// Still stops joined by rotations (`super::tumble`).
     Tumble {
         plan: TumblePlan,
+        /// Earth rate in NED, rad/s (zero when off).
+        earth_n_rad_s: Vector3<f64>,
+    },
+    /// A foot-mounted IMU on a walking pedestrian (`super::gait`).
+    Gait {
+        plan: GaitPlan,
         /// Earth rate in NED, rad/s (zero when off).
         earth_n_rad_s: Vector3<f64>,
     },
@@ -222,6 +231,18 @@ impl Trajectory {
                     earth_n_rad_s: earth_rate_n(*earth_rate, *latitude_deg),
                 })
             }
+            MotionConfig::Gait {
+                earth_rate,
+                latitude_deg,
+                ..
+            } => {
+                check_latitude(ck, *latitude_deg);
+                let plan = GaitPlan::build(m, ck)?;
+                Some(Trajectory::Gait {
+                    plan,
+                    earth_n_rad_s: earth_rate_n(*earth_rate, *latitude_deg),
+                })
+            }
         }
     }
 
@@ -231,6 +252,17 @@ impl Trajectory {
             Trajectory::Static { duration_s, .. } => *duration_s,
             Trajectory::Drive { plan, .. } => plan.duration_s,
             Trajectory::Tumble { plan, .. } => plan.duration_s(),
+            Trajectory::Gait { plan, .. } => plan.duration_s(),
+        }
+    }
+
+    /// Physical transients that are real motion but not part of the smooth rigid-body motion
+    /// (`true_*`), on gx gy gz ax ay az: the gait's impacts; zero for the other kinds. They go
+    /// to the truth's `road_vibration_*` columns.
+    pub fn transient(&self, t_s: f64) -> Option<[f64; 6]> {
+        match self {
+            Trajectory::Gait { plan, .. } if plan.has_impacts() => Some(plan.impact(t_s)),
+            _ => None,
         }
     }
 
@@ -273,6 +305,19 @@ impl Trajectory {
                     speed_m_s: 0.0,
                     heading_rad: yaw,
                     pitch_rad: pitch,
+                }
+            }
+            Trajectory::Gait {
+                plan,
+                earth_n_rad_s,
+            } => {
+                let (w, f, pose) = plan.at(t_s);
+                TrueMotion {
+                    gyro_rad_s: w + pose.c_nb().inverse() * earth_n_rad_s,
+                    accel_m_s2: f,
+                    speed_m_s: pose.v.norm(),
+                    heading_rad: pose.euler[2],
+                    pitch_rad: pose.euler[1],
                 }
             }
         }

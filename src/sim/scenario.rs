@@ -165,16 +165,153 @@ motion_config! {
         #[serde(default = "default_jerk_time")]
         edge_s: f64,
     } then {}
+    /// A foot-mounted IMU on a pedestrian (`super::gait`): walking bouts of strides (foot flat,
+    /// heel-off, swing, heel strike, foot slap) separated by standing still, a turn in pivot
+    /// steps between bouts, heel-strike and toe-off impacts as physical vibration.
+    Gait {
+        /// Heading of the first bout, deg (0 = north, positive clockwise seen from above).
+        #[serde(default)]
+        initial_heading_deg: f64,
+        /// Steps per minute (both feet; one stride of the instrumented foot is two steps).
+        #[serde(default = "default_cadence")]
+        cadence_steps_min: f64,
+        /// Distance the foot moves per stride, m.
+        #[serde(default = "default_stride_length")]
+        stride_length_m: f64,
+        /// Share of each stride the foot lies flat (zero velocity).
+        #[serde(default = "default_foot_flat_fraction")]
+        foot_flat_fraction: f64,
+        /// Plantar flexion at toe-off (the foot pitched toe-down by this much), deg.
+        #[serde(default = "default_toe_off_pitch")]
+        toe_off_pitch_deg: f64,
+        /// Dorsiflexion at heel strike (toe-up), deg.
+        #[serde(default = "default_heel_strike_pitch")]
+        heel_strike_pitch_deg: f64,
+        /// Highest lift of the IMU during the swing, m.
+        #[serde(default = "default_clearance")]
+        clearance_m: f64,
+        /// Roll (inversion) bump during the swing, deg.
+        #[serde(default = "default_roll_wobble")]
+        roll_wobble_deg: f64,
+        /// Yaw (toe-in / toe-out) wobble during the swing, deg.
+        #[serde(default = "default_yaw_wobble")]
+        yaw_wobble_deg: f64,
+        /// Mean roll rate while the foot lies flat in a stride (pronation under load), deg/s;
+        /// the roll is given back during the next swing.
+        #[serde(default = "default_stance_roll")]
+        stance_roll_deg_s: f64,
+        /// Peak specific force of the heel-strike transient, g (0 = no impacts).
+        #[serde(default = "default_impact_g")]
+        impact_g: f64,
+        /// Peak angular rate of the heel-strike transient, deg/s.
+        #[serde(default = "default_impact_deg_s")]
+        impact_deg_s: f64,
+        /// Time constant of the transient's envelope, ms (its main pulse lasts about as long).
+        #[serde(default = "default_impact_tau_ms")]
+        impact_tau_ms: f64,
+        /// Ringing frequency of the transient, Hz.
+        #[serde(default = "default_impact_ring_hz")]
+        impact_ring_hz: f64,
+        /// Size of the toe-off transient relative to the heel strike's.
+        #[serde(default = "default_toe_off_share")]
+        toe_off_share: f64,
+        /// Relative sd of each stride's period, length and pitch amplitudes (fixed by the
+        /// scenario, not by the noise seed).
+        #[serde(default = "default_stride_jitter")]
+        stride_jitter: f64,
+        /// Walking bouts.
+        #[serde(default = "default_bouts")]
+        bouts: u32,
+        /// Strides per bout.
+        #[serde(default = "default_strides_per_bout")]
+        strides_per_bout: u32,
+        /// Standing still before the first bout, s.
+        #[serde(default = "default_initial_still")]
+        initial_still_s: f64,
+        /// Standing still between bouts (before the turn), s.
+        #[serde(default = "default_pause")]
+        pause_s: f64,
+        /// Standing still after the last bout, s.
+        #[serde(default = "default_final_still")]
+        final_still_s: f64,
+        /// Turn between bouts, deg (positive = right), in pivot steps of at most 90°.
+        #[serde(default = "default_turn")]
+        turn_deg: f64,
+    } then {}
+}
+
+fn default_cadence() -> f64 {
+    110.0
+}
+fn default_stride_length() -> f64 {
+    1.4
+}
+fn default_foot_flat_fraction() -> f64 {
+    0.35
+}
+fn default_toe_off_pitch() -> f64 {
+    35.0
+}
+fn default_heel_strike_pitch() -> f64 {
+    20.0
+}
+fn default_clearance() -> f64 {
+    0.12
+}
+fn default_roll_wobble() -> f64 {
+    4.0
+}
+fn default_yaw_wobble() -> f64 {
+    3.0
+}
+fn default_stance_roll() -> f64 {
+    0.8
+}
+fn default_impact_g() -> f64 {
+    4.0
+}
+fn default_impact_deg_s() -> f64 {
+    60.0
+}
+fn default_impact_tau_ms() -> f64 {
+    6.0
+}
+fn default_impact_ring_hz() -> f64 {
+    40.0
+}
+fn default_toe_off_share() -> f64 {
+    0.3
+}
+fn default_stride_jitter() -> f64 {
+    0.03
+}
+fn default_bouts() -> u32 {
+    3
+}
+fn default_strides_per_bout() -> u32 {
+    20
+}
+fn default_initial_still() -> f64 {
+    10.0
+}
+fn default_pause() -> f64 {
+    5.0
+}
+fn default_final_still() -> f64 {
+    5.0
+}
+fn default_turn() -> f64 {
+    90.0
 }
 
 impl MotionConfig {
     /// The vibration modes of any motion kind, and whether the motion has no speed (static or
-    /// tumble: `speed_ref_m_s` is meaningless there).
+    /// tumble or gait: `speed_ref_m_s` is meaningless there).
     pub fn vibration(&self) -> (&[VibrationMode], bool) {
         match self {
-            MotionConfig::Static { vibration, .. } | MotionConfig::Tumble { vibration, .. } => {
-                (vibration, true)
-            }
+            MotionConfig::Static { vibration, .. }
+            | MotionConfig::Tumble { vibration, .. }
+            | MotionConfig::Gait { vibration, .. } => (vibration, true),
             MotionConfig::Drive { vibration, .. } => (vibration, false),
         }
     }

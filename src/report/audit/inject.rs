@@ -145,7 +145,7 @@ impl Counts {
 }
 
 /// Count the replaced flags of `chans` in `out` against `labels`, after `SCORE_FROM`.
-pub(super) fn score(out: &[Sample], labels: &[[bool; N_CHANNELS]], chans: &[usize]) -> Counts {
+pub fn score(out: &[Sample], labels: &[[bool; N_CHANNELS]], chans: &[usize]) -> Counts {
     let mut k = Counts::default();
     for (s, l) in out.iter().zip(labels).skip(SCORE_FROM) {
         for &c in chans {

@@ -15,7 +15,9 @@
 //!    that channel's own gross errors are frequent enough to coincide by chance; a one-sample
 //!    event whose partners were off on that sample only is a corrupted frame, not a shock —
 //!    unless its one partner is on its own triad and under `confirm_k` there: one vector
-//!    moving), and
+//!    moving; tested at the event's start and at its judged part's; an event in a shock's
+//!    after-context also counts as part of it when two partners are sharp on its first sample
+//!    against their roughness before that shock — the shock still ringing), and
 //!    not a break covering under a third of an event the gate itself called motion (a level
 //!    change, the release rule). Around a one-sample event, a later isolated candidate is left
 //!    out of the context (`verdict.rs`). Opt-in (`level_window_s` > 0, off by default): a
@@ -83,6 +85,9 @@ const RING: usize = 2048;
 const MAX_PENDING: usize = 8;
 /// Longest event the confirmation judges (samples); longer ones pass as suspect.
 const MAX_EVENT: usize = 64;
+/// Shocks remembered (`GrossErrorStage::shocks`): more than the events of all channels whose
+/// verdicts can fall within one event's after-context.
+const SHOCK_MEMORY: usize = 16;
 
 /// Why the stage could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -184,6 +189,11 @@ pub struct GrossErrorStage {
     max_delay: u64,
     /// Every event's verdict, oldest first, once `record_verdicts` asked for them.
     verdicts: Option<Vec<EventVerdict>>,
+    /// The latest events (any channel) the several-axes test called a shock, round robin: their
+    /// start and end. An event in a shock's after-context is also judged against the partners'
+    /// roughness before that shock (`verdict.rs`, `shock`).
+    shocks: [(u64, u64); SHOCK_MEMORY],
+    shock_next: usize,
     /// Time between successive measurements: the sum of the intervals (ns) that do not end in a
     /// gap, their count, and the last measurement's time stamp.
     span_ns: u64,
@@ -243,6 +253,8 @@ impl GrossErrorStage {
             delayed: 0,
             max_delay: 0,
             verdicts: None,
+            shocks: [(u64::MAX, 0); SHOCK_MEMORY],
+            shock_next: 0,
             span_ns: 0,
             intervals: 0,
             last_t: None,

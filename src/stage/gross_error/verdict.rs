@@ -6,7 +6,7 @@
 
 use super::confirm;
 use super::gate::{Mode, RAW_KEEP};
-use super::{GrossErrorStage, MAX_EVENT, RING, Replacement, at_ring};
+use super::{GrossErrorStage, MAX_EVENT, RING, Replacement, SHOCK_MEMORY, at_ring};
 use super::{MAX_CONTEXT, MAX_POST};
 use crate::sample::flags;
 use crate::stats::robust::{median, sigma_from_abs_dev, upper_median};
@@ -113,7 +113,18 @@ impl GrossErrorStage {
         // partner suffices when it is at least half as sharp as the event (see `shock`).
         let partner_k = evidence.map_or(SHOCK_K, |e| SHOCK_K.max(0.25 * e.z_in));
         let strong_k = evidence.map_or(SHOCK_K, |e| SHOCK_K.max(0.5 * e.z_in));
-        let shock = self.shock(c, ev.start, m, upto, partner_k, strong_k);
+        // Tested where the event starts and, if leading samples were handed back to the signal,
+        // where its judged part starts: the break the partners must share is there (a gate run
+        // that opens on a fast but smooth approach, three samples before a heel strike, would
+        // otherwise be tested on the quiet samples before the impact).
+        let mut shock = self.shock(c, ev.start, m, upto, partner_k, strong_k);
+        if !shock && lead > 0 {
+            shock = self.shock(c, ev.start + lead as u64, m, upto, partner_k, strong_k);
+        }
+        if shock {
+            self.shocks[self.shock_next] = (ev.start, end);
+            self.shock_next = (self.shock_next + 1) % SHOCK_MEMORY;
+        }
         // The gate called the event motion (a level change or the release rule) and the part
         // that breaks the signal is under a third of it: that break is the sharp part of the
         // manoeuvre, not a gross error riding on it.
@@ -258,6 +269,45 @@ impl GrossErrorStage {
         Some(median(&mut d[..m]))
     }
 
+    /// Mean square of channel `o`'s centred second differences (raw values) over the
+    /// `context_samples` before `end` (the last one, at `end − 1`, left out: it touches `end`);
+    /// `None` when none is finite.
+    fn mean_square(&self, o: usize, end: u64) -> Option<f64> {
+        let x = |i: u64| at_ring(&self.ch[o].raw, i);
+        let ctx = self.s.context_samples as u64;
+        let (mut sum, mut n) = (0.0, 0u32);
+        for i in end - ctx..end - 1 {
+            let v = x(i) - 0.5 * (x(i - 1) + x(i + 1));
+            if v.is_finite() {
+                sum += v * v;
+                n += 1;
+            }
+        }
+        (n > 0).then(|| (sum / f64::from(n)).max(f64::MIN_POSITIVE))
+    }
+
+    /// Channel `o`'s centred second difference at `i` over its RMS before `end`
+    /// ([`Self::mean_square`]); `None` when either is not finite.
+    fn sharpness(&self, o: usize, i: u64, end: u64) -> Option<f64> {
+        let x = |i: u64| at_ring(&self.ch[o].raw, i);
+        let d = x(i) - 0.5 * (x(i - 1) + x(i + 1));
+        let ms = self.mean_square(o, end)?;
+        d.is_finite().then(|| d.abs() / ms.sqrt())
+    }
+
+    /// The shock an event starting at `start` follows: of the remembered shocks that started
+    /// before `start` and ended at most `post_samples` before it (the event lies in that
+    /// shock's own after-context), the earliest start; the partners' roughness before it is
+    /// the quiet they are measured against.
+    fn after_shock(&self, start: u64) -> Option<u64> {
+        let post = self.s.post_samples as u64;
+        self.shocks
+            .iter()
+            .filter(|(s0, e0)| *s0 < start && start <= e0 + post)
+            .map(|(s0, _)| *s0)
+            .min()
+    }
+
     /// Several-axes test on the other channels' *raw* values (a partner judged first and
     /// replaced is still a partner): a channel is *sharp* within one sample of `start` when its
     /// centred second difference there exceeds `k` times its own RMS over the
@@ -270,7 +320,19 @@ impl GrossErrorStage {
     ///   falls within the 3-sample window by chance with probability ≥ `CHANCE` (more than one
     ///   per 1000 samples over the last ~`RATE_WINDOW`): at a 2 % contamination of every axis,
     ///   or the 2e-3 per channel-sample of issue 4's dense synthetic logs, coincidences are
-    ///   expected and prove nothing.
+    ///   expected and prove nothing, or
+    /// - for an event in the after-context of a shock (it starts within `post_samples` of the
+    ///   end of an event called a shock, `after_shock`), two partners sharp *on its first
+    ///   sample* against their RMS over the `context_samples` before that shock, beyond
+    ///   `partner_k` and at least a quarter as sharp as the event on that same scale: the body
+    ///   is still ringing. A real impact rings (a foot's heel strike: a pulse, a rebound and a
+    ///   few lobes within ~40 ms), and a context that holds its onset is many times rougher
+    ///   than the partners were before it: at a simulated heel strike's rebound at 400 Hz every
+    ///   other axis is 2.7–3.0× the RMS of the context before the rebound but 29–203× the RMS
+    ///   before the impact, so the first rule found no partner and the rebound was confirmed
+    ///   and replaced on its own (tests/sensor_class_gait.rs). The first two rules are
+    ///   unchanged: a glitch on one channel two samples after a real knock, while the other
+    ///   axes move around it but not as sharply on its own sample, is judged as before.
     ///
     /// Model-free, so it holds during warm-up too. Not for a one-sample event whose partners were
     /// sharp on that sample only: that is what a corrupted whole frame looks like — unless the
@@ -294,26 +356,33 @@ impl GrossErrorStage {
         if start < ctx + 2 || start + 3 > upto {
             return false;
         }
+        // After a shock: each channel's sharpness on the event's first sample against its
+        // roughness before that shock; a partner must be beyond `partner_k` and at least a
+        // quarter as sharp as the event on that same scale.
+        let before_shock = self
+            .after_shock(start)
+            .filter(|s0| *s0 >= ctx + 2)
+            .and_then(|s0| {
+                let own = self.sharpness(c, start, s0)?;
+                Some((s0, partner_k.max(0.25 * own)))
+            });
         let (mut partners, mut all_same, mut vector_moved) = (0, true, false);
         let (mut strong, mut strong_same) = (0, true);
+        let mut ringing = 0;
         for (o, other) in self.ch.iter().enumerate() {
             if o == c || other.gate.mode == Mode::Disabled {
                 continue;
             }
+            if let Some((s0, k)) = before_shock
+                && self.sharpness(o, start, s0).is_some_and(|r| r > k)
+            {
+                ringing += 1;
+            }
             let x = |i: u64| at_ring(&other.raw, i);
             let d = |i: u64| x(i) - 0.5 * (x(i - 1) + x(i + 1));
-            let (mut sum, mut n) = (0.0, 0u32);
-            for i in start - ctx..start - 1 {
-                let v = d(i);
-                if v.is_finite() {
-                    sum += v * v;
-                    n += 1;
-                }
-            }
-            if n == 0 {
+            let Some(ms) = self.mean_square(o, start) else {
                 continue;
-            }
-            let ms = (sum / f64::from(n)).max(f64::MIN_POSITIVE);
+            };
             let (lim2, strong2) = (partner_k * partner_k * ms, strong_k * strong_k * ms);
             // Off on that sample by as much as a gross error of its own would be.
             let gross_itself = d(start).powi(2) > self.s.confirm_k.powi(2) * ms;
@@ -340,6 +409,6 @@ impl GrossErrorStage {
         // A lone partner on the event's own triad, sharp on that sample but by less than a
         // gross error, is the same vector moving (a rotation about an oblique axis), not a frame.
         let frame = |same: bool| len == 1 && same && (partners >= 2 || !vector_moved);
-        (partners >= 2 && !frame(all_same)) || (strong >= 1 && !frame(strong_same))
+        (partners >= 2 && !frame(all_same)) || (strong >= 1 && !frame(strong_same)) || ringing >= 2
     }
 }
