@@ -49,6 +49,15 @@ pub enum SourceConfig {
     },
     /// Frames (or a whole log) on standard input.
     Stdin,
+    /// Native frames published by another process over Zenoh (a build with `--features
+    /// zenoh`; the session is `[zenoh]`): each payload of `key` is fed to the frame decoder.
+    Zenoh {
+        /// Key expression to subscribe, e.g. `imuprep/imu0/raw`; its payloads are native frames.
+        key: String,
+        /// Silent this long = a stall: reported, counted in health, ms (0 = never).
+        #[serde(default = "default_stall_ms")]
+        stall_ms: u64,
+    },
 }
 
 fn default_baud() -> u32 {
@@ -128,6 +137,176 @@ pub enum SinkConfig {
         #[serde(default)]
         compression: McapCompression,
     },
+    /// Zenoh publisher on `key` (a build with `--features zenoh`; the session is `[zenoh]`):
+    /// every sample on `key`, health on `key/health` (published and queryable), the descriptor
+    /// on `key/descriptor` (queryable) — docs/zenoh.md.
+    Zenoh {
+        /// Key, e.g. `imuprep/imu0/imu` (no wildcards).
+        key: String,
+        /// "native" (one frame per sample, as `file:`/`tcp:` write) or "jsonl" (one JSON line).
+        #[serde(default)]
+        format: Format,
+        /// The sink's own queue, in batches of samples; beyond it batches are dropped, counted.
+        #[serde(default = "default_zenoh_queue")]
+        queue: usize,
+        /// Wait up to this long at start for a subscriber of `key` before data flows, s (0 = no wait).
+        #[serde(default)]
+        wait_s: f64,
+        /// What a subscriber or router that falls behind costs: "drop" (its messages are
+        /// dropped, counted; never waits) or "block" (Zenoh waits for it; the sink is then
+        /// waited for like a local sink: back-pressure in an offline replay, the stall rule live).
+        #[serde(default)]
+        congestion: ZenohCongestion,
+    },
+}
+
+/// Zenoh's congestion control for a Zenoh sink's samples.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ZenohCongestion {
+    /// `CongestionControl::Drop`: never waits; what a slow consumer cannot take is dropped.
+    #[default]
+    Drop,
+    /// `CongestionControl::Block`: every sample, at the pace of the slowest consumer.
+    Block,
+}
+
+fn default_zenoh_queue() -> usize {
+    64
+}
+
+/// `[zenoh]`: the one Zenoh session a run opens when a source or sink uses Zenoh.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ZenohConfig {
+    /// "peer" (meets other peers directly, and routers) or "client" (through a router only).
+    #[serde(default = "default_zenoh_mode")]
+    pub mode: String,
+    /// Endpoints to connect to, e.g. `tcp/192.168.1.10:7447`.
+    #[serde(default)]
+    pub connect: Vec<String>,
+    /// Endpoints to listen on, e.g. `tcp/0.0.0.0:7447` (peer mode; empty = Zenoh's default).
+    #[serde(default)]
+    pub listen: Vec<String>,
+    /// Find peers and routers by UDP multicast scouting.
+    #[serde(default = "yes")]
+    pub multicast_scouting: bool,
+    /// With `connect` endpoints: how long the start waits to reach one, ms; none reached =
+    /// a startup error naming them. 0 = do not wait (keep trying in the background).
+    #[serde(default = "default_zenoh_connect_timeout_ms")]
+    pub connect_timeout_ms: u64,
+}
+
+fn default_zenoh_mode() -> String {
+    "peer".into()
+}
+fn yes() -> bool {
+    true
+}
+fn default_zenoh_connect_timeout_ms() -> u64 {
+    5_000
+}
+
+impl Default for ZenohConfig {
+    fn default() -> Self {
+        ZenohConfig {
+            mode: default_zenoh_mode(),
+            connect: Vec::new(),
+            listen: Vec::new(),
+            multicast_scouting: true,
+            connect_timeout_ms: default_zenoh_connect_timeout_ms(),
+        }
+    }
+}
+
+/// The Zenoh link protocols this build's session can use (the crate's transport features).
+pub const ZENOH_TRANSPORTS: &[&str] = &["tcp", "udp"];
+
+crate::valid_settings!(
+    /// `[zenoh]` that passed [`ZenohConfig::validate`]: the only form a session is opened from.
+    ValidZenohConfig,
+    ZenohConfig
+);
+
+impl ZenohConfig {
+    /// Every value check, one message per mistake, each starting with its key.
+    pub fn validate(self) -> Result<ValidZenohConfig, crate::settings::SettingsErrors> {
+        let mut e = Vec::new();
+        if !["peer", "client"].contains(&self.mode.as_str()) {
+            e.push(format!(
+                "mode: must be \"peer\" or \"client\", got {:?}",
+                self.mode
+            ));
+        }
+        for (key, list) in [("connect", &self.connect), ("listen", &self.listen)] {
+            for (i, ep) in list.iter().enumerate() {
+                if let Err(m) = check_zenoh_endpoint(ep) {
+                    e.push(format!("{key}[{i}]: {m}"));
+                }
+            }
+        }
+        if self.mode == "client" && !self.listen.is_empty() {
+            e.push("listen: a client does not listen (mode = \"peer\" to listen)".into());
+        }
+        if self.mode == "client" && self.connect.is_empty() && !self.multicast_scouting {
+            e.push(
+                "connect: a client needs a router: give its endpoint, or multicast_scouting = true to find one"
+                    .into(),
+            );
+        }
+        crate::settings::SettingsErrors::check("zenoh", e, ValidZenohConfig::checked(self))
+    }
+}
+
+/// A Zenoh endpoint `PROTO/HOST:PORT` with a transport this build has.
+fn check_zenoh_endpoint(ep: &str) -> Result<(), String> {
+    let Some((proto, addr)) = ep.split_once('/') else {
+        return Err(format!(
+            "{ep:?} is not an endpoint (PROTO/HOST:PORT, e.g. tcp/127.0.0.1:7447)"
+        ));
+    };
+    if !ZENOH_TRANSPORTS.contains(&proto) {
+        return Err(format!(
+            "{ep:?}: transport {proto:?} is not in this build (one of {})",
+            ZENOH_TRANSPORTS.join(", ")
+        ));
+    }
+    // Zenoh's own suffixes (`#iface=…`, `?…`) are its business; the address must have a port.
+    let addr = addr.split(['#', '?']).next().unwrap_or(addr);
+    match addr.rsplit_once(':') {
+        Some((host, port)) if !host.is_empty() && port.parse::<u16>().is_ok() => Ok(()),
+        _ => Err(format!(
+            "{ep:?}: the address needs HOST:PORT (port 0–65535)"
+        )),
+    }
+}
+
+/// A Zenoh key: non-empty, no empty chunk (`a//b`), no leading/trailing `/`; `wildcards` allows
+/// `*` and `**` chunks (a subscription), else none (a publication).
+pub fn check_zenoh_key(key: &str, wildcards: bool) -> Result<(), String> {
+    if key.is_empty() {
+        return Err("empty key".into());
+    }
+    if key.starts_with('/') || key.ends_with('/') || key.contains("//") {
+        return Err(format!(
+            "{key:?}: a key has no leading, trailing or doubled '/'"
+        ));
+    }
+    for chunk in key.split('/') {
+        let wild = chunk.contains('*') || chunk.contains('$');
+        if wild && !wildcards {
+            return Err(format!(
+                "{key:?}: a published key names one resource (no '*')"
+            ));
+        }
+        if wild && chunk != "*" && chunk != "**" && !chunk.contains("$*") {
+            return Err(format!("{key:?}: bad wildcard chunk {chunk:?}"));
+        }
+        if chunk.contains(['#', '?']) {
+            return Err(format!("{key:?}: '#' and '?' are not allowed in a key"));
+        }
+    }
+    Ok(())
 }
 
 /// How the MCAP sink compresses its chunks.
@@ -211,6 +390,14 @@ pub enum Sink {
         health_topic: String,
         compression: McapCompression,
     },
+    /// Zenoh publisher (see [`SinkConfig::Zenoh`]).
+    Zenoh {
+        key: String,
+        format: Format,
+        queue: usize,
+        wait_s: f64,
+        congestion: ZenohCongestion,
+    },
 }
 
 /// A validated configuration: it can only exist if every check passed.
@@ -222,6 +409,16 @@ pub struct Config {
     pub stages: crate::stage::build::StagesConfig,
     /// `[source] protocol` and the per-protocol option tables (`[source.ubx]`, …).
     pub protocol: crate::frame::detect::ProtocolConfig,
+    /// `[zenoh]`: the session a Zenoh source or sink opens.
+    pub zenoh: ValidZenohConfig,
+}
+
+impl Config {
+    /// True when the source or a sink uses Zenoh (the run opens one session for them).
+    pub fn uses_zenoh(&self) -> bool {
+        matches!(self.source, SourceConfig::Zenoh { .. })
+            || self.sinks.iter().any(|s| matches!(s, Sink::Zenoh { .. }))
+    }
 }
 
 impl Config {
@@ -283,12 +480,13 @@ impl Config {
                 "gross_error",
                 "bias",
                 "monitor",
+                "zenoh",
             ]
             .contains(&k.as_str())
             {
                 errs.push(
                     k.clone(),
-                    "unknown section (expected source, sinks, health, gross_error, bias, monitor)",
+                    "unknown section (expected source, sinks, health, gross_error, bias, monitor, zenoh)",
                 );
             }
         }
@@ -358,6 +556,14 @@ impl Config {
             "health.interval_s",
             format!("must be ≥ 0 s, got {}", health.interval_s),
         );
+        let zenoh: ZenohConfig = section(&table, "zenoh", &mut errs).unwrap_or_default();
+        let zenoh = match zenoh.validate() {
+            Ok(z) => Some(z),
+            Err(e) => {
+                e.push_into(&mut errs, "zenoh");
+                None
+            }
+        };
         let stages = crate::stage::build::StagesConfig::from_table(&table, base, &mut errs);
         errs.dedup();
         if errs.is_empty() {
@@ -367,6 +573,7 @@ impl Config {
                 health,
                 stages: stages.expect("no errors means the stages parsed"),
                 protocol,
+                zenoh: zenoh.expect("no errors means [zenoh] passed"),
             })
         } else {
             Err(ConfigErrors(errs.into_vec()))
@@ -412,8 +619,18 @@ fn validate_source(s: &SourceConfig, _base: &Path, errs: &mut Errors) {
             );
         }
         SourceConfig::Stdin => {}
+        SourceConfig::Zenoh { key, .. } => {
+            errs.check(cfg!(feature = "zenoh"), "source.kind", ZENOH_NOT_BUILT);
+            if let Err(m) = check_zenoh_key(key, true) {
+                errs.push("source.key", m);
+            }
+        }
     }
 }
+
+/// What a config naming Zenoh is told by a build without it.
+pub const ZENOH_NOT_BUILT: &str =
+    "zenoh needs a build with Zenoh support (cargo build --release --features zenoh)";
 
 fn validate_sink(s: &SinkConfig, base: &Path, path: &str, errs: &mut Errors) -> Option<Sink> {
     match s {
@@ -464,6 +681,40 @@ fn validate_sink(s: &SinkConfig, base: &Path, path: &str, errs: &mut Errors) -> 
                 frame_id: frame_id.clone(),
                 health_topic: health_topic.clone(),
                 compression: *compression,
+            })
+        }
+        SinkConfig::Zenoh {
+            key,
+            format,
+            queue,
+            wait_s,
+            congestion,
+        } => {
+            errs.check(
+                cfg!(feature = "zenoh"),
+                format!("{path}.kind"),
+                ZENOH_NOT_BUILT,
+            );
+            if let Err(m) = check_zenoh_key(key, false) {
+                errs.push(format!("{path}.key"), m);
+            }
+            errs.check(
+                *format != Format::Csv,
+                format!("{path}.format"),
+                "a zenoh sink publishes \"native\" frames or \"jsonl\" lines, not csv",
+            );
+            errs.check(*queue > 0, format!("{path}.queue"), "must be > 0");
+            errs.check(
+                wait_s.is_finite() && *wait_s >= 0.0,
+                format!("{path}.wait_s"),
+                format!("must be ≥ 0 s, got {wait_s}"),
+            );
+            Some(Sink::Zenoh {
+                key: key.clone(),
+                format: *format,
+                queue: *queue,
+                wait_s: *wait_s,
+                congestion: *congestion,
             })
         }
         SinkConfig::Udp { targets, format } => {

@@ -25,13 +25,14 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// The daemon: source from config (serial or replay) → pipeline → sinks, until SIGINT/SIGTERM.
+    /// The daemon: source from config (serial, replay, stdin or zenoh) → pipeline → sinks, until SIGINT/SIGTERM.
     Run {
         /// Config file (default: the embedded config/default.toml).
         #[arg(long)]
         config: Option<PathBuf>,
         /// Extra outputs, repeatable: stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH,
-        /// tcp:HOST:PORT, udp:HOST:PORT, inline:PATH, pty:, mcap:PATH (a build with --features ros2).
+        /// tcp:HOST:PORT, udp:HOST:PORT, inline:PATH, pty:, mcap:PATH (a build with --features ros2),
+        /// zenoh:KEY[?format=jsonl&queue=N&wait=S&congestion=block] (a build with --features zenoh).
         #[arg(long = "out")]
         out: Vec<String>,
         /// Also write the final health summary as JSON to this file.
@@ -46,7 +47,8 @@ enum Cmd {
         #[arg(long)]
         config: Option<PathBuf>,
         /// Outputs, repeatable: stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH,
-        /// tcp:HOST:PORT, udp:HOST:PORT, inline:PATH, pty:, mcap:PATH (a build with --features ros2).
+        /// tcp:HOST:PORT, udp:HOST:PORT, inline:PATH, pty:, mcap:PATH (a build with --features ros2),
+        /// zenoh:KEY[?format=jsonl&queue=N&wait=S&congestion=block] (a build with --features zenoh).
         #[arg(long = "out")]
         out: Vec<String>,
         /// Pace by sensor time at this speed factor, × real time (0 = as fast as possible).

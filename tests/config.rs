@@ -298,10 +298,17 @@ fn default_toml_lists_every_setting_and_every_documented_value_parses() {
             "monitor.settings",
             toml::Table::try_from(imuprep::stage::monitor::MonitorSettings::default()).unwrap(),
         ),
+        (
+            "zenoh",
+            toml::Table::try_from(imuprep::config::ZenohConfig::default()).unwrap(),
+        ),
     ] {
         let mut keys = Vec::new();
         leaf_paths(&defaults, "", &mut keys);
-        assert!(keys.len() > 10 || section == "health" || section == "monitor.settings");
+        assert!(
+            keys.len() > 10 || ["health", "monitor.settings", "zenoh"].contains(&section),
+            "{section}: {keys:?}"
+        );
         for k in keys {
             let full = format!("{section}.{k}");
             let got = at(&file, &full).unwrap_or_else(|| panic!("{full} is not in default.toml"));
@@ -355,23 +362,38 @@ fn default_toml_lists_every_setting_and_every_documented_value_parses() {
     let serial = uncomment("# kind = \"serial\"", "# Wire protocol")
         .replace("kind = \"replay\"\npath = \"replay/drive.log\"", "");
     let serial = serial.replacen("speed = 0.0 ", "# speed ", 1);
+    let zenoh_source = uncomment("#   kind = \"zenoh\"", "# For a live sensor")
+        .replace("kind = \"replay\"\npath = \"replay/drive.log\"", "");
+    let zenoh_source = zenoh_source.replacen("speed = 0.0 ", "# speed ", 1);
     for (name, text) in [
         ("serial source", serial),
+        ("zenoh source", zenoh_source),
         ("protocol tables", uncomment("# [source.ubx]", "\n[health]")),
         ("sinks", uncomment("# [[sinks]]", "# Gross errors")),
     ] {
+        // Without the `ros2` and `zenoh` features the documented mcap and zenoh sinks and the
+        // zenoh source are refused, and only they, each with the build that has them.
+        let mut refused = Vec::new();
+        if name == "sinks" && !cfg!(feature = "ros2") {
+            refused.push("sinks[4].kind: mcap needs a build with ROS 2 support");
+        }
+        if name == "sinks" && !cfg!(feature = "zenoh") {
+            refused.push("sinks[5].kind: zenoh needs a build with Zenoh support");
+        }
+        if name == "zenoh source" && !cfg!(feature = "zenoh") {
+            refused.push("source.kind: zenoh needs a build with Zenoh support");
+        }
         match Config::from_toml_str(&text, Path::new(".")) {
-            Ok(_) => {}
-            // Without the `ros2` feature the documented mcap sink is refused, and only it.
-            Err(e) if name == "sinks" && !cfg!(feature = "ros2") => {
+            Ok(_) => assert!(refused.is_empty(), "{name}: {refused:?} not refused"),
+            Err(e) => {
                 let e = e.to_string();
                 assert!(
-                    e.contains("1 configuration error")
-                        && e.contains("kind: mcap needs a build with ROS 2 support"),
+                    !refused.is_empty()
+                        && e.contains(&format!("{} configuration error", refused.len()))
+                        && refused.iter().all(|r| e.contains(r)),
                     "{name}: {e}\n{text}"
                 );
             }
-            Err(e) => panic!("{name}: {e}\n{text}"),
         }
     }
 }
@@ -397,4 +419,53 @@ fn a_tuning_only_file_works_where_the_command_brings_its_input_and_run_still_nee
     let out = imuprep(["run".as_ref(), "--config".as_ref(), p.as_os_str()]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing section [source]"));
+}
+
+/// `[zenoh]` is checked in every build (raw → validated once): every mistake at its key path,
+/// all in one run, with the source and sink keys that name Zenoh.
+#[test]
+fn zenoh_section_mistakes_are_all_reported_at_their_keys() {
+    let text = r#"
+[source]
+kind = "zenoh"
+key = "imuprep//raw"
+
+[[sinks]]
+kind = "zenoh"
+key = "imuprep/*/imu"
+format = "csv"
+queue = 0
+
+[zenoh]
+mode = "router"
+connect = ["tcp/127.0.0.1", "quic/10.0.0.1:7447", "127.0.0.1:7447"]
+listen = ["udp/0.0.0.0:99999"]
+scouting = false
+"#;
+    let e = Config::from_toml_str(text, Path::new("."))
+        .unwrap_err()
+        .to_string();
+    for want in [
+        "source.key: \"imuprep//raw\": a key has no leading, trailing or doubled '/'",
+        "sinks[0].key: \"imuprep/*/imu\": a published key names one resource (no '*')",
+        "sinks[0].format: a zenoh sink publishes \"native\" frames or \"jsonl\" lines, not csv",
+        "sinks[0].queue: must be > 0",
+        "zenoh.scouting: unknown field `scouting`",
+        "zenoh.mode: must be \"peer\" or \"client\", got \"router\"",
+        "zenoh.connect[0]: \"tcp/127.0.0.1\": the address needs HOST:PORT",
+        "zenoh.connect[1]: \"quic/10.0.0.1:7447\": transport \"quic\" is not in this build",
+        "zenoh.connect[2]: \"127.0.0.1:7447\" is not an endpoint (PROTO/HOST:PORT",
+        "zenoh.listen[0]: \"udp/0.0.0.0:99999\": the address needs HOST:PORT",
+    ] {
+        assert!(e.contains(want), "missing {want:?} in:\n{e}");
+    }
+    // A client does not listen, and needs a router to reach.
+    let e = Config::from_toml_str(
+        "[source]\nkind = \"stdin\"\n[zenoh]\nmode = \"client\"\nlisten = [\"tcp/0.0.0.0:7447\"]\nmulticast_scouting = false\n",
+        Path::new("."),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("zenoh.listen: a client does not listen"), "{e}");
+    assert!(e.contains("zenoh.connect: a client needs a router"), "{e}");
 }

@@ -11,3 +11,5 @@ pub mod sim_log;
 pub mod sink;
 pub mod source;
 pub mod timing;
+#[cfg(feature = "zenoh")]
+pub mod zenoh;

@@ -1,5 +1,6 @@
-//! Sources: a recorded log, standard input, or a serial port — all through the same
-//! [`FrameDecoder`]. Each runs as a tokio task and sends [`SourceEvent`]s to the runtime.
+//! Sources: a recorded log, standard input, a serial port, or (a build with `--features zenoh`)
+//! payloads of a Zenoh key — all through the same [`FrameDecoder`]. Each runs as a tokio task
+//! and sends [`SourceEvent`]s to the runtime.
 
 use crate::frame::detect::{DETECT_BYTES, ProtocolConfig};
 use crate::frame::{
@@ -491,4 +492,67 @@ pub async fn serial_watched(
         tokio::time::sleep(delay).await;
         delay = (delay * 2).min(retry_max);
     }
+}
+
+/// The payloads of a Zenoh subscription as one byte stream, through the same decoder as every
+/// other source (so CRC errors, gaps and duplicates are counted as everywhere). A key silent for
+/// `stall` is reported ([`SourceEvent::Stall`], counted) and still listened to, keeping the
+/// decoder so the gap is flagged. Ends when the subscription closes (the session closed).
+#[cfg(feature = "zenoh")]
+pub async fn zenoh_with(
+    sub: zenoh::pubsub::Subscriber<zenoh::handlers::FifoChannelHandler<zenoh::sample::Sample>>,
+    stall: Option<Duration>,
+    c: ProtocolConfig,
+    side: bool,
+    tx: mpsc::Sender<SourceEvent>,
+) {
+    let key = sub.key_expr().to_string();
+    let name = format!("zenoh:{key}");
+    if tx
+        .send(SourceEvent::Connected { name: name.clone() })
+        .await
+        .is_err()
+    {
+        return;
+    }
+    let mut decoder = Codec(c.decoder(c.resolve(&[])));
+    let mut stalls = 0u64;
+    loop {
+        // One payload after another: a payload holds whole frames (one, usually), but the
+        // decoder does not rely on it.
+        let payloads = futures_util::stream::unfold(&sub, |s| async move {
+            let sample = s.recv_async().await.ok()?;
+            let b = Bytes::from(sample.payload().to_bytes().into_owned());
+            Some((Ok::<Bytes, std::io::Error>(b), s))
+        });
+        let reader = tokio_util::io::StreamReader::new(Box::pin(payloads));
+        let (dec, err, alive) = match stall {
+            Some(d) => pump(StallGuard::new(reader, d), decoder, &tx, None, side).await,
+            None => pump(reader, decoder, &tx, None, side).await,
+        };
+        decoder = dec;
+        if !alive {
+            return;
+        }
+        match err {
+            Some(e) if e.kind() == std::io::ErrorKind::TimedOut => {
+                stalls += 1;
+                let reason = format!("{name}: nothing published ({e}); still listening");
+                tracing::warn!(stalls, "zenoh source silent: {reason}");
+                if tx
+                    .send(SourceEvent::Stall { reason, stalls })
+                    .await
+                    .is_err()
+                {
+                    return;
+                }
+            }
+            Some(e) => {
+                tracing::error!("{name}: {e}");
+                break;
+            }
+            None => break,
+        }
+    }
+    let _ = tx.send(SourceEvent::End(decoder.0.stats())).await;
 }

@@ -33,7 +33,8 @@ pub struct Health {
     pub source_outages: u64,
     /// The cleaning stages the pipeline runs, in order; empty = samples are published raw.
     pub cleaning_stages: Vec<String>,
-    /// Times the source stayed open but silent for its stall time (serial) and was reopened.
+    /// Times the source stayed open but silent for its stall time (serial: then reopened;
+    /// zenoh: still listened to).
     pub source_stalls: u64,
     /// Sensor time of the last sample published, ns.
     pub last_t_ns: u64,
@@ -172,7 +173,7 @@ impl Health {
         if self.source_stalls > 0 {
             let _ = writeln!(
                 o,
-                "  source     : {} (open but silent; reopened)",
+                "  source     : {} (open but silent for the stall time)",
                 count(self.source_stalls, "stall", "stalls")
             );
         }
@@ -198,6 +199,13 @@ impl Health {
                     String::new()
                 }
             );
+            if s.congestion_dropped + s.no_subscriber > 0 {
+                let _ = writeln!(
+                    o,
+                    "               zenoh — {} dropped by its congestion control (a subscriber or router behind), {} published while no subscriber matched",
+                    s.congestion_dropped, s.no_subscriber
+                );
+            }
             let g = &s.clients_gone;
             if g.clients > 0 {
                 let _ = writeln!(

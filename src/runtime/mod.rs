@@ -29,10 +29,26 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     if pipeline.cleaning_stage_names().is_empty() {
         tracing::warn!("cleaning: {NO_CLEANING}");
     }
+    // One Zenoh session for the source and every sink that use Zenoh (`[zenoh]`); a session
+    // that cannot open is a startup error naming its endpoints.
+    #[cfg(feature = "zenoh")]
+    let zenoh = if cfg.uses_zenoh() {
+        Some(
+            crate::io::zenoh::ZenohSession::open(&cfg.zenoh)
+                .await
+                .map_err(anyhow::Error::msg)?,
+        )
+    } else {
+        None
+    };
+    let ctx = sink::SinkContext {
+        #[cfg(feature = "zenoh")]
+        zenoh: zenoh.clone(),
+    };
     // Sinks first: a bad address or path fails before any data is read.
     let mut sinks = Vec::new();
     for s in &cfg.sinks {
-        sinks.push(sink::start(s).await?);
+        sinks.push(sink::start_with(s, &ctx).await?);
     }
     // SIGINT/SIGTERM, watched by a task of its own (started below, once nothing can fail): a
     // sink waited for without limit must still let a signal stop the run while the loop awaits it.
@@ -71,6 +87,27 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
             side,
             tx,
         )),
+        #[cfg(feature = "zenoh")]
+        SourceConfig::Zenoh { key, stall_ms } => {
+            let z = zenoh.as_ref().expect("a zenoh source opens the session");
+            let sub = z
+                .session
+                .declare_subscriber(key.clone())
+                .await
+                .map_err(|e| anyhow::anyhow!("zenoh source {key}: cannot subscribe: {e}"))?;
+            tokio::spawn(source::zenoh_with(
+                sub,
+                (*stall_ms > 0).then(|| Duration::from_millis(*stall_ms)),
+                proto,
+                side,
+                tx,
+            ))
+        }
+        #[cfg(not(feature = "zenoh"))]
+        SourceConfig::Zenoh { .. } => anyhow::bail!(
+            "[source] kind = \"zenoh\": {}",
+            crate::config::ZENOH_NOT_BUILT
+        ),
     };
     let signals = tokio::spawn(async move {
         let sig = shutdown_signal().await;
@@ -205,6 +242,11 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
         }
     }
     signals.abort();
+    // What the Zenoh sinks put is still in Zenoh's queues: closing the session sends it.
+    #[cfg(feature = "zenoh")]
+    if let Some(z) = &zenoh {
+        z.close().await;
+    }
     health.elapsed_s = started.elapsed().as_secs_f64();
     health.stages = pipeline.health();
     health.cleaning_stages = cleaning_stages(&pipeline);
@@ -259,7 +301,7 @@ pub fn offline_replay(source: &SourceConfig) -> bool {
         SourceConfig::Replay { path, speed } => {
             *speed == 0.0 && std::fs::metadata(path).is_ok_and(|m| m.is_file())
         }
-        SourceConfig::Stdin | SourceConfig::Serial { .. } => false,
+        SourceConfig::Stdin | SourceConfig::Serial { .. } | SourceConfig::Zenoh { .. } => false,
     }
 }
 

@@ -82,10 +82,68 @@ pub fn parse_out_spec(spec: &str) -> Result<Sink, String> {
                 McapCompression::Lz4
             },
         }),
+        "zenoh" => parse_zenoh(rest),
         _ => Err(format!(
-            "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR, inline:PATH (the input's own protocol, to a serial device or file), pty: (the same on a new pseudo-terminal, its path printed), mcap:PATH (ROS 2 bag, sensor_msgs/msg/Imu; mcap+lz4:PATH with LZ4 chunks)"
+            "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR, inline:PATH (the input's own protocol, to a serial device or file), pty: (the same on a new pseudo-terminal, its path printed), mcap:PATH (ROS 2 bag, sensor_msgs/msg/Imu; mcap+lz4:PATH with LZ4 chunks), zenoh:KEY[?format=jsonl&queue=N&wait=S&congestion=block] (a build with --features zenoh)"
         )),
     }
+}
+
+/// `zenoh:KEY[?format=native|jsonl&queue=N&wait=S&congestion=drop|block]` (the `[[sinks]]`
+/// keys `format`, `queue`, `wait_s`, `congestion`). Whether this build has Zenoh is checked when the sink starts.
+fn parse_zenoh(rest: &str) -> Result<Sink, String> {
+    use crate::config::{Format, ZenohCongestion};
+    let (key, opts) = rest.split_once('?').unwrap_or((rest, ""));
+    crate::config::check_zenoh_key(key, false).map_err(|e| {
+        format!("zenoh: {e} (zenoh:KEY[?format=jsonl&queue=N&wait=S&congestion=block], e.g. zenoh:imuprep/imu0/imu)")
+    })?;
+    let (mut format, mut queue, mut wait_s) = (Format::Native, 64usize, 0.0f64);
+    let mut congestion = ZenohCongestion::Drop;
+    for kv in opts.split('&').filter(|s| !s.is_empty()) {
+        let (k, v) = kv.split_once('=').unwrap_or((kv, ""));
+        match k {
+            "format" => {
+                format = match v {
+                    "native" => Format::Native,
+                    "jsonl" | "json" => Format::Jsonl,
+                    o => return Err(format!("zenoh: format {o:?}: native or jsonl")),
+                }
+            }
+            "queue" => {
+                queue = v
+                    .parse()
+                    .ok()
+                    .filter(|q| *q > 0)
+                    .ok_or_else(|| format!("zenoh: queue {v:?}: a count of batches > 0"))?
+            }
+            "wait" | "wait_s" => {
+                wait_s = v
+                    .parse()
+                    .ok()
+                    .filter(|w: &f64| w.is_finite() && *w >= 0.0)
+                    .ok_or_else(|| format!("zenoh: wait {v:?}: seconds ≥ 0"))?
+            }
+            "congestion" => {
+                congestion = match v {
+                    "drop" => ZenohCongestion::Drop,
+                    "block" => ZenohCongestion::Block,
+                    o => return Err(format!("zenoh: congestion {o:?}: drop or block")),
+                }
+            }
+            o => {
+                return Err(format!(
+                    "zenoh: unknown option {o:?} (format, queue, wait, congestion)"
+                ));
+            }
+        }
+    }
+    Ok(Sink::Zenoh {
+        key: key.to_string(),
+        format,
+        queue,
+        wait_s,
+        congestion,
+    })
 }
 
 #[cfg(test)]
@@ -106,6 +164,48 @@ mod out_spec_tests {
         for spec in ["csv:", "jsonl:", "file:", "csv"] {
             let e = parse_out_spec(spec).unwrap_err();
             assert!(e.contains("needs a path"), "{spec}: {e}");
+        }
+    }
+
+    #[test]
+    fn zenoh_keys_and_options() {
+        use crate::config::Format;
+        assert_eq!(
+            parse_out_spec("zenoh:imuprep/imu0/imu?format=jsonl&queue=8&wait=2.5&congestion=block"),
+            Ok(Sink::Zenoh {
+                key: "imuprep/imu0/imu".into(),
+                format: Format::Jsonl,
+                queue: 8,
+                wait_s: 2.5,
+                congestion: crate::config::ZenohCongestion::Block,
+            })
+        );
+        let Ok(Sink::Zenoh {
+            format,
+            queue,
+            congestion,
+            ..
+        }) = parse_out_spec("zenoh:a")
+        else {
+            panic!("zenoh:a refused")
+        };
+        assert_eq!(
+            (format, queue, congestion),
+            (Format::Native, 64, crate::config::ZenohCongestion::Drop)
+        );
+        for bad in [
+            "zenoh:",
+            "zenoh:a/*/b",
+            "zenoh:/a",
+            "zenoh:a//b",
+            "zenoh:a?format=csv",
+            "zenoh:a?queue=0",
+            "zenoh:a?wait=-1",
+            "zenoh:a?speed=2",
+            "zenoh:a?congestion=wait",
+        ] {
+            let e = parse_out_spec(bad).unwrap_err();
+            assert!(e.starts_with("zenoh:"), "{bad}: {e}");
         }
     }
 }

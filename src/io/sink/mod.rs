@@ -55,6 +55,8 @@ mod inline;
 mod net;
 mod stats;
 mod stream;
+#[cfg(feature = "zenoh")]
+mod zenoh;
 
 pub use stats::{ClientCounters, ClientStats, GoneClients, SinkReport, SinkStats};
 
@@ -321,10 +323,26 @@ enum Put {
 /// Queue length (in batches) of a sink's own input.
 const SINK_QUEUE: usize = 64;
 
+/// What the sinks of one run share: its Zenoh session, when it has one.
+#[derive(Clone, Default)]
+pub struct SinkContext {
+    #[cfg(feature = "zenoh")]
+    pub zenoh: Option<crate::io::zenoh::ZenohSession>,
+}
+
 /// Start the task for one configured sink (binds sockets and creates files now, so a bad
 /// address or path fails before any data flows).
 pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
-    let (tx, rx) = mpsc::channel(SINK_QUEUE);
+    start_with(sink, &SinkContext::default()).await
+}
+
+/// [`start`] with what the run's sinks share (a Zenoh sink needs the run's session).
+pub async fn start_with(sink: &Sink, ctx: &SinkContext) -> std::io::Result<SinkHandle> {
+    let queue = match sink {
+        Sink::Zenoh { queue, .. } => *queue,
+        _ => SINK_QUEUE,
+    };
+    let (tx, rx) = mpsc::channel(queue);
     let stats = Arc::new(SinkStats::default());
     let st = stats.clone();
     let (name, task) = match sink.clone() {
@@ -394,9 +412,43 @@ pub async fn start(sink: &Sink) -> std::io::Result<SinkHandle> {
             }
         }
         Sink::Inline { path } => inline::start_inline(path, rx, st).await?,
+        Sink::Zenoh {
+            key,
+            format,
+            wait_s,
+            congestion,
+            ..
+        } => {
+            #[cfg(feature = "zenoh")]
+            {
+                let Some(z) = ctx.zenoh.clone() else {
+                    return Err(std::io::Error::other(format!(
+                        "zenoh sink {key}: no Zenoh session (the run opens one from [zenoh])"
+                    )));
+                };
+                zenoh::start_zenoh(z, key, format, wait_s, congestion, rx, st).await?
+            }
+            #[cfg(not(feature = "zenoh"))]
+            {
+                let _ = (key, format, wait_s, congestion, rx, st, ctx);
+                return Err(std::io::Error::other(format!(
+                    "--out zenoh: {}",
+                    crate::config::ZENOH_NOT_BUILT
+                )));
+            }
+        }
     };
-    // Network sinks are never waited for; local ones are (up to the stall time).
-    let lossless = !matches!(sink, Sink::Tcp { .. } | Sink::Udp { .. });
+    // Network sinks are never waited for; local ones are (up to the stall time), and so is a
+    // Zenoh sink that blocks for its consumers (`congestion = "block"`).
+    let lossless = !matches!(
+        sink,
+        Sink::Tcp { .. }
+            | Sink::Udp { .. }
+            | Sink::Zenoh {
+                congestion: crate::config::ZenohCongestion::Drop,
+                ..
+            }
+    );
     Ok(SinkHandle {
         name,
         tx,

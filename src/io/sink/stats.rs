@@ -58,6 +58,12 @@ pub struct SinkStats {
     pub errors: AtomicU64,
     /// Inline sinks: pass-through messages (not IMU data) dropped with a side batch while stuck.
     pub messages_dropped: AtomicU64,
+    /// Zenoh sinks: messages Zenoh's own congestion control dropped (a subscriber or router
+    /// behind), as Zenoh counts them for the session.
+    pub congestion_dropped: AtomicU64,
+    /// Zenoh sinks: samples published while no subscriber matched the key (none yet, or the
+    /// router or every subscriber gone): sent to nobody, not counted as dropped.
+    pub no_subscriber: AtomicU64,
     /// TCP clients connected now.
     pub clients: Mutex<Vec<Arc<ClientCounters>>>,
     /// TCP clients that have left.
@@ -74,6 +80,12 @@ pub struct SinkReport {
     pub errors: u64,
     /// Inline sinks: pass-through messages dropped while stuck.
     pub messages_dropped: u64,
+    /// Zenoh sinks: messages Zenoh's congestion control dropped (in `dropped_total`).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub congestion_dropped: u64,
+    /// Zenoh sinks: samples published while no subscriber matched (not in `dropped_total`).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub no_subscriber: u64,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub clients: Vec<ClientStats>,
     #[serde(skip_serializing_if = "is_zero_gone")]
@@ -84,10 +96,16 @@ fn is_zero_gone(g: &GoneClients) -> bool {
     g.clients == 0
 }
 
+fn is_zero(n: &u64) -> bool {
+    *n == 0
+}
+
 impl SinkReport {
-    /// Samples this sink lost, including every client's lag (present and gone).
+    /// Samples this sink lost, including every client's lag (present and gone) and what
+    /// Zenoh's congestion control dropped.
     pub fn dropped_total(&self) -> u64 {
         self.dropped
+            + self.congestion_dropped
             + self.clients.iter().map(|c| c.samples_dropped).sum::<u64>()
             + self.clients_gone.samples_dropped
     }
@@ -102,6 +120,8 @@ impl SinkStats {
             health_out: self.health_out.load(Relaxed),
             errors: self.errors.load(Relaxed),
             messages_dropped: self.messages_dropped.load(Relaxed),
+            congestion_dropped: self.congestion_dropped.load(Relaxed),
+            no_subscriber: self.no_subscriber.load(Relaxed),
             clients: self
                 .clients
                 .lock()
