@@ -579,21 +579,7 @@ fn an_endpoint_that_cannot_be_used_is_a_startup_error_naming_it() {
             .replace("connect_timeout_ms = 5000", "connect_timeout_ms = 500"),
     )
     .unwrap();
-    let out = imuprep(&[
-        "replay",
-        "replay/drive.log",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        "zenoh:imuprep/t5/imu",
-    ]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "{err}");
-    assert!(
-        err.contains("zenoh: cannot open the session") && err.contains(&endpoint(port)),
-        "{err}"
-    );
-    assert!(!err.contains("panicked"), "{err}");
+    fails_naming(&cfg, &endpoint(port));
     // A listen endpoint already taken.
     let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let ep = endpoint(taken.local_addr().unwrap().port());
@@ -606,6 +592,12 @@ fn an_endpoint_that_cannot_be_used_is_a_startup_error_naming_it() {
         ),
     )
     .unwrap();
+    fails_naming(&cfg, &ep);
+}
+
+/// A replay with config `cfg` and a `zenoh:` sink fails at startup, saying it cannot open the
+/// session and naming `endpoint`, without a panic.
+fn fails_naming(cfg: &Path, endpoint: &str) {
     let out = imuprep(&[
         "replay",
         "replay/drive.log",
@@ -617,7 +609,7 @@ fn an_endpoint_that_cannot_be_used_is_a_startup_error_naming_it() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{err}");
     assert!(
-        err.contains("zenoh: cannot open the session") && err.contains(&ep),
+        err.contains("zenoh: cannot open the session") && err.contains(endpoint),
         "{err}"
     );
     assert!(!err.contains("panicked"), "{err}");
