@@ -5,7 +5,7 @@
 
 mod sim_common;
 
-use imuprep::sim::gait::SpanKind;
+use imuprep::sim::gait::{GaitPlan, SpanKind};
 use imuprep::sim::{Effect, Scenario, SimRecord, Simulator, Trajectory};
 use nalgebra::{Rotation3, Vector3};
 use sim_common::run;
@@ -18,6 +18,16 @@ fn gait(sets: &[(&str, &str)]) -> Scenario {
         .map(|(k, v)| (k.to_string(), v.to_string()))
         .collect();
     Scenario::from_toml_str_with(GAIT, &sets).unwrap()
+}
+
+/// The default walk at 1 kHz, seed 1: its plan and its records.
+fn walk_at_1_khz() -> (GaitPlan, Vec<SimRecord>) {
+    let scn = gait(&[("sensor.sample_rate_hz", "1000.0")]);
+    let sim = Simulator::new(&scn, 1).unwrap();
+    let Trajectory::Gait { plan, .. } = sim.trajectory() else {
+        panic!("gait")
+    };
+    (plan.clone(), run(&scn, 1))
 }
 
 /// Strapdown-integrate `signal(record)` (gyro rad/s, accel m/s²) over records `from..=to`,
@@ -52,13 +62,7 @@ fn strapdown(
 
 #[test]
 fn strapdown_integration_of_the_truth_reproduces_every_stride_and_the_turns() {
-    let scn = gait(&[("sensor.sample_rate_hz", "1000.0")]);
-    let sim = Simulator::new(&scn, 1).unwrap();
-    let Trajectory::Gait { plan, .. } = sim.trajectory() else {
-        panic!("gait")
-    };
-    let plan = plan.clone();
-    let recs = run(&scn, 1);
+    let (plan, recs) = walk_at_1_khz();
     let at = |t: f64| ((t * 1000.0).round() as usize).min(recs.len() - 1);
     let rigid = |r: &SimRecord| r.truth.true_signal;
     // With the impacts (real motion, in `road_vibration_*`): what the sensor feels.
@@ -121,13 +125,7 @@ fn strapdown_integration_of_the_truth_reproduces_every_stride_and_the_turns() {
 
 #[test]
 fn the_walk_has_the_numbers_the_docs_give() {
-    let scn = gait(&[("sensor.sample_rate_hz", "1000.0")]);
-    let sim = Simulator::new(&scn, 1).unwrap();
-    let Trajectory::Gait { plan, .. } = sim.trajectory() else {
-        panic!("gait")
-    };
-    let plan = plan.clone();
-    let recs = run(&scn, 1);
+    let (plan, recs) = walk_at_1_khz();
     let spans = plan.spans();
     let walking = |k: SpanKind| {
         spans
