@@ -60,19 +60,28 @@ enum Cmd {
         #[command(flatten)]
         proto: imuprep::frame::detect::ProtocolArgs,
     },
-    /// Convert a recording into a replay log: CSV (canonical or vendor layout, optionally .gz),
-    /// or UBX / MAVLink / ULog (with --protocol, or any file that is not .csv: detected).
+    /// Convert a recording into a replay log: a text table (CSV in a canonical or vendor layout;
+    /// semicolon, tab or whitespace separated, decimal commas, comment lines, no header with
+    /// --columns; optionally .gz), or UBX / MAVLink / ULog (with --protocol, or any binary file
+    /// that is not .csv: detected).
     Import {
-        /// Input recording: CSV (.csv, .csv.gz) or a protocol file.
+        /// Input recording: a text table (.csv, .csv.gz, or any text file whose lines split into
+        /// the same cells: .txt, .tsv, .dat, ...) or a protocol file.
         input: PathBuf,
         #[command(flatten)]
         proto: imuprep::frame::detect::ProtocolArgs,
         /// Output replay log (native).
         #[arg(short, long)]
         output: PathBuf,
-        /// Column mapping, repeatable: --col gx=gyro_x_dps (keys: t gx gy gz ax ay az temp).
+        /// Column mapping by header name, repeatable: --col gx=gyro_x_dps (keys: t gx gy gz ax
+        /// ay az temp).
         #[arg(long = "col")]
         cols: Vec<String>,
+        /// Columns by position, for a file without a header (or to ignore its header): each
+        /// column's key in order, `_` to skip one, later columns skipped: --columns
+        /// t,gx,gy,gz,ax,ay,az (keys as --col; units from the flags, else the data).
+        #[arg(long, value_name = "KEYS", conflicts_with = "cols")]
+        columns: Option<String>,
         /// Unit of the gyro columns (default: the column name's; else checked against the data:
         /// range, and the turning of gravity's direction; canonical names = rad/s when they cannot tell).
         #[arg(long, value_enum)]
@@ -418,6 +427,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             proto,
             output,
             cols,
+            columns,
             gyro_unit,
             accel_unit,
             time_unit,
@@ -437,6 +447,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 ..Default::default()
             };
             report::convert::parse_columns(&cols, &mut o)?;
+            report::convert::parse_positions(columns.as_deref(), &mut o)?;
             eprint!("{}", report::convert::import(&input, &output, &proto, &o)?);
             Ok(ExitCode::SUCCESS)
         }

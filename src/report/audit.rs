@@ -44,7 +44,7 @@ use serde::Serialize;
 use crate::analysis::allan::overlapping_adev;
 use crate::config::Config;
 use crate::frame::Descriptor;
-use crate::io::csv::{ImportOptions, read_csv, read_log};
+use crate::io::csv::{ImportOptions, Sniffed, read_csv, read_log, sniff_file};
 use crate::sample::{CHANNEL_NAMES, Sample, flags};
 
 mod inject;
@@ -177,7 +177,9 @@ impl AuditReport {
     }
 }
 
-/// Recordings under `dir`: `.log` (native), `.csv`, `.csv.gz`, `.ulg` (PX4), sorted by path.
+/// Recordings under `dir`, sorted by path: `.log` (native), `.csv`, `.csv.gz`, `.ulg` (PX4), and
+/// `.txt`, `.tsv`, `.dat` (or their `.gz`) whose content is a text table of numbers (a
+/// `NOTES.txt` is none, and is no recording).
 pub fn find_recordings(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -188,10 +190,13 @@ pub fn find_recordings(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
                 stack.push(p);
             } else {
                 let n = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
-                if [".log", ".csv", ".csv.gz", ".ulg"]
-                    .iter()
-                    .any(|e| n.ends_with(e))
-                {
+                let known = [".log", ".ulg"].iter().any(|e| n.ends_with(e))
+                    || super::convert::is_csv_name(&p);
+                let lower = n.to_ascii_lowercase();
+                let stem = lower.strip_suffix(".gz").unwrap_or(&lower);
+                let text = [".txt", ".tsv", ".dat"].iter().any(|e| stem.ends_with(e))
+                    && matches!(sniff_file(&p), Sniffed::Table(_));
+                if known || text {
                     out.push(p);
                 }
             }
@@ -201,7 +206,8 @@ pub fn find_recordings(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     Ok(out)
 }
 
-/// Read a recording as `imuprep import` (CSV) or `imuprep replay` (native log) would.
+/// Read a recording as `imuprep import` (a text table or a ULog) or `imuprep replay` (native
+/// log) would.
 pub fn load_recording(path: &Path) -> Result<(Descriptor, Vec<Sample>), String> {
     let name = path.to_string_lossy();
     if name.ends_with(".log") {

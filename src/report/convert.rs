@@ -28,6 +28,20 @@ pub fn parse_columns(cols: &[String], o: &mut ImportOptions) -> Result<()> {
     Ok(())
 }
 
+/// `.csv` or `.csv.gz`: read as a table whatever the content.
+pub fn is_csv_name(p: &Path) -> bool {
+    let n = p.to_string_lossy().to_ascii_lowercase();
+    n.ends_with(".csv") || n.ends_with(".csv.gz")
+}
+
+/// `--columns t,gx,gy,gz,ax,ay,az` → the importer's columns by position.
+pub fn parse_positions(spec: Option<&str>, o: &mut ImportOptions) -> Result<()> {
+    if let Some(spec) = spec {
+        o.positions = csvio::parse_positions(spec).map_err(anyhow::Error::msg)?;
+    }
+    Ok(())
+}
+
 /// What `import` wrote.
 #[derive(Debug, Clone, Serialize)]
 pub struct ImportReport {
@@ -42,7 +56,8 @@ pub struct ImportReport {
     pub sample_rate_hz: f64,
 }
 
-/// Convert `input` (CSV as `o` says, else any protocol the decoders read) into a native log.
+/// Convert `input` (a text table as `o` says, else any protocol the decoders read) into a
+/// native log.
 pub fn import(
     input: &Path,
     output: &Path,
@@ -52,12 +67,27 @@ pub fn import(
     if let Some(r) = o.time_from_index_hz {
         ensure!(r.is_finite() && r > 0.0, "--rate must be > 0 Hz");
     }
-    let is_csv = {
-        let n = input.to_string_lossy().to_ascii_lowercase();
-        n.ends_with(".csv") || n.ends_with(".csv.gz")
+    // A text table by its name (.csv, .csv.gz: read as one whatever its content, as always), or
+    // by its content (any other name: text with a consistent delimiter; a binary file goes to
+    // the protocol decoders, text that is no table is said to be so).
+    let table = if proto.protocol.is_some() {
+        None
+    } else {
+        match csvio::sniff_file(input) {
+            csvio::Sniffed::Table(f) => Some(f),
+            _ if is_csv_name(input) => Some(csvio::TableFormat::default()),
+            csvio::Sniffed::Text(why) => {
+                return Err(InputProblem(format!(
+                    "{}: text, but not a table of numbers: {why} (a table: one row per line, cells separated by commas, semicolons, tabs or spaces, an optional header line)",
+                    input.display()
+                ))
+                .into());
+            }
+            csvio::Sniffed::Binary => None,
+        }
     };
-    let (d, samples, decoded, timing) = if is_csv && proto.protocol.is_none() {
-        let (d, s, report) = csvio::read_csv_report(input, o)?;
+    let (d, samples, decoded, timing) = if let Some(fmt) = table {
+        let (d, s, report) = csvio::read_table_report(input, o, &fmt)?;
         if s.is_empty() {
             return Err(InputProblem(format!(
                 "{}: no data rows after the header: nothing to import",

@@ -64,6 +64,11 @@ impl TimeUnit {
 pub struct ImportOptions {
     /// Column names for t, gx, gy, gz, ax, ay, az, temp (in that order); `None` = detect.
     pub columns: [Option<String>; 8],
+    /// The columns by position (`--columns t,gx,gy,gz,ax,ay,az`): for each column of the file in
+    /// order, the key it holds (0..8 as in `columns`) or `None` (`_`, skipped); columns past the
+    /// list are skipped too. Empty: the header names them. A header line, if the file has one,
+    /// is then skipped and its names not used.
+    pub positions: Vec<Option<usize>>,
     pub gyro_unit: Option<GyroUnit>,
     pub accel_unit: Option<AccelUnit>,
     pub time_unit: Option<TimeUnit>,
@@ -89,7 +94,16 @@ pub enum CsvError {
         msg: String,
         header: String,
     },
-    #[error("{path}:{line}:{col}: cannot read {cell:?} as a number (column {name})")]
+    #[error(
+        "{path}:{line}: no header: the first row is all numbers ({row}); name the columns by position with --columns, e.g. --columns {example} (keys t gx gy gz ax ay az temp, `_` skips a column)"
+    )]
+    Headerless {
+        path: PathBuf,
+        line: usize,
+        row: String,
+        example: String,
+    },
+    #[error("{path}:{line}:{col}: cannot read {cell:?} as a number ({})", column_words(.name))]
     Cell {
         path: PathBuf,
         line: usize,
@@ -105,10 +119,58 @@ pub enum CsvError {
     },
 }
 
-const CANON: [&str; 8] = ["t", "gx", "gy", "gz", "ax", "ay", "az", "temp"];
+/// `column NAME`, or the name alone when it says so already (`column 3`, a column named by
+/// position).
+fn column_words(name: &str) -> String {
+    if name.starts_with("column ") {
+        name.to_string()
+    } else {
+        format!("column {name}")
+    }
+}
+
+/// The keys of `--col` and `--columns`, in the order of [`ImportOptions::columns`].
+pub const CANON: [&str; 8] = ["t", "gx", "gy", "gz", "ax", "ay", "az", "temp"];
 
 pub mod columns;
+pub mod sniff;
 pub mod units;
+
+pub use sniff::{Delimiter, Sniffed, TableFormat, sniff_file};
+
+/// `--columns t,gx,gy,gz,ax,ay,az`: the key of each column by position (`_` skips one); each key
+/// at most once.
+pub fn parse_positions(spec: &str) -> Result<Vec<Option<usize>>, String> {
+    let mut out = Vec::new();
+    for (i, k) in spec.split(',').map(str::trim).enumerate() {
+        if k == "_" {
+            out.push(None);
+            continue;
+        }
+        let key = CANON.iter().position(|c| *c == k).ok_or_else(|| {
+            format!(
+                "--columns {spec:?}: {k:?} (column {}) is not one of t gx gy gz ax ay az temp or _",
+                i + 1
+            )
+        })?;
+        if out.contains(&Some(key)) {
+            return Err(format!("--columns {spec:?}: {k} named twice"));
+        }
+        out.push(Some(key));
+    }
+    if out.iter().all(Option::is_none) {
+        return Err(format!("--columns {spec:?}: names no column"));
+    }
+    Ok(out)
+}
+
+/// A `--columns` example for a row of `n` cells: t, gx..az in order, `_` for the rest.
+fn positions_example(n: usize) -> String {
+    (0..n.max(2))
+        .map(|i| *CANON[..7].get(i).unwrap_or(&"_"))
+        .collect::<Vec<_>>()
+        .join(",")
+}
 
 use columns::NameUnit;
 
@@ -135,16 +197,22 @@ fn detect(header: &[String], o: &ImportOptions, path: &Path) -> Result<Layout, C
     let absent = (0..6)
         .filter(|c| idx[c + 1].is_none())
         .fold(0u8, |m, c| m | 1 << c);
+    let by_position = !o.positions.is_empty();
     if absent == ALL_CHANNELS {
-        return Err(err(
+        return Err(err(if by_position {
+            "no sensor column: --columns names none of gx, gy, gz, ax, ay, az".into()
+        } else {
             "no sensor column: none of gx, gy, gz, ax, ay, az found (name them so, or pass --col gx=NAME ...)"
-                .into(),
-        ));
+                .into()
+        }));
     }
     if idx[0].is_none() && o.time_from_index_hz.is_none() {
-        return Err(err(
-            "missing time column (name it \"t\", or pass --col t=NAME, or --rate HZ to time by index)".into(),
-        ));
+        return Err(err(if by_position {
+            "missing time column (name one t in --columns, or pass --rate HZ to time by index)"
+                .into()
+        } else {
+            "missing time column (name it \"t\", or pass --col t=NAME, or --rate HZ to time by index)".into()
+        }));
     }
     Ok(Layout {
         gyro: columns::gyro_named(header, &idx),
@@ -188,6 +256,9 @@ pub struct ColumnUse {
 /// What an import found besides the samples.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct ImportReport {
+    /// How the text table was read when it is not a comma-separated file with its header on
+    /// line 1: the delimiter, decimal commas, comment lines skipped, no header.
+    pub table: Option<TableFormat>,
     /// Rows read (= samples).
     pub rows: u64,
     /// The columns read (absent channels and, with `--rate`, the time column left out).
@@ -213,6 +284,9 @@ pub struct ImportReport {
 
 impl std::fmt::Display for ImportReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if let Some(t) = &self.table {
+            writeln!(f, "table: {t}")?;
+        }
         write!(
             f,
             "{}; {}",
@@ -282,23 +356,59 @@ pub fn read_csv(path: &Path, o: &ImportOptions) -> Result<(Descriptor, Vec<Sampl
 /// numbers and time faults (gaps, duplicate time stamps, steps backwards) are derived from the
 /// time stamps and the median interval ([`crate::io::timing`]) and flagged on the samples;
 /// with `--rate` (time from the row index) the sequence is the row index.
+///
+/// Any text table: its delimiter, decimal commas, comment preamble and header are sniffed from
+/// its first lines ([`sniff`]); a file that does not sniff as a table is read as a
+/// comma-separated file with its header on line 1 (and fails as such).
 pub fn read_csv_report(
     path: &Path,
     o: &ImportOptions,
 ) -> Result<(Descriptor, Vec<Sample>, ImportReport), CsvError> {
+    let fmt = match sniff_file(path) {
+        Sniffed::Table(f) => f,
+        Sniffed::Text(_) | Sniffed::Binary => TableFormat::default(),
+    };
+    read_table_report(path, o, &fmt)
+}
+
+/// [`read_csv_report`] with the table's format given.
+pub fn read_table_report(
+    path: &Path,
+    o: &ImportOptions,
+    fmt: &TableFormat,
+) -> Result<(Descriptor, Vec<Sample>, ImportReport), CsvError> {
+    let io_err = |err| CsvError::Io {
+        path: path.into(),
+        err,
+    };
+    // The preamble (comment and blank lines) is skipped here, so the `csv` crate's line numbers
+    // are `skip` short of the file's.
+    let skip = fmt.skip_lines;
+    let mut text = open_text(path)?;
+    let mut line = Vec::new();
+    for _ in 0..skip {
+        line.clear();
+        text.read_until(b'\n', &mut line).map_err(io_err)?;
+    }
+    let text: Box<dyn Read> = if fmt.delimiter == Delimiter::Whitespace {
+        Box::new(sniff::WsReader::new(text))
+    } else {
+        Box::new(text)
+    };
     // RFC 4180 records (quoted cells, CRLF) by the `csv` crate; rows may have any number of
-    // cells (a short row is reported below with the column it lacks).
+    // cells here (a row whose count differs from the header's is reported below, at its line).
     let mut rd = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
-        .from_reader(open_text(path)?);
+        .delimiter(fmt.delimiter.byte())
+        .from_reader(text);
     // A read error inside a .gz is the compressed stream ending early or corrupt: said as such,
     // with the line it stopped at (it once said only "incomplete deflate stream").
     let gz = path.extension().is_some_and(|e| e == "gz");
     let io = |err: csv::Error, line: u64| match err.kind() {
         csv::ErrorKind::Io(_) if gz => CsvError::Row {
             path: path.into(),
-            line: line as usize,
+            line: line as usize + skip,
             msg: format!(
                 "{err}: the compressed file ends early or is corrupt here (a truncated .gz? \
                  `gzip -t` checks it); nothing was imported"
@@ -316,7 +426,7 @@ pub fn read_csv_report(
     {
         return Err(CsvError::Empty { path: path.into() });
     }
-    let header: Vec<String> = rec
+    let first: Vec<String> = rec
         .iter()
         .enumerate()
         .map(|(i, s)| {
@@ -327,7 +437,57 @@ pub fn read_csv_report(
             };
             s.trim().to_string()
         })
+        .skip(usize::from(fmt.header && fmt.marker_cell))
         .collect();
+    // The header, or (columns by position) names for the columns; the first data row when the
+    // file has no header.
+    let mut named = o.clone();
+    let header: Vec<String> = if o.positions.is_empty() {
+        if !fmt.header {
+            let (line, row) = fmt
+                .first_row
+                .clone()
+                .unwrap_or_else(|| (skip + 1, first.join(",")));
+            return Err(CsvError::Headerless {
+                path: path.into(),
+                line,
+                row,
+                example: positions_example(first.len()),
+            });
+        }
+        first
+    } else {
+        let n = first.len();
+        if let Some(k) = o.columns.iter().position(Option::is_some) {
+            return Err(CsvError::Columns {
+                path: path.into(),
+                msg: format!(
+                    "--columns names the columns by position, --col {}=NAME by header name: give one of them",
+                    CANON[k]
+                ),
+                header: first.join(","),
+            });
+        }
+        if o.positions.len() > n {
+            return Err(CsvError::Columns {
+                path: path.into(),
+                msg: format!(
+                    "--columns names {} columns, the {} has {}",
+                    o.positions.len(),
+                    if fmt.header { "header" } else { "first row" },
+                    n
+                ),
+                header: first.join(","),
+            });
+        }
+        for (p, k) in o.positions.iter().enumerate() {
+            if let Some(k) = k {
+                named.columns[*k] = Some(format!("column {}", p + 1));
+            }
+        }
+        (1..=n).map(|p| format!("column {p}")).collect()
+    };
+    let o = &named;
     let lay = detect(&header, o, path)?;
     let mut out = Vec::new();
     // The time column's numbers and each row's line (for errors), in the file's unit.
@@ -338,13 +498,41 @@ pub fn read_csv_report(
     let mut empty = [0usize; 6];
     let mut first_empty: [Option<usize>; 6] = [None; 6];
     let mut holey_rows: Vec<(usize, u8)> = Vec::new();
-    while rd
-        .read_record(&mut rec)
-        .map_err(|e| io(e, rd.position().line()))?
-    {
-        let lineno = rec.position().map_or(0, |p| p.line() as usize);
+    // A row must have the header's cells (trailing empty ones aside): a short row, or one with
+    // cells past the header, is a line cut short, another delimiter or decimal commas in a
+    // comma-separated file — an error at its line, never a row read askew or dropped.
+    let want = header
+        .iter()
+        .rposition(|h| !h.is_empty())
+        .map_or(0, |p| p + 1);
+    let against = if fmt.header { "header" } else { "first row" };
+    // Headerless with --columns: the first record read is the first data row.
+    let mut have_row = !fmt.header;
+    loop {
+        if have_row {
+            have_row = false;
+        } else if !rd
+            .read_record(&mut rec)
+            .map_err(|e| io(e, rd.position().line()))?
+        {
+            break;
+        }
+        let lineno = rec.position().map_or(0, |p| p.line() as usize) + skip;
         if rec.len() == 1 && rec[0].trim().is_empty() {
             continue;
+        }
+        let beyond =
+            rec.len() > header.len() && rec.iter().skip(header.len()).any(|c| !c.trim().is_empty());
+        if rec.len() < want || beyond {
+            return Err(CsvError::Row {
+                path: path.into(),
+                line: lineno,
+                msg: format!(
+                    "{} where the {against} has {} (a line cut short, another delimiter, or decimal commas in a comma-separated file?); nothing was imported",
+                    crate::text::count(rec.len() as u64, "cell", "cells"),
+                    want
+                ),
+            });
         }
         let cells = &rec;
         let get = |k: usize| -> Result<Option<f64>, CsvError> {
@@ -367,13 +555,21 @@ pub fn read_csv_report(
                 // after the last row (a column empty in every row is an absent channel).
                 return Ok(None);
             }
-            cell.parse::<f64>().map(Some).map_err(|_| CsvError::Cell {
-                path: path.into(),
-                line: lineno,
-                col: p + 1,
-                cell: cell.to_string(),
-                name: header[p].clone(),
-            })
+            // A byte-order mark before a headerless file's first cell.
+            let cell = if p == 0 {
+                cell.trim_start_matches('\u{feff}')
+            } else {
+                cell
+            };
+            sniff::parse_number(cell, fmt.decimal_comma)
+                .map(Some)
+                .ok_or_else(|| CsvError::Cell {
+                    path: path.into(),
+                    line: lineno,
+                    col: p + 1,
+                    cell: cell.to_string(),
+                    name: header[p].clone(),
+                })
         };
         let mut s = Sample {
             seq: out.len() as u32,
@@ -455,6 +651,7 @@ pub fn read_csv_report(
         s.absent = absent;
     }
     let mut report = ImportReport {
+        table: (!fmt.is_plain()).then(|| fmt.clone()),
         columns: (0..8)
             .filter_map(|k| {
                 let p = lay.idx[k]?;
