@@ -492,6 +492,39 @@ fn ragged_and_mixed_lines_are_an_error_at_their_line() {
 }
 
 #[test]
+fn a_last_row_cut_short_is_left_out_and_said_the_rows_before_it_imported() {
+    // A logger stopped mid-write: the file's last line holds 3 of its 7 cells (blank lines
+    // after it change nothing). Every whole row is imported, the cut one is named in a warning;
+    // the same short row anywhere else stays an error (ragged_and_mixed_lines_… above).
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(9);
+    let head = HEADER.join(",");
+    let mut text = table(&[&head], &rows, ",", str::to_string);
+    let whole = text.clone();
+    text += "100.5,0.01,0.02\n\n  \n";
+    let p = write(dir.path(), "cut_last.csv", &text);
+    let (rate, s, rep) = import(&p, &ImportOptions::default());
+    assert_truth("cut last", rate, &s, &rows);
+    let line = whole.lines().count() + 1;
+    assert!(
+        rep.warnings.iter().any(|w| w.contains(&format!(
+            "line {line}, the file's last, has 3 cells where the header has 7"
+        ))),
+        "{:?}",
+        rep.warnings
+    );
+    // The CLI says it and writes the log.
+    let log = dir.path().join("cut_last.log");
+    let out = cli(&p, &log, &[]);
+    let e = stderr(&out);
+    assert!(out.status.success() && log.exists(), "{e}");
+    assert!(
+        e.contains("WARNING: line") && e.contains("a write cut off"),
+        "{e}"
+    );
+}
+
+#[test]
 fn prose_is_no_table_and_says_so() {
     let dir = tempfile::tempdir().unwrap();
     let p = write(

@@ -508,6 +508,8 @@ pub fn read_table_report(
     let against = if fmt.header { "header" } else { "first row" };
     // Headerless with --columns: the first record read is the first data row.
     let mut have_row = !fmt.header;
+    // The file's last row when it was cut short: (line, cells).
+    let mut cut_last: Option<(usize, usize)> = None;
     loop {
         if have_row {
             have_row = false;
@@ -523,6 +525,35 @@ pub fn read_table_report(
         }
         let beyond =
             rec.len() > header.len() && rec.iter().skip(header.len()).any(|c| !c.trim().is_empty());
+        if rec.len() < want && !beyond && cut_last.is_none() {
+            // A short row that is the file's last is a write cut off (a logger stopped, a copy
+            // interrupted): left out, said, counted; the rows before it are whole. Anywhere
+            // else a short row is an error (below).
+            let short = (lineno, rec.len());
+            let mut more = false;
+            while rd
+                .read_record(&mut rec)
+                .map_err(|e| io(e, rd.position().line()))?
+            {
+                if !(rec.len() == 1 && rec[0].trim().is_empty()) {
+                    more = true;
+                    break;
+                }
+            }
+            if !more {
+                cut_last = Some(short);
+                break;
+            }
+            return Err(CsvError::Row {
+                path: path.into(),
+                line: short.0,
+                msg: format!(
+                    "{} where the {against} has {} (a line cut short, another delimiter, or decimal commas in a comma-separated file?); nothing was imported",
+                    crate::text::count(short.1 as u64, "cell", "cells"),
+                    want
+                ),
+            });
+        }
         if rec.len() < want || beyond {
             return Err(CsvError::Row {
                 path: path.into(),
@@ -664,7 +695,16 @@ pub fn read_table_report(
             })
             .collect(),
         units: units.0,
-        warnings: units.1,
+        warnings: units
+            .1
+            .into_iter()
+            .chain(cut_last.map(|(line, cells)| {
+                format!(
+                    "line {line}, the file's last, has {} where the {against} has {want}: a write cut off, left out (the rows before it are imported)",
+                    crate::text::count(cells as u64, "cell", "cells")
+                )
+            }))
+            .collect(),
         rows: out.len() as u64,
         absent: channel_names_of(absent)
             .into_iter()
