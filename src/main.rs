@@ -390,7 +390,8 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 first: seed,
                 count: seeds,
             };
-            audit(dir, seeds, load_config(&config)?, json)
+            let cfg = load_config(&config)?;
+            audit(dir, seeds, cfg, config, json)
         }
         Cmd::Run {
             config,
@@ -602,10 +603,13 @@ fn audit(
     dir: PathBuf,
     seeds: report::audit::Seeds,
     cfg: Config,
+    config_path: Option<PathBuf>,
     json: Option<PathBuf>,
 ) -> Result<ExitCode> {
-    let report = report::audit::audit_dir(&dir, seeds, &cfg)
+    let mut report = report::audit::audit_dir(&dir, seeds, &cfg)
         .with_context(|| format!("cannot read {}", dir.display()))?;
+    // The header and the JSON say whose pipeline was audited.
+    report.config = config_path;
     if report.recordings.is_empty() {
         // Nothing audited is an input problem (status 3), not a missed target (status 1); say
         // what was looked at and why each file was left out.

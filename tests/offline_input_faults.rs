@@ -425,3 +425,55 @@ fn calibrate_with_a_missing_gnss_file_fails_naming_it() {
     );
     assert!(!out.join("report.txt").exists());
 }
+
+/// `audit --config C` once printed "imuprep audit of DIR (embedded default config)" over the
+/// results of C's pipeline, and its JSON did not say which config ran. Both now name C; without
+/// `--config` the header still says "embedded default config" and the JSON's `config` is null.
+#[test]
+fn audit_with_a_config_names_it_in_the_header_and_the_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let recs = dir.path().join("recs");
+    std::fs::create_dir(&recs).unwrap();
+    std::fs::copy("replay/drive.log", recs.join("drive.log")).unwrap();
+    let cfg = write(
+        &dir.path().join("causal.toml"),
+        b"[gross_error.settings]\nlookahead_samples = 0\n",
+    );
+    let json = dir.path().join("a.json");
+    let recs = recs.to_str().unwrap();
+    let (code, out, err) = run_out(&[
+        "audit",
+        recs,
+        "--seeds",
+        "1",
+        "--config",
+        &cfg,
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(code == 0 || code == 1, "{err}");
+    let head = out.lines().next().unwrap_or("");
+    assert_eq!(
+        head,
+        format!("imuprep audit of {recs} (config {cfg} over the embedded default)")
+    );
+    let j: serde_json::Value = common::read_json(&json);
+    assert_eq!(j["config"], cfg.as_str(), "{j}");
+    let (code, out, err) = run_out(&[
+        "audit",
+        recs,
+        "--seeds",
+        "1",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(code == 0 || code == 1, "{err}");
+    assert!(
+        out.starts_with(&format!(
+            "imuprep audit of {recs} (embedded default config)\n"
+        )),
+        "{out}"
+    );
+    let j: serde_json::Value = common::read_json(&json);
+    assert!(j["config"].is_null(), "{j}");
+}

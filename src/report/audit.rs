@@ -161,6 +161,10 @@ pub struct Skipped {
 #[derive(Debug, Clone, Serialize)]
 pub struct AuditReport {
     pub dir: PathBuf,
+    /// The config file whose pipeline was audited (`--config`, over the embedded default);
+    /// `None`: the embedded default alone. The caller sets it: [`audit_dir`] takes the parsed
+    /// config only.
+    pub config: Option<PathBuf>,
     pub recordings: Vec<RecordingAudit>,
     pub skipped: Vec<Skipped>,
 }
@@ -664,6 +668,7 @@ pub fn audit_recording(
 pub fn audit_dir(dir: &Path, seeds: Seeds, cfg: &Config) -> std::io::Result<AuditReport> {
     let mut report = AuditReport {
         dir: dir.to_path_buf(),
+        config: None,
         recordings: Vec::new(),
         skipped: Vec::new(),
     };
@@ -685,11 +690,11 @@ pub fn audit_dir(dir: &Path, seeds: Seeds, cfg: &Config) -> std::io::Result<Audi
 
 impl std::fmt::Display for AuditReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        writeln!(
-            f,
-            "imuprep audit of {} (embedded default config)",
-            self.dir.display()
-        )?;
+        let config = match &self.config {
+            None => "embedded default config".to_string(),
+            Some(p) => format!("config {} over the embedded default", p.display()),
+        };
+        writeln!(f, "imuprep audit of {} ({config})", self.dir.display())?;
         for r in &self.recordings {
             writeln!(
                 f,
