@@ -699,3 +699,38 @@ fn a_signal_while_the_sink_waits_for_a_subscriber_stops_the_run_with_its_summary
         "{summary}"
     );
 }
+
+/// The config check of an endpoint's `?…`/`#…` options agrees with Zenoh's own parser: what
+/// `[zenoh]` accepts, Zenoh accepts, and what Zenoh refuses is a config error at its key, not a
+/// raw error when the session opens.
+#[test]
+fn the_endpoint_check_agrees_with_zenohs_parser_on_options() {
+    use std::str::FromStr;
+    for ep in [
+        "tcp/127.0.0.1:7447",
+        "tcp/127.0.0.1:7447#",
+        "tcp/127.0.0.1:7447?",
+        "tcp/127.0.0.1:7447#=1",
+        "tcp/127.0.0.1:7447#;",
+        "tcp/127.0.0.1:7447#a",
+        "tcp/127.0.0.1:7447#a=",
+        "tcp/127.0.0.1:7447#a=1;;b=2",
+        "tcp/127.0.0.1:7447#a=1#b",
+        "tcp/127.0.0.1:7447?a=1#",
+        "tcp/127.0.0.1:7447?#a=1",
+        "tcp/127.0.0.1:7447?a=1#b=2",
+        "tcp/127.0.0.1:7447?a?b=1",
+        "tcp/127.0.0.1:7447#a=1?b=2",
+        "tcp/127.0.0.1:7447#so_sndbuf=65536",
+    ] {
+        let zenoh_ok = zenoh::config::EndPoint::from_str(ep).is_ok();
+        let text = format!("[source]\nkind = \"stdin\"\n[zenoh]\nconnect = [{ep:?}]\n");
+        let ours = imuprep::config::Config::from_toml_str(&text, Path::new("."));
+        assert_eq!(
+            ours.is_ok(),
+            zenoh_ok,
+            "{ep}: imuprep {:?}",
+            ours.err().map(|e| e.to_string())
+        );
+    }
+}
