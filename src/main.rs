@@ -645,10 +645,11 @@ fn daemon(cfg: Config, summary_json: Option<PathBuf>) -> Result<ExitCode> {
     // An input that ended by itself (a replayed log, stdin) with nothing or mostly garbage in
     // it is a failed run, said loudly; a live daemon stopped by a signal only warns.
     if let Some(problem) = health.input_problem() {
-        eprintln!("imuprep: ERROR: {problem}");
         if health.ended_by == "end of input" {
+            eprintln!("imuprep: ERROR: {problem}");
             return Ok(ExitCode::from(report::INPUT_PROBLEM_EXIT));
         }
+        eprintln!("imuprep: WARNING: {problem}");
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -477,3 +477,48 @@ fn audit_with_a_config_names_it_in_the_header_and_the_json() {
     let j: serde_json::Value = common::read_json(&json);
     assert!(j["config"].is_null(), "{j}");
 }
+
+/// A live run stopped by SIGINT before any sample came (a silent stdin, a sensor never
+/// connected) exits 0 by design — "a live daemon stopped by a signal only warns" — yet printed
+/// `imuprep: ERROR: no samples decoded …`, an error line with a success status. It is now a
+/// `WARNING:` line; a replay that ends by itself with nothing in it keeps `ERROR:` and status 3.
+#[test]
+fn a_live_run_stopped_by_a_signal_before_any_sample_warns_not_errors() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = write(
+        &dir.path().join("stdin.toml"),
+        b"[source]\nkind = \"stdin\"\n[health]\ninterval_s = 0.1\n",
+    );
+    let mut child = std::process::Command::new(common::bin())
+        .args(["run", "--config", &cfg])
+        .stdin(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let _stdin = child.stdin.take();
+    let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+    // The run loop is up (and its signal handler) once it reports health.
+    let mut err = String::new();
+    for line in lines.by_ref() {
+        let line = line.unwrap();
+        err.push_str(&line);
+        err.push('\n');
+        if line.contains("INFO health:") {
+            break;
+        }
+    }
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    for line in lines {
+        err.push_str(&line.unwrap());
+        err.push('\n');
+    }
+    let status = child.wait().unwrap();
+    assert!(status.success(), "{err}");
+    assert!(err.contains("imuprep summary (signal SIGINT"), "{err}");
+    assert!(
+        err.contains("imuprep: WARNING: no samples decoded from 0 bytes of input"),
+        "{err}"
+    );
+    assert!(!err.contains("ERROR"), "{err}");
+}
