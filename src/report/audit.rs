@@ -265,6 +265,19 @@ fn percentile(v: &mut [f64], p: f64) -> f64 {
     v[((v.len() - 1) as f64 * p).round() as usize]
 }
 
+/// How unevenly a record's gyro roughness is spread: the 99th over the 1st percentile of the
+/// three-axis gyro sd of its 1-s windows, the statistic [`classify`] calls static below 2.
+/// `None` when it cannot tell: no gyro, or fewer than 10 whole windows.
+pub fn gyro_roughness_ratio(samples: &[Sample], rate_hz: f64) -> Option<f64> {
+    let mut sd = window_gyro_sd(samples, rate_hz);
+    if sd.len() < 10 {
+        return None;
+    }
+    let lo = percentile(&mut sd, 0.01);
+    let hi = percentile(&mut sd, 0.99);
+    Some(if hi == 0.0 { 1.0 } else { hi / lo })
+}
+
 /// Static or moving (module docs).
 pub fn classify(samples: &[Sample], rate_hz: f64) -> Class {
     let mut sd = window_gyro_sd(samples, rate_hz);
