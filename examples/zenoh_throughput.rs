@@ -106,6 +106,7 @@ async fn main() {
     let publisher = ZenohSession::open(&pub_cfg).await.unwrap();
     let ctx = SinkContext {
         zenoh: Some(publisher.clone()),
+        stop: None,
     };
     let dir = tempfile::tempdir().unwrap();
     let file = Sink::File {

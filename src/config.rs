@@ -271,8 +271,33 @@ fn check_zenoh_endpoint(ep: &str) -> Result<(), String> {
             ZENOH_TRANSPORTS.join(", ")
         ));
     }
-    // Zenoh's own suffixes (`#iface=…`, `?…`) are its business; the address must have a port.
-    let addr = addr.split(['#', '?']).next().unwrap_or(addr);
+    // Zenoh's own suffixes (`?metadata`, then `#config`) are its business, but their form is
+    // checked as Zenoh's parser checks it (`EndPoint::try_from`): each one present is a
+    // non-empty `KEY=VALUE;…` list with no empty key, `?` before `#`. The address must have a
+    // port.
+    let (addr, suffix) = match addr.find(['#', '?']) {
+        Some(i) => (&addr[..i], &addr[i..]),
+        None => (addr, ""),
+    };
+    let (meta, conf) = match suffix.find('#') {
+        Some(i) => (&suffix[..i], Some(&suffix[i + 1..])),
+        None => (suffix, None),
+    };
+    let meta = meta.strip_prefix('?');
+    let well_formed = |p: &str| {
+        let mut items = p.split(';').filter(|i| !i.is_empty()).peekable();
+        items.peek().is_some() && items.all(|i| !i.split('=').next().unwrap_or("").is_empty())
+    };
+    for (part, sep) in [(meta, '?'), (conf, '#')] {
+        match part {
+            Some(p) if (sep == '#' && p.contains('?')) || !well_formed(p) => {
+                return Err(format!(
+                    "{ep:?}: Zenoh's options after '{sep}' must be KEY=VALUE[;KEY=VALUE…] (an empty part, an empty key, or '?' after '#', is refused by Zenoh)"
+                ));
+            }
+            _ => {}
+        }
+    }
     match addr.rsplit_once(':') {
         Some((host, port)) if !host.is_empty() && port.parse::<u16>().is_ok() => Ok(()),
         _ => Err(format!(

@@ -399,7 +399,8 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 first: seed,
                 count: seeds,
             };
-            audit(dir, seeds, load_config(&config)?, json)
+            let cfg = load_config(&config)?;
+            audit(dir, seeds, cfg, config, json)
         }
         Cmd::Run {
             config,
@@ -613,10 +614,13 @@ fn audit(
     dir: PathBuf,
     seeds: report::audit::Seeds,
     cfg: Config,
+    config_path: Option<PathBuf>,
     json: Option<PathBuf>,
 ) -> Result<ExitCode> {
-    let report = report::audit::audit_dir(&dir, seeds, &cfg)
+    let mut report = report::audit::audit_dir(&dir, seeds, &cfg)
         .with_context(|| format!("cannot read {}", dir.display()))?;
+    // The header and the JSON say whose pipeline was audited.
+    report.config = config_path;
     if report.recordings.is_empty() {
         // Nothing audited is an input problem (status 3), not a missed target (status 1); say
         // what was looked at and why each file was left out.
@@ -652,10 +656,11 @@ fn daemon(cfg: Config, summary_json: Option<PathBuf>) -> Result<ExitCode> {
     // An input that ended by itself (a replayed log, stdin) with nothing or mostly garbage in
     // it is a failed run, said loudly; a live daemon stopped by a signal only warns.
     if let Some(problem) = health.input_problem() {
-        eprintln!("imuprep: ERROR: {problem}");
         if health.ended_by == "end of input" {
+            eprintln!("imuprep: ERROR: {problem}");
             return Ok(ExitCode::from(report::INPUT_PROBLEM_EXIT));
         }
+        eprintln!("imuprep: WARNING: {problem}");
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -394,3 +394,54 @@ fn a_channel_named_twice_is_analysed_once() {
     .unwrap();
     replay_summary("replay/static_bench.log", &cfg);
 }
+
+/// `allan` and `diagnose` assume a record at rest. On a walk (the simulated foot-mounted IMU)
+/// they once said nothing: `allan` wrote a gyro noise density 24× the sensor's into imu.yaml,
+/// and `diagnose` kept the stride (0.92 Hz, 2.4 rad/s on gy) as a "vibration line" and the
+/// walk's accelerations as "g-sensitivity" in a bias.toml that, as `[bias] model`, multiplied
+/// the replay's gyro error by 50–600. Both now warn, in the text, the JSON and the model files;
+/// a record at rest gets no warning.
+#[test]
+fn allan_and_diagnose_on_a_record_not_at_rest_warn_in_every_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let log = d.join("walk.log");
+    let log = log.to_str().unwrap();
+    run(&[
+        "simulate",
+        "replay/gait.toml",
+        "-o",
+        log,
+        "--set",
+        "sensor.sample_rate_hz=100.0",
+        "--set",
+        "motion.bouts=10",
+    ]);
+    let (a, g) = (d.join("a"), d.join("g"));
+    let out = run(&["allan", log, "--out-dir", a.to_str().unwrap()]);
+    let warn = "WARNING: the record is not at rest";
+    assert!(out.contains(warn), "{out}");
+    for f in ["report.txt", "imu.yaml", "gnss_imu_config.txt", "bias.toml"] {
+        let t = std::fs::read_to_string(a.join(f)).unwrap();
+        assert!(t.contains(warn), "{f}: {t}");
+    }
+    let j: serde_json::Value = common::read_json(a.join("report.json"));
+    assert_eq!(j["warnings"].as_array().map(Vec::len), Some(1), "{j}");
+    let out = run(&["diagnose", log, "--out-dir", g.to_str().unwrap()]);
+    assert!(out.contains(warn), "{out}");
+    for f in ["report.txt", "bias.toml"] {
+        let t = std::fs::read_to_string(g.join(f)).unwrap();
+        assert!(t.contains(warn), "{f}: {t}");
+    }
+    let j: serde_json::Value = common::read_json(g.join("report.json"));
+    assert_eq!(j["warnings"].as_array().map(Vec::len), Some(1), "{j}");
+    // The bundled static bench is at rest.
+    let s = d.join("s");
+    let out = run(&[
+        "allan",
+        "replay/static_bench.log",
+        "--out-dir",
+        s.to_str().unwrap(),
+    ]);
+    assert!(!out.contains("WARNING"), "{out}");
+}

@@ -469,3 +469,39 @@ scouting = false
     assert!(e.contains("zenoh.listen: a client does not listen"), "{e}");
     assert!(e.contains("zenoh.connect: a client needs a router"), "{e}");
 }
+
+/// An endpoint's `?metadata` or `#config` part that Zenoh's parser refuses (`tcp/…:7447#`, an
+/// empty key, `?` after `#`) once passed the config check and failed at session open with
+/// Zenoh's raw error (`zenoh config listen/endpoints = [...]: Json5Err(Message { msg: ... })`),
+/// although a malformed endpoint is meant to be a config error at its key. Well-formed options
+/// still pass through to Zenoh.
+#[test]
+fn zenoh_endpoint_options_zenoh_refuses_are_config_errors_at_their_keys() {
+    let bad = [
+        "tcp/127.0.0.1:7447#",
+        "tcp/127.0.0.1:7447?",
+        "tcp/127.0.0.1:7447#=1",
+        "tcp/127.0.0.1:7447#;",
+        "tcp/127.0.0.1:7447?a=1#",
+        "tcp/127.0.0.1:7447#a=1?b=2",
+    ];
+    let good = [
+        "tcp/127.0.0.1:7447#so_sndbuf=65536",
+        "tcp/127.0.0.1:7447?prio=1-7#iface=lo",
+        "udp/127.0.0.1:7447#rel=0;mtu=1400",
+    ];
+    let list = |v: &[&str]| serde_json::to_string(v).unwrap();
+    let text = format!(
+        "[source]\nkind = \"stdin\"\n[zenoh]\nconnect = {}\nlisten = {}\n",
+        list(&bad),
+        list(&good)
+    );
+    let e = Config::from_toml_str(&text, Path::new("."))
+        .unwrap_err()
+        .to_string();
+    for (i, ep) in bad.iter().enumerate() {
+        let want = format!("zenoh.connect[{i}]: {ep:?}: Zenoh's options after");
+        assert!(e.contains(&want), "missing {want:?} in:\n{e}");
+    }
+    assert!(!e.contains("zenoh.listen"), "{e}");
+}

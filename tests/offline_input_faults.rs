@@ -425,3 +425,100 @@ fn calibrate_with_a_missing_gnss_file_fails_naming_it() {
     );
     assert!(!out.join("report.txt").exists());
 }
+
+/// `audit --config C` once printed "imuprep audit of DIR (embedded default config)" over the
+/// results of C's pipeline, and its JSON did not say which config ran. Both now name C; without
+/// `--config` the header still says "embedded default config" and the JSON's `config` is null.
+#[test]
+fn audit_with_a_config_names_it_in_the_header_and_the_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let recs = dir.path().join("recs");
+    std::fs::create_dir(&recs).unwrap();
+    std::fs::copy("replay/drive.log", recs.join("drive.log")).unwrap();
+    let cfg = write(
+        &dir.path().join("causal.toml"),
+        b"[gross_error.settings]\nlookahead_samples = 0\n",
+    );
+    let json = dir.path().join("a.json");
+    let recs = recs.to_str().unwrap();
+    let (code, out, err) = run_out(&[
+        "audit",
+        recs,
+        "--seeds",
+        "1",
+        "--config",
+        &cfg,
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(code == 0 || code == 1, "{err}");
+    let head = out.lines().next().unwrap_or("");
+    assert_eq!(
+        head,
+        format!("imuprep audit of {recs} (config {cfg} over the embedded default)")
+    );
+    let j: serde_json::Value = common::read_json(&json);
+    assert_eq!(j["config"], cfg.as_str(), "{j}");
+    let (code, out, err) = run_out(&[
+        "audit",
+        recs,
+        "--seeds",
+        "1",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(code == 0 || code == 1, "{err}");
+    assert!(
+        out.starts_with(&format!(
+            "imuprep audit of {recs} (embedded default config)\n"
+        )),
+        "{out}"
+    );
+    let j: serde_json::Value = common::read_json(&json);
+    assert!(j["config"].is_null(), "{j}");
+}
+
+/// A live run stopped by SIGINT before any sample came (a silent stdin, a sensor never
+/// connected) exits 0 by design — "a live daemon stopped by a signal only warns" — yet printed
+/// `imuprep: ERROR: no samples decoded …`, an error line with a success status. It is now a
+/// `WARNING:` line; a replay that ends by itself with nothing in it keeps `ERROR:` and status 3.
+#[test]
+fn a_live_run_stopped_by_a_signal_before_any_sample_warns_not_errors() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = write(
+        &dir.path().join("stdin.toml"),
+        b"[source]\nkind = \"stdin\"\n[health]\ninterval_s = 0.1\n",
+    );
+    let mut child = std::process::Command::new(common::bin())
+        .args(["run", "--config", &cfg])
+        .stdin(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let _stdin = child.stdin.take();
+    let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+    // The run loop is up (and its signal handler) once it reports health.
+    let mut err = String::new();
+    for line in lines.by_ref() {
+        let line = line.unwrap();
+        err.push_str(&line);
+        err.push('\n');
+        if line.contains("INFO health:") {
+            break;
+        }
+    }
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    for line in lines {
+        err.push_str(&line.unwrap());
+        err.push('\n');
+    }
+    let status = child.wait().unwrap();
+    assert!(status.success(), "{err}");
+    assert!(err.contains("imuprep summary (signal SIGINT"), "{err}");
+    assert!(
+        err.contains("imuprep: WARNING: no samples decoded from 0 bytes of input"),
+        "{err}"
+    );
+    assert!(!err.contains("ERROR"), "{err}");
+}

@@ -614,3 +614,123 @@ fn fails_naming(cfg: &Path, endpoint: &str) {
     );
     assert!(!err.contains("panicked"), "{err}");
 }
+
+/// `wait=S` once ignored Ctrl-C: the sink waited for a subscriber before the run's SIGINT and
+/// SIGTERM handler was installed, so a signal in the wait killed the process without a summary
+/// (or, inherited as ignored, was lost: the run then waited out S and replayed everything). A
+/// signal now ends the wait at once and the run stops with its summary.
+#[test]
+fn a_signal_while_the_sink_waits_for_a_subscriber_stops_the_run_with_its_summary() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = config(dir.path(), &[], "");
+    let sum = dir.path().join("summary.json");
+    let mut child = std::process::Command::new(common::bin())
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args([
+            "replay",
+            "replay/drive.log",
+            "--config",
+            cfg.to_str().unwrap(),
+            "--out",
+            "zenoh:imuprep/t6/imu?wait=60",
+            "--summary-json",
+            sum.to_str().unwrap(),
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let stderr = child.stderr.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut all = String::new();
+        for line in std::io::BufReader::new(stderr)
+            .lines()
+            .map_while(Result::ok)
+        {
+            let _ = tx.send(line.clone());
+            all.push_str(&line);
+            all.push('\n');
+        }
+        all
+    });
+    // Signal once the sink is waiting.
+    let t = Instant::now();
+    loop {
+        let line = rx.recv_timeout(Duration::from_secs(20)).unwrap();
+        if line.contains("waiting up to 60 s for a subscriber") {
+            break;
+        }
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+    let signalled = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if signalled.elapsed() > Duration::from_secs(10) {
+            child.kill().unwrap();
+            panic!(
+                "SIGINT did not stop the run in the wait ({:.1} s in)",
+                t.elapsed().as_secs_f64()
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let status = child.wait().unwrap();
+    let err = reader.join().unwrap();
+    assert!(
+        status.code().is_some(),
+        "killed by the signal, no summary: {err}"
+    );
+    assert!(err.contains("imuprep summary (signal SIGINT"), "{err}");
+    assert!(!err.contains("no subscriber after"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let summary = summary(&sum);
+    let z = sink(&summary, "zenoh:imuprep/t6/imu");
+    let read = summary["samples_in"].as_u64().unwrap();
+    assert!(
+        read < 29982,
+        "the replay ran on after the signal: {summary}"
+    );
+    assert_eq!(
+        z["samples_out"].as_u64().unwrap() + z["dropped"].as_u64().unwrap(),
+        summary["samples_out"].as_u64().unwrap(),
+        "{summary}"
+    );
+}
+
+/// The config check of an endpoint's `?…`/`#…` options agrees with Zenoh's own parser: what
+/// `[zenoh]` accepts, Zenoh accepts, and what Zenoh refuses is a config error at its key, not a
+/// raw error when the session opens.
+#[test]
+fn the_endpoint_check_agrees_with_zenohs_parser_on_options() {
+    use std::str::FromStr;
+    for ep in [
+        "tcp/127.0.0.1:7447",
+        "tcp/127.0.0.1:7447#",
+        "tcp/127.0.0.1:7447?",
+        "tcp/127.0.0.1:7447#=1",
+        "tcp/127.0.0.1:7447#;",
+        "tcp/127.0.0.1:7447#a",
+        "tcp/127.0.0.1:7447#a=",
+        "tcp/127.0.0.1:7447#a=1;;b=2",
+        "tcp/127.0.0.1:7447#a=1#b",
+        "tcp/127.0.0.1:7447?a=1#",
+        "tcp/127.0.0.1:7447?#a=1",
+        "tcp/127.0.0.1:7447?a=1#b=2",
+        "tcp/127.0.0.1:7447?a?b=1",
+        "tcp/127.0.0.1:7447#a=1?b=2",
+        "tcp/127.0.0.1:7447#so_sndbuf=65536",
+    ] {
+        let zenoh_ok = zenoh::config::EndPoint::from_str(ep).is_ok();
+        let text = format!("[source]\nkind = \"stdin\"\n[zenoh]\nconnect = [{ep:?}]\n");
+        let ours = imuprep::config::Config::from_toml_str(&text, Path::new("."));
+        assert_eq!(
+            ours.is_ok(),
+            zenoh_ok,
+            "{ep}: imuprep {:?}",
+            ours.err().map(|e| e.to_string())
+        );
+    }
+}

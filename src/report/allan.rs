@@ -36,6 +36,11 @@ pub fn allan(log: &Path, channels: &[String], skip_s: f64, out_dir: &Path) -> Re
             )
         })?;
     report.skipped.extend(absent);
+    if let Some(w) = super::not_at_rest(&samples, rate) {
+        report.warnings.push(format!(
+            "{w}: the Allan deviation and its terms measure the motion as well as the sensor's noise, and so do imu.yaml, gnss_imu_config.txt and bias.toml; analyse a recording at rest, or skip to a still part (--skip-s)"
+        ));
+    }
     let written = write_outputs(&report, out_dir).map_err(anyhow::Error::msg)?;
     let written = written
         .iter()
@@ -119,7 +124,12 @@ bias model (ar_of = bias: Gauss-Markov from B, white noise from N and Q, RRW fro
         ("allan.svg", allan_svg(report)?),
         (
             "bias.toml",
-            model.to_toml_string().map_err(|e| e.to_string())?,
+            report
+                .warnings
+                .iter()
+                .map(|w| format!("# WARNING: {w}\n"))
+                .collect::<String>()
+                + &model.to_toml_string().map_err(|e| e.to_string())?,
         ),
     ];
     if let Some(y) = export::kalibr_yaml(report) {

@@ -161,6 +161,10 @@ pub struct Skipped {
 #[derive(Debug, Clone, Serialize)]
 pub struct AuditReport {
     pub dir: PathBuf,
+    /// The config file whose pipeline was audited (`--config`, over the embedded default);
+    /// `None`: the embedded default alone. The caller sets it: [`audit_dir`] takes the parsed
+    /// config only.
+    pub config: Option<PathBuf>,
     pub recordings: Vec<RecordingAudit>,
     pub skipped: Vec<Skipped>,
 }
@@ -265,6 +269,19 @@ fn percentile(v: &mut [f64], p: f64) -> f64 {
     }
     v.sort_by(f64::total_cmp);
     v[((v.len() - 1) as f64 * p).round() as usize]
+}
+
+/// How unevenly a record's gyro roughness is spread: the 99th over the 1st percentile of the
+/// three-axis gyro sd of its 1-s windows, the statistic [`classify`] calls static below 2.
+/// `None` when it cannot tell: no gyro, or fewer than 10 whole windows.
+pub fn gyro_roughness_ratio(samples: &[Sample], rate_hz: f64) -> Option<f64> {
+    let mut sd = window_gyro_sd(samples, rate_hz);
+    if sd.len() < 10 {
+        return None;
+    }
+    let lo = percentile(&mut sd, 0.01);
+    let hi = percentile(&mut sd, 0.99);
+    Some(if hi == 0.0 { 1.0 } else { hi / lo })
 }
 
 /// Static or moving (module docs).
@@ -670,6 +687,7 @@ pub fn audit_recording(
 pub fn audit_dir(dir: &Path, seeds: Seeds, cfg: &Config) -> std::io::Result<AuditReport> {
     let mut report = AuditReport {
         dir: dir.to_path_buf(),
+        config: None,
         recordings: Vec::new(),
         skipped: Vec::new(),
     };
@@ -691,11 +709,11 @@ pub fn audit_dir(dir: &Path, seeds: Seeds, cfg: &Config) -> std::io::Result<Audi
 
 impl std::fmt::Display for AuditReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        writeln!(
-            f,
-            "imuprep audit of {} (embedded default config)",
-            self.dir.display()
-        )?;
+        let config = match &self.config {
+            None => "embedded default config".to_string(),
+            Some(p) => format!("config {} over the embedded default", p.display()),
+        };
+        writeln!(f, "imuprep audit of {} ({config})", self.dir.display())?;
         for r in &self.recordings {
             writeln!(
                 f,

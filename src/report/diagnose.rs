@@ -192,7 +192,7 @@ pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added>
     }
     none_diagnosed(st.log, model.channels.is_empty())?;
     let json = report.to_json().map_err(|e| anyhow!(e.to_string()))?;
-    write_outputs(out_dir, &report.to_text(), &json, &model, progress)?;
+    write_outputs(out_dir, &report.to_text(), &json, &model, &[], progress)?;
     Ok(added_all)
 }
 
@@ -279,11 +279,13 @@ pub fn channel_model(
 }
 
 /// `report.txt`, `report.json` and `bias.toml` into `out_dir`, said on `progress`.
+/// `warnings` head `bias.toml` as comments (the model of a record not at rest).
 pub fn write_outputs(
     out_dir: &Path,
     text: &str,
     json: &str,
     model: &BiasModelFile,
+    warnings: &[String],
     progress: &mut dyn Write,
 ) -> Result<()> {
     let write = |name: &str, text: &str| {
@@ -292,9 +294,13 @@ pub fn write_outputs(
     };
     write("report.txt", text)?;
     write("report.json", json)?;
+    let head: String = warnings
+        .iter()
+        .map(|w| format!("# WARNING: {w}\n"))
+        .collect();
     write(
         "bias.toml",
-        &model.to_toml_string().map_err(|e| anyhow!(e.to_string()))?,
+        &(head + &model.to_toml_string().map_err(|e| anyhow!(e.to_string()))?),
     )?;
     writeln!(
         progress,

@@ -26,6 +26,8 @@ pub struct WholeReport {
     pub method: &'static str,
     /// One diagnosis per channel.
     pub channels: Vec<WholeDiagnosis>,
+    /// What makes the effects doubtful (a record not at rest), one line each.
+    pub warnings: Vec<String>,
 }
 
 const METHOD: &str = "whole log: effects proposed and fitted on the even blocks, kept only if their held-out gain on the odd blocks beats its noise (z-test at alpha = 0.001 / candidates; for slow effects the noise of the gain from the held-out innovations' autocovariance), then refitted on every block";
@@ -34,6 +36,9 @@ impl WholeReport {
     /// The text report.
     pub fn to_text(&self) -> String {
         let mut o = format!("diagnose: {}\nmethod: {}\n", self.source, self.method);
+        for w in &self.warnings {
+            o.push_str(&format!("WARNING: {w}\n"));
+        }
         for c in &self.channels {
             o.push_str(&whole_text(c));
         }
@@ -48,10 +53,22 @@ pub fn diagnose_whole_samples(st: &Stretch, progress: &mut dyn Write) -> Result<
     let mut model = BiasModelFile::default();
     let mut added_all: Added = Vec::new();
     let settings = WholeSettings::default();
+    let warnings: Vec<String> = super::not_at_rest(st.samples, rate)
+        .map(|w| {
+            format!(
+                "{w}: the effects are fitted to the motion as well as to the sensor (a stride is a \"vibration line\", a manoeuvre's accelerations a \"g-sensitivity\"), and bias.toml as [bias] model would subtract them from real motion; diagnose a recording at rest, or a still part (--from-s/--to-s)"
+            )
+        })
+        .into_iter()
+        .collect();
+    for w in &warnings {
+        writeln!(progress, "WARNING: {w}")?;
+    }
     let mut report = WholeReport {
         source: p.source.clone(),
         method: METHOD,
         channels: vec![],
+        warnings,
     };
     let bar = ProgressBar::new(7 * p.chans.len() as u64);
     bar.set_style(
@@ -106,6 +123,13 @@ pub fn diagnose_whole_samples(st: &Stretch, progress: &mut dyn Write) -> Result<
     bar.finish_and_clear();
     super::diagnose::none_diagnosed(st.log, model.channels.is_empty())?;
     let json = serde_json::to_string_pretty(&report).map_err(|e| anyhow!(e.to_string()))?;
-    write_outputs(out_dir, &report.to_text(), &json, &model, progress)?;
+    write_outputs(
+        out_dir,
+        &report.to_text(),
+        &json,
+        &model,
+        &report.warnings,
+        progress,
+    )?;
     Ok(added_all)
 }

@@ -180,3 +180,15 @@ pub fn write_json<T: serde::Serialize + ?Sized>(path: &Path, value: &T) -> Resul
     std::fs::write(path, serde_json::to_string_pretty(value)?)
         .with_context(|| format!("writing {}", path.display()))
 }
+
+/// `allan` and `diagnose` assume a record at rest; on one that is not (as `imuprep audit`
+/// classifies: the gyro's 1-s roughness varies 2× or more over it) they model the motion as
+/// sensor error. The first half of their warning, or `None` at rest or without a gyro to tell.
+pub fn not_at_rest(samples: &[crate::sample::Sample], rate_hz: f64) -> Option<String> {
+    let r = audit::gyro_roughness_ratio(samples, rate_hz)?;
+    (r >= 2.0).then(|| {
+        format!(
+            "the record is not at rest: the gyro's roughness in 1-s windows varies {r:.1}x over it (99th over 1st percentile; a record at rest stays under 2x, as `imuprep audit` classifies)"
+        )
+    })
+}

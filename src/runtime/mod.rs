@@ -41,19 +41,27 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
     } else {
         None
     };
+    // SIGINT/SIGTERM, watched by a task of its own from before the sinks start: a sink waited
+    // for without limit must still let a signal stop the run while the loop awaits it, and so
+    // must a zenoh sink's wait for its first subscriber (`wait=S`) while the sinks start.
+    let (sig_tx, sig_rx) = watch::channel::<Option<&'static str>>(None);
+    let (stop_tx, stop_rx) = watch::channel(false);
+    let signals = tokio::spawn(async move {
+        let sig = shutdown_signal().await;
+        let _ = stop_tx.send(true);
+        let _ = sig_tx.send(Some(sig));
+    });
     let ctx = sink::SinkContext {
         #[cfg(feature = "zenoh")]
         zenoh: zenoh.clone(),
+        #[cfg(feature = "zenoh")]
+        stop: Some(stop_rx.clone()),
     };
     // Sinks first: a bad address or path fails before any data is read.
     let mut sinks = Vec::new();
     for s in &cfg.sinks {
         sinks.push(sink::start_with(s, &ctx).await?);
     }
-    // SIGINT/SIGTERM, watched by a task of its own (started below, once nothing can fail): a
-    // sink waited for without limit must still let a signal stop the run while the loop awaits it.
-    let (sig_tx, sig_rx) = watch::channel::<Option<&'static str>>(None);
-    let (stop_tx, stop_rx) = watch::channel(false);
     // An offline replay at speed 0 gains nothing by dropping: its local sinks are waited for
     // without a stall limit (back-pressure). Live sources and paced replays keep the stall rule.
     if offline_replay(&cfg.source) {
@@ -109,11 +117,6 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
             crate::config::ZENOH_NOT_BUILT
         ),
     };
-    let signals = tokio::spawn(async move {
-        let sig = shutdown_signal().await;
-        let _ = stop_tx.send(true);
-        let _ = sig_tx.send(Some(sig));
-    });
     let started = Instant::now();
     let mut health = Health {
         cleaning_stages: cleaning_stages(&pipeline),

@@ -90,52 +90,57 @@ pub fn parse_out_spec(spec: &str) -> Result<Sink, String> {
 }
 
 /// `zenoh:KEY[?format=native|jsonl&queue=N&wait=S&congestion=drop|block]` (the `[[sinks]]`
-/// keys `format`, `queue`, `wait_s`, `congestion`). Whether this build has Zenoh is checked when the sink starts.
+/// keys `format`, `queue`, `wait_s`, `congestion`). Whether this build has Zenoh is checked when
+/// the sink starts. Every mistake is reported, in one message (`zenoh: …; …`): the key's, each
+/// option's, and an option given twice (which would otherwise silently take the last value).
 fn parse_zenoh(rest: &str) -> Result<Sink, String> {
     use crate::config::{Format, ZenohCongestion};
     let (key, opts) = rest.split_once('?').unwrap_or((rest, ""));
-    crate::config::check_zenoh_key(key, false).map_err(|e| {
-        format!("zenoh: {e} (zenoh:KEY[?format=jsonl&queue=N&wait=S&congestion=block], e.g. zenoh:imuprep/imu0/imu)")
-    })?;
+    let mut errors = Vec::new();
+    if let Err(e) = crate::config::check_zenoh_key(key, false) {
+        errors.push(format!(
+            "{e} (zenoh:KEY[?format=jsonl&queue=N&wait=S&congestion=block], e.g. zenoh:imuprep/imu0/imu)"
+        ));
+    }
     let (mut format, mut queue, mut wait_s) = (Format::Native, 64usize, 0.0f64);
     let mut congestion = ZenohCongestion::Drop;
+    let mut seen: Vec<&str> = Vec::new();
     for kv in opts.split('&').filter(|s| !s.is_empty()) {
         let (k, v) = kv.split_once('=').unwrap_or((kv, ""));
-        match k {
-            "format" => {
-                format = match v {
-                    "native" => Format::Native,
-                    "jsonl" | "json" => Format::Jsonl,
-                    o => return Err(format!("zenoh: format {o:?}: native or jsonl")),
-                }
+        let name = if k == "wait_s" { "wait" } else { k };
+        if ["format", "queue", "wait", "congestion"].contains(&name) {
+            if seen.contains(&name) {
+                errors.push(format!("option {name:?} given twice"));
+                continue;
             }
-            "queue" => {
-                queue = v
-                    .parse()
-                    .ok()
-                    .filter(|q| *q > 0)
-                    .ok_or_else(|| format!("zenoh: queue {v:?}: a count of batches > 0"))?
-            }
-            "wait" | "wait_s" => {
-                wait_s = v
-                    .parse()
-                    .ok()
-                    .filter(|w: &f64| w.is_finite() && *w >= 0.0)
-                    .ok_or_else(|| format!("zenoh: wait {v:?}: seconds ≥ 0"))?
-            }
-            "congestion" => {
-                congestion = match v {
-                    "drop" => ZenohCongestion::Drop,
-                    "block" => ZenohCongestion::Block,
-                    o => return Err(format!("zenoh: congestion {o:?}: drop or block")),
-                }
-            }
-            o => {
-                return Err(format!(
-                    "zenoh: unknown option {o:?} (format, queue, wait, congestion)"
-                ));
-            }
+            seen.push(name);
         }
+        match name {
+            "format" => match v {
+                "native" => format = Format::Native,
+                "jsonl" | "json" => format = Format::Jsonl,
+                o => errors.push(format!("format {o:?}: native or jsonl")),
+            },
+            "queue" => match v.parse().ok().filter(|q| *q > 0) {
+                Some(q) => queue = q,
+                None => errors.push(format!("queue {v:?}: a count of batches > 0")),
+            },
+            "wait" => match v.parse().ok().filter(|w: &f64| w.is_finite() && *w >= 0.0) {
+                Some(w) => wait_s = w,
+                None => errors.push(format!("wait {v:?}: seconds ≥ 0")),
+            },
+            "congestion" => match v {
+                "drop" => congestion = ZenohCongestion::Drop,
+                "block" => congestion = ZenohCongestion::Block,
+                o => errors.push(format!("congestion {o:?}: drop or block")),
+            },
+            o => errors.push(format!(
+                "unknown option {o:?} (format, queue, wait, congestion)"
+            )),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(format!("zenoh: {}", errors.join("; ")));
     }
     Ok(Sink::Zenoh {
         key: key.to_string(),
@@ -206,6 +211,37 @@ mod out_spec_tests {
         ] {
             let e = parse_out_spec(bad).unwrap_err();
             assert!(e.starts_with("zenoh:"), "{bad}: {e}");
+        }
+    }
+
+    /// `--out zenoh:KEY?…` once stopped at its first mistake (`queue=-3&wait=x&format=xml` named
+    /// only the queue) and took an option given twice silently (`format=jsonl&format=native`
+    /// published native frames). Every mistake is now named in one message, a repeat included.
+    #[test]
+    fn zenoh_spec_names_every_mistake_and_a_repeated_option() {
+        let e = parse_out_spec("zenoh:a/*?queue=-3&wait=x&format=xml&speed=2&congestion=no")
+            .unwrap_err();
+        for want in [
+            "a published key names one resource",
+            "queue \"-3\"",
+            "wait \"x\"",
+            "format \"xml\"",
+            "unknown option \"speed\"",
+            "congestion \"no\"",
+        ] {
+            assert!(e.contains(want), "missing {want:?} in {e}");
+        }
+        assert!(
+            e.starts_with("zenoh: ") && !e[1..].contains("zenoh: "),
+            "{e}"
+        );
+        for twice in [
+            "zenoh:a?format=jsonl&format=native",
+            "zenoh:a?wait=1&wait_s=2",
+            "zenoh:a?queue=8&queue=8",
+        ] {
+            let e = parse_out_spec(twice).unwrap_err();
+            assert!(e.contains("given twice"), "{twice}: {e}");
         }
     }
 }

@@ -124,6 +124,9 @@ pub fn kalibr_yaml(report: &AllanReport) -> Option<String> {
         "# imuprep allan {} ({} samples, {:.0} s at {} Hz)",
         report.source, report.n_samples, report.duration_s, report.rate_hz
     );
+    for w in &report.warnings {
+        let _ = writeln!(s, "# WARNING: {w}");
+    }
     let _ = writeln!(
         s,
         "# Continuous-time values from the IEEE-952 fit of the overlapping Allan variance:\n\
@@ -184,6 +187,9 @@ pub fn gnss_imu_config(report: &AllanReport) -> Option<String> {
          # S*tor_s is shown after 'physical:' (v / sqrt(imu_sample_rate)).",
         report.source
     );
+    for w in &report.warnings {
+        let _ = writeln!(s, "# WARNING: {w}");
+    }
     let _ = writeln!(s, "imu_sample_rate = {}", report.rate_hz);
     let mut line = |name: &str, v: f64, unit: &str, from: &str, bounds: &[String]| {
         let _ = writeln!(

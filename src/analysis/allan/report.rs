@@ -68,6 +68,8 @@ pub struct AllanReport {
     pub channels: Vec<ChannelAllan>,
     /// Channels asked for but not analysed, with the reason.
     pub skipped: Vec<(String, String)>,
+    /// What makes the figures doubtful (a record not at rest), one line each.
+    pub warnings: Vec<String>,
 }
 
 fn timing(samples: &[Sample], rate_hz: f64) -> Timing {
@@ -125,6 +127,7 @@ pub fn allan_report(
         settings: settings.clone(),
         channels: Vec::new(),
         skipped: Vec::new(),
+        warnings: Vec::new(),
     };
     let mut y = vec![0.0; samples.len()];
     for &c in channels {
@@ -223,6 +226,9 @@ impl fmt::Display for AllanReport {
              (the analysis takes the samples as equally spaced at the declared rate)",
             t.median_dt_s, t.max_dt_s, t.long_intervals, t.non_increasing
         )?;
+        for w in &self.warnings {
+            writeln!(f, "WARNING: {w}")?;
+        }
         writeln!(
             f,
             "terms: weighted non-negative least squares of sigma^2(tau) = 3Q^2/tau^2 + N^2/tau + (2ln2/pi)B^2 + K^2 tau/3 + R^2 tau^2/2,\n\

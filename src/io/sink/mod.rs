@@ -323,11 +323,14 @@ enum Put {
 /// Queue length (in batches) of a sink's own input.
 const SINK_QUEUE: usize = 64;
 
-/// What the sinks of one run share: its Zenoh session, when it has one.
+/// What the sinks of one run share: its Zenoh session, when it has one, and its stop signal.
 #[derive(Clone, Default)]
 pub struct SinkContext {
     #[cfg(feature = "zenoh")]
     pub zenoh: Option<crate::io::zenoh::ZenohSession>,
+    /// Becomes `true` on SIGINT/SIGTERM: a zenoh sink's wait for a subscriber (`wait_s`) ends.
+    #[cfg(feature = "zenoh")]
+    pub stop: Option<tokio::sync::watch::Receiver<bool>>,
 }
 
 /// Start the task for one configured sink (binds sockets and creates files now, so a bad
@@ -426,7 +429,8 @@ pub async fn start_with(sink: &Sink, ctx: &SinkContext) -> std::io::Result<SinkH
                         "zenoh sink {key}: no Zenoh session (the run opens one from [zenoh])"
                     )));
                 };
-                zenoh::start_zenoh(z, key, format, wait_s, congestion, rx, st).await?
+                let stop = ctx.stop.clone();
+                zenoh::start_zenoh(z, key, format, wait_s, congestion, stop, rx, st).await?
             }
             #[cfg(not(feature = "zenoh"))]
             {

@@ -37,13 +37,16 @@ use zenoh::qos::{CongestionControl, Priority};
 pub const NATIVE_SCHEMA: &str = "imuprep-frame-v1";
 
 /// Declare the publishers and queryables of `key` on the run's session and start the sink's
-/// task; with `wait_s` > 0, first wait up to that long for a subscriber of `key`.
+/// task; with `wait_s` > 0, first wait up to that long for a subscriber of `key` (or until
+/// `stop` turns true: a signal ends the wait, and the run stops).
+#[allow(clippy::too_many_arguments)]
 pub(super) async fn start_zenoh(
     z: ZenohSession,
     key: String,
     format: Format,
     wait_s: f64,
     congestion: ZenohCongestion,
+    stop: Option<tokio::sync::watch::Receiver<bool>>,
     rx: mpsc::Receiver<SinkItem>,
     stats: Arc<SinkStats>,
 ) -> std::io::Result<(String, JoinHandle<()>)> {
@@ -93,6 +96,16 @@ pub(super) async fn start_zenoh(
     if wait_s > 0.0 && !matched {
         tracing::info!("zenoh sink {key}: waiting up to {wait_s} s for a subscriber");
         let deadline = tokio::time::Instant::now() + Duration::from_secs_f64(wait_s);
+        let stopped = async move {
+            match stop {
+                Some(mut s) => {
+                    let _ = s.wait_for(|v| *v).await;
+                }
+                None => std::future::pending().await,
+            }
+        };
+        tokio::pin!(stopped);
+        let mut signalled = false;
         while !matched {
             tokio::select! {
                 m = matching.recv_async() => match m {
@@ -100,9 +113,15 @@ pub(super) async fn start_zenoh(
                     Err(_) => break,
                 },
                 _ = tokio::time::sleep_until(deadline) => break,
+                _ = &mut stopped => {
+                    signalled = true;
+                    break;
+                }
             }
         }
-        if !matched {
+        if signalled {
+            tracing::info!("zenoh sink {key}: stopped while waiting for a subscriber");
+        } else if !matched {
             tracing::warn!(
                 "zenoh sink {key}: no subscriber after {wait_s} s; publishing anyway (samples sent to nobody are counted)"
             );
