@@ -200,6 +200,10 @@ enum Cmd {
         /// (train) and the next 3 min (validation), tested on the rest.
         #[arg(long)]
         paper_split: bool,
+        /// Write bias.toml even when the record is not at rest (by default it is not written
+        /// then: its effects would be fitted to the motion and subtract it from real motion).
+        #[arg(long)]
+        allow_motion: bool,
     },
     /// Accelerometer bias, scale factor and misalignment from the still stretches of a moving
     /// recording (multi-position calibration without a turntable), each kept only if it
@@ -503,6 +507,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             to_s,
             out_dir,
             paper_split,
+            allow_motion,
         } => {
             let mut stdout = std::io::stdout();
             report::diagnose::diagnose(
@@ -510,7 +515,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 &channels,
                 (from_s, to_s),
                 &out_dir,
-                paper_split,
+                (paper_split, allow_motion),
                 &mut stdout,
             )?;
             Ok(ExitCode::SUCCESS)

@@ -400,6 +400,7 @@ fn a_channel_named_twice_is_analysed_once() {
 /// and `diagnose` kept the stride (0.92 Hz, 2.4 rad/s on gy) as a "vibration line" and the
 /// walk's accelerations as "g-sensitivity" in a bias.toml that, as `[bias] model`, multiplied
 /// the replay's gyro error by 50–600. Both now warn, in the text, the JSON and the model files;
+/// `diagnose` writes no bias.toml then (and removes an earlier run's) unless `--allow-motion`;
 /// a record at rest gets no warning.
 #[test]
 fn allan_and_diagnose_on_a_record_not_at_rest_warn_in_every_output() {
@@ -427,7 +428,8 @@ fn allan_and_diagnose_on_a_record_not_at_rest_warn_in_every_output() {
     }
     let j: serde_json::Value = common::read_json(a.join("report.json"));
     assert_eq!(j["warnings"].as_array().map(Vec::len), Some(1), "{j}");
-    let out = run(&["diagnose", log, "--out-dir", g.to_str().unwrap()]);
+    let gd = g.to_str().unwrap();
+    let out = run(&["diagnose", log, "--out-dir", gd, "--allow-motion"]);
     assert!(out.contains(warn), "{out}");
     for f in ["report.txt", "bias.toml"] {
         let t = std::fs::read_to_string(g.join(f)).unwrap();
@@ -435,6 +437,14 @@ fn allan_and_diagnose_on_a_record_not_at_rest_warn_in_every_output() {
     }
     let j: serde_json::Value = common::read_json(g.join("report.json"));
     assert_eq!(j["warnings"].as_array().map(Vec::len), Some(1), "{j}");
+    // Without --allow-motion: the report, no model, and the one above removed (not left to
+    // pass for this run's).
+    let out = run(&["diagnose", log, "--out-dir", gd]);
+    assert!(out.contains(warn) && out.contains("no bias.toml"), "{out}");
+    assert!(out.contains("removed the earlier run's"), "{out}");
+    assert!(!g.join("bias.toml").exists());
+    let t = std::fs::read_to_string(g.join("report.txt")).unwrap();
+    assert!(t.contains("bias.toml is therefore not written"), "{t}");
     // The bundled static bench is at rest.
     let s = d.join("s");
     let out = run(&[

@@ -34,13 +34,14 @@ pub fn effects_text(v: &[String]) -> String {
 }
 
 /// `diagnose` on one stretch `from_s..to_s` of a log; progress lines go to `progress`. The whole
-/// stretch is diagnosed as one ([`diagnose_whole_samples`]) unless `paper_split`.
+/// stretch is diagnosed as one ([`diagnose_whole_samples`]) unless `paper_split`. On a stretch
+/// not at rest no `bias.toml` is written unless `allow_motion` ([`Stretch::motion`]).
 pub fn diagnose(
     log: &Path,
     channels: &[String],
     (from_s, to_s): (f64, Option<f64>),
     out_dir: &Path,
-    paper_split: bool,
+    (paper_split, allow_motion): (bool, bool),
     progress: &mut dyn Write,
 ) -> Result<Added> {
     let (rate, samples) = load_span_to(log, from_s, to_s.map(|t| (t - from_s).max(0.0)))?;
@@ -53,15 +54,39 @@ pub fn diagnose(
     } else {
         super::diagnose_whole::diagnose_whole_samples
     };
+    let samples = &samples[..end];
     let stretch = Stretch {
         log,
-        samples: &samples[..end],
+        samples,
         rate,
         from_s,
         channels,
         out_dir,
+        motion: motion_warning(samples, rate, allow_motion),
+        allow_motion,
     };
+    if let Some(w) = &stretch.motion {
+        writeln!(progress, "WARNING: {w}")?;
+    }
     run(&stretch, progress)
+}
+
+/// What diagnosing a stretch not at rest means (`None` at rest, by [`super::not_at_rest`]):
+/// every effect is fitted to the motion as well as to the sensor, and the model would subtract
+/// it from real motion. Measured on the rtklibexplorer drive: its bias.toml, as `[bias] model`,
+/// changed gz by 9.7 °/s rms (the raw gz is 9.3 °/s rms) and the integrated heading by 850°;
+/// the "g-sensitivity" it held on gz, 0.16 (rad/s)/(m/s²) on ay, is the car's turning seen as
+/// centripetal acceleration (1/speed).
+fn motion_warning(samples: &[Sample], rate: f64, allow_motion: bool) -> Option<String> {
+    let w = super::not_at_rest(samples, rate)?;
+    let what = if allow_motion {
+        "written anyway (--allow-motion): load it only where that is what you want"
+    } else {
+        "bias.toml is therefore not written (--allow-motion writes it anyway); diagnose a recording at rest, or a still part (--from-s/--to-s)"
+    };
+    Some(format!(
+        "{w}: the effects are fitted to the motion as well as to the sensor (a stride is a \"vibration line\", a turn's centripetal acceleration a \"g-sensitivity\"), and bias.toml as [bias] model would subtract them from real motion; {what}"
+    ))
 }
 
 /// Fails with [`super::InputProblem`] when no channel could be diagnosed (each said why above):
@@ -86,6 +111,10 @@ pub struct Stretch<'a> {
     pub from_s: f64,
     pub channels: &'a [String],
     pub out_dir: &'a Path,
+    /// Why the stretch is not at rest, and what follows for `bias.toml` (`None` at rest).
+    pub motion: Option<String>,
+    /// Write `bias.toml` even when the stretch is not at rest.
+    pub allow_motion: bool,
 }
 
 /// The other channels of `series` than `c`, named (candidate exogenous inputs).
@@ -192,7 +221,12 @@ pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added>
     }
     none_diagnosed(st.log, model.channels.is_empty())?;
     let json = report.to_json().map_err(|e| anyhow!(e.to_string()))?;
-    write_outputs(out_dir, &report.to_text(), &json, &model, &[], progress)?;
+    let head: String = st
+        .motion
+        .iter()
+        .map(|w| format!("WARNING: {w}\n"))
+        .collect();
+    write_outputs(st, &(head + &report.to_text()), &json, &model, progress)?;
     Ok(added_all)
 }
 
@@ -216,6 +250,7 @@ pub fn prepare(st: &Stretch, progress: &mut dyn Write) -> Result<Prepared> {
         from_s,
         channels,
         out_dir,
+        ..
     } = *st;
     ensure!(!samples.is_empty(), "the chosen stretch is empty");
     let (chans, left_out) = present_channels(log, samples, &parse_channels(channels)?)?;
@@ -278,23 +313,42 @@ pub fn channel_model(
     }
 }
 
-/// `report.txt`, `report.json` and `bias.toml` into `out_dir`, said on `progress`.
-/// `warnings` head `bias.toml` as comments (the model of a record not at rest).
+/// `report.txt`, `report.json` and `bias.toml` into the stretch's `out_dir`, said on
+/// `progress`. On a stretch not at rest ([`Stretch::motion`]) `bias.toml` is headed by the
+/// warning, or, without `allow_motion`, not written, and one left there by an earlier run
+/// removed (a stale model must not pass for this run's).
 pub fn write_outputs(
-    out_dir: &Path,
+    st: &Stretch,
     text: &str,
     json: &str,
     model: &BiasModelFile,
-    warnings: &[String],
     progress: &mut dyn Write,
 ) -> Result<()> {
+    let out_dir = st.out_dir;
     let write = |name: &str, text: &str| {
         let p = out_dir.join(name);
         std::fs::write(&p, text).with_context(|| format!("writing {}", p.display()))
     };
     write("report.txt", text)?;
     write("report.json", json)?;
-    let head: String = warnings
+    if st.motion.is_some() && !st.allow_motion {
+        let stale = out_dir.join("bias.toml");
+        let removed = if stale.exists() {
+            std::fs::remove_file(&stale)
+                .with_context(|| format!("removing the earlier {}", stale.display()))?;
+            format!("; removed the earlier run's {}", stale.display())
+        } else {
+            String::new()
+        };
+        writeln!(
+            progress,
+            "wrote {0}/report.txt, {0}/report.json and {0}/plots/; no bias.toml (the record is not at rest){removed}",
+            out_dir.display()
+        )?;
+        return Ok(());
+    }
+    let head: String = st
+        .motion
         .iter()
         .map(|w| format!("# WARNING: {w}\n"))
         .collect();

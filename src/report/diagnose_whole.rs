@@ -53,17 +53,7 @@ pub fn diagnose_whole_samples(st: &Stretch, progress: &mut dyn Write) -> Result<
     let mut model = BiasModelFile::default();
     let mut added_all: Added = Vec::new();
     let settings = WholeSettings::default();
-    let warnings: Vec<String> = super::not_at_rest(st.samples, rate)
-        .map(|w| {
-            format!(
-                "{w}: the effects are fitted to the motion as well as to the sensor (a stride is a \"vibration line\", a manoeuvre's accelerations a \"g-sensitivity\"), and bias.toml as [bias] model would subtract them from real motion; diagnose a recording at rest, or a still part (--from-s/--to-s)"
-            )
-        })
-        .into_iter()
-        .collect();
-    for w in &warnings {
-        writeln!(progress, "WARNING: {w}")?;
-    }
+    let warnings: Vec<String> = st.motion.iter().cloned().collect();
     let mut report = WholeReport {
         source: p.source.clone(),
         method: METHOD,
@@ -123,13 +113,6 @@ pub fn diagnose_whole_samples(st: &Stretch, progress: &mut dyn Write) -> Result<
     bar.finish_and_clear();
     super::diagnose::none_diagnosed(st.log, model.channels.is_empty())?;
     let json = serde_json::to_string_pretty(&report).map_err(|e| anyhow!(e.to_string()))?;
-    write_outputs(
-        out_dir,
-        &report.to_text(),
-        &json,
-        &model,
-        &report.warnings,
-        progress,
-    )?;
+    write_outputs(st, &report.to_text(), &json, &model, progress)?;
     Ok(added_all)
 }
