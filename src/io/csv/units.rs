@@ -411,6 +411,19 @@ fn stated_by(opt: bool, column: &str, flag: &str) -> String {
     }
 }
 
+/// The unit an option or the column name states: (unit, `"option"` or `"name"`, who said it).
+fn stated_unit<U: Copy>(
+    opt: Option<U>,
+    named: &NameUnit<U>,
+    flag: &str,
+) -> Option<(U, &'static str, String)> {
+    match (opt, named) {
+        (Some(u), _) => Some((u, "option", stated_by(true, "", flag))),
+        (None, NameUnit::Stated(u, col)) => Some((*u, "name", stated_by(false, col, flag))),
+        _ => None,
+    }
+}
+
 /// Decide the gyro unit: an option wins, then a unit in the name (both only warned about when
 /// the data contradict them), then the data, then a convention; else an error asking for
 /// `--gyro-unit`.
@@ -421,13 +434,13 @@ pub fn decide_gyro(
     ev: &GyroEvidence,
 ) -> Result<Decided<GyroUnit>, String> {
     let data = ev.unit();
-    let stated = match (opt, named) {
-        (Some(u), _) => Some((u, true, String::new())),
-        (None, NameUnit::Stated(u, col)) => Some((*u, false, col.clone())),
-        _ => None,
+    let finding = |u: GyroUnit, source: &'static str, how: String| UnitFinding {
+        quantity: "gyro",
+        unit: gyro_name(u),
+        source,
+        how,
     };
-    if let Some((u, is_opt, col)) = stated {
-        let by = stated_by(is_opt, &col, "--gyro-unit");
+    if let Some((u, source, by)) = stated_unit(opt, named, "--gyro-unit") {
         let warning = data.filter(|v| *v != u).map(|v| {
             format!(
                 "gyro: {by} says {}, but the data say {}: {}; if the values are in {}, pass --gyro-unit {}",
@@ -440,21 +453,10 @@ pub fn decide_gyro(
         });
         return Ok(Decided {
             unit: u,
-            finding: UnitFinding {
-                quantity: "gyro",
-                unit: gyro_name(u),
-                source: if is_opt { "option" } else { "name" },
-                how: format!("stated by {by}"),
-            },
+            finding: finding(u, source, format!("stated by {by}")),
             warning,
         });
     }
-    let finding = |u: GyroUnit, source: &'static str, how: String| UnitFinding {
-        quantity: "gyro",
-        unit: gyro_name(u),
-        source,
-        how,
-    };
     match (named, data) {
         (_, Some(v)) => Ok(Decided {
             unit: v,
@@ -499,13 +501,13 @@ pub fn decide_accel(
         AccelUnit::MS2 => "≈ 9.8, gravity in m/s²",
     };
     let neither = "neither ≈ 1 g nor ≈ 9.8 m/s², as an accelerometer on Earth reads, static or moving (gravity removed? another unit?)";
-    let stated = match (opt, named) {
-        (Some(u), _) => Some((u, true, String::new())),
-        (None, NameUnit::Stated(u, col)) => Some((*u, false, col.clone())),
-        _ => None,
+    let finding = |u: AccelUnit, source: &'static str, how: String| UnitFinding {
+        quantity: "accel",
+        unit: accel_name(u),
+        source,
+        how,
     };
-    if let Some((u, is_opt, col)) = stated {
-        let by = stated_by(is_opt, &col, "--accel-unit");
+    if let Some((u, source, by)) = stated_unit(opt, named, "--accel-unit") {
         let warning = match data {
             Some(Some(v)) if v != u => Some(format!(
                 "accel: {by} says {}, but the {}: {}; if the values are in {}, pass --accel-unit {}",
@@ -524,21 +526,10 @@ pub fn decide_accel(
         };
         return Ok(Decided {
             unit: u,
-            finding: UnitFinding {
-                quantity: "accel",
-                unit: accel_name(u),
-                source: if is_opt { "option" } else { "name" },
-                how: format!("stated by {by}"),
-            },
+            finding: finding(u, source, format!("stated by {by}")),
             warning,
         });
     }
-    let finding = |u: AccelUnit, source: &'static str, how: String| UnitFinding {
-        quantity: "accel",
-        unit: accel_name(u),
-        source,
-        how,
-    };
     match (named, data) {
         (_, Some(Some(v))) => Ok(Decided {
             unit: v,
