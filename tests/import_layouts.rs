@@ -14,7 +14,6 @@
 mod common;
 
 use imuprep::io::csv::{ImportOptions, ImportReport, read_csv_report};
-use imuprep::rng::Rng;
 use imuprep::sample::Sample;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -27,38 +26,11 @@ const D2R: f64 = PI / 180.0;
 /// An EuRoC-like start, ns.
 const T0_NS: u64 = 1_403_636_579_758_555_392;
 
-/// One truth row: time (s from the start), gyro rad/s, specific force m/s².
-struct Row {
-    t: f64,
-    g: [f64; 3],
-    f: [f64; 3],
-}
+use common::TruthRow as Row;
 
-/// Roll φ = A sin(2πt/T) about x: ω = (φ', 0, 0), f = g (0, sin φ, cos φ); `amp_deg` 0 is a
-/// static bench.
+/// The rolling sensor of [`common::rocking`] from t = 0; `amp_deg` 0 is a static bench.
 fn motion(amp_deg: f64, seed: u64) -> Vec<Row> {
-    let mut r = Rng::new(seed);
-    let w0 = 2.0 * PI / 6.0;
-    let a = amp_deg.to_radians();
-    (0..N)
-        .map(|i| {
-            let t = i as f64 / FS;
-            let phi = a * (w0 * t).sin();
-            Row {
-                t,
-                g: [
-                    a * w0 * (w0 * t).cos() + 0.002 * r.normal(),
-                    0.003 + 0.002 * r.normal(),
-                    -0.001 + 0.002 * r.normal(),
-                ],
-                f: [
-                    0.02 * r.normal(),
-                    G0 * phi.sin() + 0.02 * r.normal(),
-                    G0 * phi.cos() + 0.02 * r.normal(),
-                ],
-            }
-        })
-        .collect()
+    common::rocking(N, FS, 0.0, amp_deg, seed)
 }
 
 /// Write `header` and one line per row.
@@ -111,24 +83,7 @@ fn unit<'a>(rep: &'a ImportReport, q: &str) -> (&'a str, &'a str, &'a str) {
 
 /// Every channel equals the truth within 1e-9 (rad/s, m/s²), the rate is 200 Hz within 1e-6.
 fn assert_truth(label: &str, rate: f64, s: &[Sample], rows: &[Row]) {
-    assert!((rate - FS).abs() < 1e-6, "{label}: rate {rate}");
-    assert_eq!(s.len(), rows.len(), "{label}");
-    for (k, (s, r)) in s.iter().zip(rows).enumerate() {
-        for c in 0..3 {
-            assert!(
-                (s.gyro[c] - r.g[c]).abs() < 1e-9,
-                "{label} row {k} g{c}: {} vs {}",
-                s.gyro[c],
-                r.g[c]
-            );
-            assert!(
-                (s.accel[c] - r.f[c]).abs() < 1e-9,
-                "{label} row {k} a{c}: {} vs {}",
-                s.accel[c],
-                r.f[c]
-            );
-        }
-    }
+    common::assert_rows(label, (rate, FS), s, rows);
 }
 
 /// (unit, source) decided for `q`.

@@ -390,3 +390,62 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: impl AsRef<std::path::Pat
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
+
+/// One truth row of [`rocking`]: time (s), gyro rad/s, specific force m/s².
+pub struct TruthRow {
+    pub t: f64,
+    pub g: [f64; 3],
+    pub f: [f64; 3],
+}
+
+/// `n` rows at `fs` Hz from `t0_s` of a sensor rolling φ = A sin(2πt/6 s) about x (`amp_deg` 0
+/// is a static bench): ω = (φ', 0, 0) plus a small gyro bias, f = g (0, sin φ, cos φ), each with
+/// seeded white noise (gyro 0.002 rad/s, accel 0.02 m/s²).
+pub fn rocking(n: usize, fs: f64, t0_s: f64, amp_deg: f64, seed: u64) -> Vec<TruthRow> {
+    const G0: f64 = 9.80665;
+    let mut r = Rng::new(seed);
+    let w0 = 2.0 * std::f64::consts::PI / 6.0;
+    let a = amp_deg.to_radians();
+    (0..n)
+        .map(|i| {
+            let t = t0_s + i as f64 / fs;
+            let phi = a * (w0 * t).sin();
+            TruthRow {
+                t,
+                g: [
+                    a * w0 * (w0 * t).cos() + 0.002 * r.normal(),
+                    0.003 + 0.002 * r.normal(),
+                    -0.001 + 0.002 * r.normal(),
+                ],
+                f: [
+                    0.02 * r.normal(),
+                    G0 * phi.sin() + 0.02 * r.normal(),
+                    G0 * phi.cos() + 0.02 * r.normal(),
+                ],
+            }
+        })
+        .collect()
+}
+
+/// Imported samples equal the truth rows: every channel within 1e-9 (one unit conversion's
+/// rounding of shortest round-trip text), the rate `fs` within 1e-6 Hz.
+pub fn assert_rows(label: &str, (rate, fs): (f64, f64), s: &[Sample], rows: &[TruthRow]) {
+    assert!((rate - fs).abs() < 1e-6, "{label}: rate {rate}");
+    assert_eq!(s.len(), rows.len(), "{label}");
+    for (k, (s, r)) in s.iter().zip(rows).enumerate() {
+        for c in 0..3 {
+            assert!(
+                (s.gyro[c] - r.g[c]).abs() < 1e-9,
+                "{label} row {k} g{c}: {} vs {}",
+                s.gyro[c],
+                r.g[c]
+            );
+            assert!(
+                (s.accel[c] - r.f[c]).abs() < 1e-9,
+                "{label} row {k} a{c}: {} vs {}",
+                s.accel[c],
+                r.f[c]
+            );
+        }
+    }
+}
