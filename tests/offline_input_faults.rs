@@ -396,6 +396,15 @@ fn allan_and_fit_on_a_too_short_log_name_it() {
     );
     assert!(!Path::new(out).join("report.txt").exists());
     assert!(!Path::new(out).join("arima.toml").exists());
+    // `diagnose` said the sample counts only ("need at least 20000 samples, got 10"): it now
+    // says how long a recording that is, at the log's rate.
+    let (code, o, err) = run_out(&["diagnose", &log, "--channel", "gx", "--out-dir", out]);
+    assert_ne!(code, 0, "{o}{err}");
+    assert!(
+        o.contains("gx: cannot diagnose: series too short: need at least")
+            && o.contains("s of the recording at 200 Hz, has 0.1 s)"),
+        "{o}{err}"
+    );
 }
 
 /// `calibrate --gnss` with a file that does not exist once ran the whole calibration, put

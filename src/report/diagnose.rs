@@ -12,6 +12,7 @@ use std::path::Path;
 use anyhow::{Context, Result, anyhow, ensure};
 
 use super::{load_span_to, parse_channels, present_channels};
+use crate::analysis::AnalysisError;
 use crate::analysis::diagnose::paper_split::{
     ChannelInput, DeploymentFit, DiagnoseSettings, diagnose_channel,
 };
@@ -19,6 +20,7 @@ use crate::analysis::diagnose::report::{DiagnoseReport, channel_plots, effect_te
 use crate::analysis::exogenous::Exogenous;
 use crate::model::bias_model::{BiasModelFile, ChannelBiasModel, Effect};
 use crate::sample::{CHANNEL_NAMES, Sample};
+use crate::stats::NumError;
 
 /// What one run added, per channel: (channel, effects chosen by the loop, with times from the
 /// start of the analysed stretch).
@@ -182,7 +184,7 @@ pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added>
         let d = match diagnose_channel(&input, &settings) {
             Ok(d) => d,
             Err(e) => {
-                writeln!(progress, "{name}: cannot diagnose: {e}")?;
+                writeln!(progress, "{name}: cannot diagnose: {}", why_not(&e, rate))?;
                 continue;
             }
         };
@@ -228,6 +230,21 @@ pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added>
         .collect();
     write_outputs(st, &(head + &report.to_text()), &json, &model, progress)?;
     Ok(added_all)
+}
+
+/// Why a channel could not be diagnosed, for people: a series too short also in seconds at
+/// the log's `rate` (the sample counts alone leave the user to work out how long a recording
+/// to make).
+pub fn why_not(e: &AnalysisError, rate: f64) -> String {
+    match *e {
+        AnalysisError::Numeric(NumError::TooShort { needed, got }) => format!(
+            "{e} (needs {:.0} s of the recording at {} Hz, has {:.1} s)",
+            (needed as f64 / rate).ceil(),
+            crate::text::trim_decimals(rate, 2),
+            got as f64 / rate
+        ),
+        _ => e.to_string(),
+    }
 }
 
 /// What both diagnose loops start from: the channels asked for that the log has, every

@@ -77,7 +77,13 @@ pub fn diagnose_whole_samples(st: &Stretch, progress: &mut dyn Write) -> Result<
         }) {
             Ok(d) => d,
             Err(e) => {
-                bar.suspend(|| writeln!(progress, "{name}: cannot diagnose: {e}"))?;
+                bar.suspend(|| {
+                    writeln!(
+                        progress,
+                        "{name}: cannot diagnose: {}",
+                        super::diagnose::why_not(&e, rate)
+                    )
+                })?;
                 bar.set_position(start + 7);
                 continue;
             }
