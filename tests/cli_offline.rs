@@ -422,6 +422,12 @@ fn allan_and_diagnose_on_a_record_not_at_rest_warn_in_every_output() {
     let out = run(&["allan", log, "--out-dir", a.to_str().unwrap()]);
     let warn = "WARNING: the record is not at rest";
     assert!(out.contains(warn), "{out}");
+    // The model-error floor at the top of its search range is said as a bound (it was printed
+    // as the value "10000.0 %").
+    assert!(
+        out.contains("model error floor above 10000 %") && !out.contains("10000.0 %"),
+        "{out}"
+    );
     for f in ["report.txt", "imu.yaml", "gnss_imu_config.txt", "bias.toml"] {
         let t = std::fs::read_to_string(a.join(f)).unwrap();
         assert!(t.contains(warn), "{f}: {t}");

@@ -8,7 +8,7 @@
 //! counts time-stamp intervals that break that (gaps) so a reader can judge, but does not
 //! resample (a host-time-stamped log's jitter is not a sensor gap).
 
-use super::terms::{FitSettings, Resolution, Term, TermFit, fit_terms};
+use super::terms::{FitSettings, MODEL_ERROR_MAX, Resolution, Term, TermFit, fit_terms};
 use super::{AllanReadings, overlapping_adev};
 use crate::analysis::AnalysisError;
 use crate::sample::{CHANNEL_NAMES, Sample};
@@ -212,6 +212,20 @@ fn term_name(t: Term, gyro: bool) -> &'static str {
     }
 }
 
+/// The model-error floor ε for people: a percentage, or, at the top of the range searched
+/// ([`MODEL_ERROR_MAX`]: the floor is not found below it), that the IEEE model does not describe
+/// the curve — the bound is not a measured value.
+fn model_error_text(eps: f64) -> String {
+    if eps >= 0.999 * MODEL_ERROR_MAX {
+        format!(
+            "above {:.0} % (the most searched: the IEEE model does not describe this curve; a record not at rest?)",
+            100.0 * MODEL_ERROR_MAX
+        )
+    } else {
+        format!("{:.1} %", 100.0 * eps)
+    }
+}
+
 impl fmt::Display for AllanReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
@@ -243,7 +257,7 @@ impl fmt::Display for AllanReport {
             );
             writeln!(
                 f,
-                "\n{} ({}): {} taus {:.3}..{} s; {} passes{}; model error floor {:.1} %",
+                "\n{} ({}): {} taus {:.3}..{} s; {} passes{}; model error floor {}",
                 ch.channel,
                 if ch.gyro { "rad/s" } else { "m/s^2" },
                 fit.points.len(),
@@ -260,7 +274,7 @@ impl fmt::Display for AllanReport {
                 } else {
                     " (not converged)"
                 },
-                100.0 * fit.model_error
+                model_error_text(fit.model_error)
             )?;
             for tr in &fit.terms {
                 let (k, du) = display_unit(tr.term, ch.gyro);

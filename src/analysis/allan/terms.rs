@@ -384,7 +384,7 @@ fn trigamma(mut x: f64) -> f64 {
 /// `ψ(ν/2) − ln(ν/2)` and variance `ψ'(ν/2)` for `ν σ̂²/σ² ~ χ²(ν)`, so one long-τ point that is
 /// 3× off by chance (not rare at ν ≈ 2) does not pass for a model error; a linear-domain χ² would
 /// let it set ε. The sum falls monotonically in ε², so bisection on ln ε² over [1e-12, 1e4]
-/// finds it.
+/// finds it; [`MODEL_ERROR_MAX`] when even ε² = 1e4 leaves χ² above dof.
 fn model_error_floor(
     c: &[f64; 5],
     tau: &[f64],
@@ -405,7 +405,7 @@ fn model_error_floor(
     if dof == 0 || at0.is_nan() || at0 <= target {
         return 0.0;
     }
-    let (mut lo, mut hi) = ((1e-12f64).ln(), (1e4f64).ln());
+    let (mut lo, mut hi) = ((1e-12f64).ln(), (MODEL_ERROR_MAX * MODEL_ERROR_MAX).ln());
     for _ in 0..100 {
         let mid = 0.5 * (lo + hi);
         if at(mid.exp()) > target {
@@ -416,6 +416,9 @@ fn model_error_floor(
     }
     (0.5 * (lo + hi)).exp().sqrt()
 }
+
+/// The largest model-error floor ε searched (ε² up to 1e4): ε = 100, a model 100× off.
+pub const MODEL_ERROR_MAX: f64 = 100.0;
 
 fn n_active(c: &[f64; 5]) -> usize {
     c.iter().filter(|v| **v > 0.0).count()
