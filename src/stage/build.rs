@@ -144,7 +144,18 @@ impl StagesConfig {
         {
             let mut raw = b.settings.clone().into_inner();
             raw.sample_rate_hz = rate_hz;
-            b.settings = raw.validate()?;
+            b.settings = raw.validate().map_err(|mut e| {
+                // Said where the settings live, and that the rate is the stream's, not the
+                // config's (a 1-Hz log once got "vibration_bandwidth_hz: must be in (0,
+                // sample_rate_hz/20)" with neither).
+                for m in e.errors.iter_mut() {
+                    *m = format!("bias.settings.{m}");
+                }
+                e.errors.push(format!(
+                    "bias.settings.sample_rate_hz is the stream's own rate here, {rate_hz} Hz (from its descriptor), not the config's"
+                ));
+                e
+            })?;
         }
         Ok(())
     }
@@ -252,7 +263,16 @@ mod tests {
         c.set_sample_rate(200.0).unwrap();
         assert_eq!(c.bias.as_ref().unwrap().settings.sample_rate_hz, 200.0);
         let e = c.set_sample_rate(1e6).unwrap_err();
-        assert!(e.iter().any(|m| m.starts_with("sample_rate_hz:")), "{e}");
+        assert!(
+            e.iter()
+                .any(|m| m.starts_with("bias.settings.sample_rate_hz:")),
+            "{e}"
+        );
+        assert!(
+            e.iter()
+                .any(|m| m.contains("the stream's own rate here, 1000000 Hz")),
+            "{e}"
+        );
         assert!(e.to_string().starts_with("invalid bias settings:"), "{e}");
         assert_eq!(c.bias.as_ref().unwrap().settings.sample_rate_hz, 200.0);
         assert_eq!(c.build().unwrap().stage_names(), ["bias"]);

@@ -290,8 +290,13 @@ impl BiasSettings {
             && self.vibration_bandwidth_hz > 0.0
             && (!fs_ok || self.vibration_bandwidth_hz < 0.05 * fs))
         {
+            let bound = if fs_ok {
+                format!(" = {} Hz", 0.05 * fs)
+            } else {
+                String::new()
+            };
             e.push(format!(
-                "vibration_bandwidth_hz: must be in (0, sample_rate_hz/20) (got {})",
+                "vibration_bandwidth_hz: must be in (0, sample_rate_hz/20{bound}) (got {})",
                 self.vibration_bandwidth_hz
             ));
         }
