@@ -98,6 +98,9 @@ pub struct SinkHandle {
     pub stall: Duration,
     /// Set while the sink is stuck (dropping instead of waiting).
     stuck: AtomicBool,
+    /// Network sinks: set from a full queue's first drop until an item gets through again
+    /// (each such episode is warned about once, and its end said).
+    dropping: AtomicBool,
     /// Local sinks of an offline replay at speed 0: wait without a stall limit (back-pressure),
     /// until this says the run is stopping (a signal); see the module docs and
     /// [`SinkHandle::wait_without_limit`]. `None`: the stall rule.
@@ -112,6 +115,33 @@ pub struct SinkHandle {
 }
 
 impl SinkHandle {
+    /// A sink fed through `tx`, its task running, nothing stuck, dropped or pending yet.
+    fn new(
+        name: String,
+        tx: mpsc::Sender<SinkItem>,
+        lossless: bool,
+        wants_side: bool,
+        stats: Arc<SinkStats>,
+        task: JoinHandle<()>,
+    ) -> Self {
+        SinkHandle {
+            name,
+            tx,
+            lossless,
+            wants_side,
+            stats,
+            task,
+            stall: DEFAULT_STALL,
+            stuck: AtomicBool::new(false),
+            dropping: AtomicBool::new(false),
+            backpressure: None,
+            waiting: AtomicBool::new(false),
+            skip_samples: AtomicU64::new(0),
+            skip_carriers: AtomicU64::new(0),
+            skip_protocol: Mutex::new(None),
+        }
+    }
+
     /// Back-pressure instead of the stall rule (offline replays at speed 0): a full queue is
     /// waited for without limit, with a warning once the wait passes the stall time, until
     /// `stop` turns true (SIGINT/SIGTERM); from then on what the sink cannot take is dropped,
@@ -132,7 +162,13 @@ impl SinkHandle {
     /// (see the module docs).
     pub async fn offer(&self, item: SinkItem) {
         let item = match self.try_put(item) {
-            Put::Sent | Put::Closed => return,
+            Put::Sent => {
+                if !self.lossless && self.dropping.swap(false, Relaxed) {
+                    tracing::info!(sink = %self.name, "sink's queue has room again; no longer dropping");
+                }
+                return;
+            }
+            Put::Closed => return,
             Put::Full(item) => *item,
         };
         if let Some(stop) = &self.backpressure {
@@ -161,6 +197,12 @@ impl SinkHandle {
                 }
             }
         } else {
+            if !self.lossless && !self.dropping.swap(true, Relaxed) {
+                tracing::warn!(
+                    sink = %self.name,
+                    "network sink's queue is full (its consumer or the network is behind): dropping what it cannot take, counted (the summary's and health reports' 'dropped'); a network sink is never waited for"
+                );
+            }
             item
         };
         self.dropped(item);
@@ -453,19 +495,42 @@ pub async fn start_with(sink: &Sink, ctx: &SinkContext) -> std::io::Result<SinkH
                 ..
             }
     );
-    Ok(SinkHandle {
-        name,
-        tx,
-        lossless,
-        wants_side: matches!(sink, Sink::Inline { .. }),
-        stats,
-        task,
-        stall: DEFAULT_STALL,
-        stuck: AtomicBool::new(false),
-        backpressure: None,
-        waiting: AtomicBool::new(false),
-        skip_samples: AtomicU64::new(0),
-        skip_carriers: AtomicU64::new(0),
-        skip_protocol: Mutex::new(None),
-    })
+    let wants_side = matches!(sink, Sink::Inline { .. });
+    Ok(SinkHandle::new(name, tx, lossless, wants_side, stats, task))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A network sink (never waited for) whose queue holds one item and whose consumer reads
+    /// nothing: the second batch is dropped, counted, and starts a dropping episode (warned
+    /// once); an item that gets through again ends it.
+    #[tokio::test]
+    async fn a_network_sinks_full_queue_drops_counted_in_one_warned_episode() {
+        let (tx, mut rx) = mpsc::channel(1);
+        let stats = Arc::new(SinkStats::default());
+        let h = SinkHandle::new(
+            "udp:test".into(),
+            tx,
+            false,
+            false,
+            stats,
+            tokio::spawn(async {}),
+        );
+        let batch = || SinkItem::Samples(Arc::new(vec![Sample::nth(0, 1_000); 3]));
+        h.offer(batch()).await;
+        assert!(!h.dropping.load(Relaxed));
+        h.offer(batch()).await;
+        h.offer(batch()).await;
+        assert!(h.dropping.load(Relaxed));
+        assert_eq!(h.stats.dropped.load(Relaxed), 6);
+        rx.recv().await.unwrap();
+        h.offer(batch()).await;
+        assert!(
+            !h.dropping.load(Relaxed),
+            "the episode ends when an item gets through"
+        );
+        assert_eq!(h.stats.dropped.load(Relaxed), 6);
+    }
 }
