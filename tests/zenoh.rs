@@ -388,7 +388,16 @@ fn the_zenoh_source_decodes_published_frames_counts_a_corrupt_one_and_answers_qu
     let out = stop(child);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
-    assert!(err.contains("zenoh source silent"), "{err}");
+    // Said once per stall (it was said twice: by the source and by the runtime).
+    assert!(
+        err.contains("source stall #1: zenoh source silent"),
+        "{err}"
+    );
+    assert_eq!(
+        err.matches("zenoh source silent").count(),
+        err.matches("source stall #").count(),
+        "{err}"
+    );
     let summary = summary(&sum);
     let dec = &summary["decoder"];
     assert_eq!(dec["crc_errors"], 1, "{dec}");

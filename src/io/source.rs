@@ -447,17 +447,17 @@ pub async fn serial_watched(
                 let event = match err {
                     Some(e) if stalled => {
                         stalls += 1;
-                        let reason = format!("port open but silent ({e}); reopening");
-                        tracing::warn!(port = %port, stalls, "serial {reason}");
+                        // Said once, by the runtime ("source stall #N: …"), as every event.
+                        let reason = format!("serial {port}: open but silent ({e}); reopening");
                         SourceEvent::Stall { reason, stalls }
                     }
                     _ => {
                         outages += 1;
-                        let reason = match err {
+                        let why = match err {
                             Some(e) => format!("read failed: {e}"),
                             None => "port closed".to_string(),
                         };
-                        tracing::warn!(port = %port, outages, "serial port lost ({reason}); retrying");
+                        let reason = format!("serial {port} lost ({why}); retrying");
                         SourceEvent::Outage { reason, outages }
                     }
                 };
@@ -475,10 +475,9 @@ pub async fn serial_watched(
                 if outages == 0 {
                     // First failure at start-up is an outage too: the daemon keeps trying.
                     outages += 1;
-                    tracing::warn!(port = %port, "cannot open serial port ({e}); retrying");
                     if tx
                         .send(SourceEvent::Outage {
-                            reason: e.to_string(),
+                            reason: format!("cannot open serial port {port} ({e}); retrying"),
                             outages,
                         })
                         .await
@@ -537,8 +536,10 @@ pub async fn zenoh_with(
         match err {
             Some(e) if e.kind() == std::io::ErrorKind::TimedOut => {
                 stalls += 1;
-                let reason = format!("{name}: nothing published ({e}); still listening");
-                tracing::warn!(stalls, "zenoh source silent: {reason}");
+                // Said once, by the runtime ("source stall #N: …"), as every event.
+                let reason = format!(
+                    "zenoh source silent: {name}: nothing published ({e}); still listening"
+                );
                 if tx
                     .send(SourceEvent::Stall { reason, stalls })
                     .await
