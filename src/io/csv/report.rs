@@ -1,0 +1,116 @@
+//! What an import found besides the samples ([`ImportReport`]), and how it is said.
+
+use super::TableFormat;
+use super::units;
+use crate::io::timing::TimeFaults;
+
+/// The empty cells of one present channel (a column with values in other rows): each imported
+/// as a missing value (NaN), which the decoders and the pipeline flag `NON_FINITE`.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct EmptyCells {
+    pub channel: String,
+    pub cells: u64,
+    /// Line in the file (1 = the header) of the first.
+    pub first_line: usize,
+}
+
+/// Which column an import read for one of t, gx..az, temp.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct ColumnUse {
+    pub key: &'static str,
+    pub column: String,
+}
+
+/// What an import found besides the samples.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct ImportReport {
+    /// How the text table was read when it is not a comma-separated file with its header on
+    /// line 1: the delimiter, decimal commas, comment lines skipped, no header.
+    pub table: Option<TableFormat>,
+    /// Rows read (= samples).
+    pub rows: u64,
+    /// The columns read (absent channels and, with `--rate`, the time column left out).
+    pub columns: Vec<ColumnUse>,
+    /// How the time, gyro and accel units were decided (stated, convention or inferred from the
+    /// data, with the evidence).
+    pub units: Vec<units::UnitFinding>,
+    /// The data contradicting a stated unit (never overridden: the flag to pass is named).
+    pub warnings: Vec<String>,
+    /// Sequence and time faults derived from the time stamps (all zero with `--rate`).
+    pub time: TimeFaults,
+    /// Channels the file does not have (no column, or a column empty in every row): written as
+    /// absent (the descriptor's absent mask, NaN values), never as zeros.
+    pub absent: Vec<String>,
+    /// Present channels with some empty cells, in channel order (rows kept, values NaN).
+    pub empty_cells: Vec<EmptyCells>,
+    /// Rows whose every present channel is empty (counted in `empty_cells` too): kept as
+    /// samples with no value, their time stamp holding the time base.
+    pub empty_rows: u64,
+    /// Line of the first such row.
+    pub first_empty_row: Option<usize>,
+}
+
+impl std::fmt::Display for ImportReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if let Some(t) = &self.table {
+            writeln!(f, "table: {t}")?;
+        }
+        write!(
+            f,
+            "{}; {}",
+            crate::text::count(self.rows, "row", "rows"),
+            self.time
+        )?;
+        if !self.absent.is_empty() {
+            write!(
+                f,
+                "; channels absent (no column, or every cell empty): {} — written as absent, not as zeros",
+                self.absent.join(", ")
+            )?;
+        }
+        // Missing values on a line of their own: a user must see them, not find them at the
+        // end of the time summary.
+        if !self.empty_cells.is_empty() {
+            let each: Vec<String> = self
+                .empty_cells
+                .iter()
+                .map(|e| {
+                    format!(
+                        "{}: {} (first at line {})",
+                        e.channel,
+                        crate::text::count(e.cells, "empty cell", "empty cells"),
+                        e.first_line
+                    )
+                })
+                .collect();
+            write!(
+                f,
+                "\n{} — imported as missing values (NaN), rows kept, flagged non-finite by the pipeline",
+                each.join(", ")
+            )?;
+        }
+        if let Some(line) = self.first_empty_row {
+            write!(
+                f,
+                "\n{} with every channel empty (first at line {}) — kept, with no value (the time stamp holds the time base), flagged non-finite by the pipeline",
+                crate::text::count(self.empty_rows, "row", "rows"),
+                line
+            )?;
+        }
+        if !self.columns.is_empty() {
+            let each: Vec<String> = self
+                .columns
+                .iter()
+                .map(|c| format!("{}={}", c.key, c.column))
+                .collect();
+            write!(f, "\ncolumns: {}", each.join(", "))?;
+        }
+        for u in &self.units {
+            write!(f, "\n{u}")?;
+        }
+        for w in &self.warnings {
+            write!(f, "\nWARNING: {w}")?;
+        }
+        Ok(())
+    }
+}
