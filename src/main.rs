@@ -632,11 +632,7 @@ fn audit(
         let why = if report.skipped.is_empty() {
             " (no .log, .csv, .csv.gz or .ulg file in it)".to_string()
         } else {
-            report
-                .skipped
-                .iter()
-                .map(|s| format!("\n  skipped {}: {}", s.path.display(), s.reason))
-                .collect()
+            report.skipped.iter().map(|s| format!("\n  {s}")).collect()
         };
         return Err(report::InputProblem(format!(
             "no recording under {} could be audited{why}",

@@ -468,11 +468,17 @@ fn audit_with_a_config_names_it_in_the_header_and_the_json() {
     );
     let j: serde_json::Value = common::read_json(&json);
     assert_eq!(j["config"], cfg.as_str(), "{j}");
+    // Also (third walkthrough): a skipped file's path said once (was "skipped P: P: …"), seeds
+    // that wrap past u64::MAX listed (was "seeds 18446744073709551615–0"), and the misses' JSON
+    // key `fn` beside `tp` and `fp` (was the Rust field name `fn_`).
+    write(&dir.path().join("recs/people.csv"), b"name,age\nbob,3\n");
     let (code, out, err) = run_out(&[
         "audit",
         recs,
+        "--seed",
+        "18446744073709551615",
         "--seeds",
-        "1",
+        "2",
         "--json",
         json.to_str().unwrap(),
     ]);
@@ -483,8 +489,23 @@ fn audit_with_a_config_names_it_in_the_header_and_the_json() {
         )),
         "{out}"
     );
+    assert!(
+        out.contains("seeds 18446744073709551615, 0 pooled"),
+        "{out}"
+    );
+    let people = format!("{recs}/people.csv");
+    assert!(
+        out.contains(&format!("skipped {people}: no sensor column"))
+            && out.matches(people.as_str()).count() == 1,
+        "{out}"
+    );
     let j: serde_json::Value = common::read_json(&json);
     assert!(j["config"].is_null(), "{j}");
+    let injected = &j["recordings"][0]["injected"];
+    assert!(
+        injected["fn"].is_u64() && injected.get("fn_").is_none(),
+        "{injected}"
+    );
 }
 
 /// A live run stopped by SIGINT before any sample came (a silent stdin, a sensor never

@@ -119,6 +119,7 @@ pub(super) fn flagged_bad(s: &Sample, c: usize) -> bool {
 pub struct Counts {
     pub tp: u64,
     pub fp: u64,
+    #[serde(rename = "fn")]
     pub fn_: u64,
 }
 

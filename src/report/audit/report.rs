@@ -115,6 +115,18 @@ pub struct Skipped {
     pub reason: String,
 }
 
+impl std::fmt::Display for Skipped {
+    /// "skipped PATH: REASON", the path once (the reader's error often names the file already).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let path = self.path.display().to_string();
+        let reason = self
+            .reason
+            .strip_prefix(&format!("{path}: "))
+            .unwrap_or(&self.reason);
+        write!(f, "skipped {path}: {reason}")
+    }
+}
+
 /// The whole audit.
 #[derive(Debug, Clone, Serialize)]
 pub struct AuditReport {

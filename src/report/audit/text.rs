@@ -80,7 +80,7 @@ impl std::fmt::Display for AuditReport {
             )?;
         }
         for s in &self.skipped {
-            writeln!(f, "\nskipped {}: {}", s.path.display(), s.reason)?;
+            writeln!(f, "\n{s}")?;
         }
         let missed = self.missed();
         let total = self.targets().count();
@@ -105,8 +105,16 @@ impl std::fmt::Display for AuditReport {
 fn seed_span(seeds: &[u64]) -> String {
     match seeds {
         [one] => format!("seed {one}"),
-        [first, .., last] => format!("seeds {first}–{last} pooled"),
+        // Consecutive seeds as a span; seeds that wrapped past u64::MAX are listed.
+        [first, .., last] if last > first => format!("seeds {first}–{last} pooled"),
         [] => "no seed".to_string(),
+        many => format!(
+            "seeds {} pooled",
+            many.iter()
+                .map(u64::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
     }
 }
 
