@@ -1,6 +1,6 @@
 //! The settings toolkit under every config section: errors located by key path, collected over
 //! a whole file ([`Errors`]), a TOML table laid over another ([`overlay`]) and a section read key
-//! by key over its defaults ([`lenient`]). `config.rs` (the whole file) and `stage/build.rs` (the
+//! by key over its defaults ([`lenient`]). `config/` (the whole file) and `stage/build.rs` (the
 //! stage sections) both use it; it uses neither.
 
 use std::fmt;
