@@ -461,3 +461,41 @@ fn allan_and_diagnose_on_a_record_not_at_rest_warn_in_every_output() {
     ]);
     assert!(!out.contains("WARNING"), "{out}");
 }
+
+/// Clipping said where it happens (third walkthrough): `simulate` with a ±0.5 g accelerometer
+/// on a bench at 1 g printed its usual line only, and `replay` "N saturated" among the flags.
+/// Now `simulate` counts the clipped channel-samples and `replay` warns when more than 1 % of
+/// the samples are clipped; a sensor within its range gets neither line.
+#[test]
+fn clipping_is_counted_by_simulate_and_warned_by_replay() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("clip.log");
+    let log = log.to_str().unwrap();
+    let sim = |range_g: &str| {
+        run(&[
+            "simulate",
+            "replay/static_bench.toml",
+            "-o",
+            log,
+            "--set",
+            "motion.duration_s=20",
+            "--set",
+            &format!("sensor.accel_range_g={range_g}"),
+        ])
+    };
+    let out = sim("0.5");
+    // The bench's az reads ≈ 1 g on every sample: one clipped channel-sample per instant.
+    assert!(
+        out.contains("clipped at the sensor's range: 2000 channel-samples of 12000"),
+        "{out}"
+    );
+    let summary = run(&["replay", log]);
+    assert!(
+        summary.contains("WARNING    : 2000 of 2000 samples (100.0 %) clipped"),
+        "{summary}"
+    );
+    let out = sim("16");
+    assert!(!out.contains("clipped"), "{out}");
+    let summary = run(&["replay", log]);
+    assert!(!summary.contains("clipped"), "{summary}");
+}

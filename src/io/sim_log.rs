@@ -14,6 +14,8 @@ pub struct SimLogSummary {
     pub dropped: u64,
     pub duplicated: u64,
     pub bytes: u64,
+    /// Channel-samples clipped at the sensor's range (flagged saturated), over the instants.
+    pub clipped: u64,
 }
 
 /// Run `scn` with `seed` and write the frames a serial port would have carried (dropped frames
@@ -40,6 +42,7 @@ pub fn write_sim_log(
     let mut sum = SimLogSummary::default();
     while let Some(r) = sim.next_record() {
         sum.instants += 1;
+        sum.clipped += u64::from((r.sample.flags & crate::sample::flags::SAT_ANY).count_ones());
         let copies = match r.emission {
             Emission::Normal => 1,
             Emission::Dropped => {

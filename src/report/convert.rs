@@ -279,6 +279,15 @@ impl fmt::Display for SimulateReport {
             w.duplicated,
             count(w.bytes, "byte", "bytes"),
             self.output.display()
-        )
+        )?;
+        if w.clipped > 0 {
+            writeln!(
+                f,
+                "clipped at the sensor's range: {} of {} (flagged saturated)",
+                count(w.clipped, "channel-sample", "channel-samples"),
+                6 * w.instants
+            )?;
+        }
+        Ok(())
     }
 }

@@ -130,6 +130,17 @@ impl Health {
             "  samples    : {} in, {} out; flagged: {flagged}",
             self.samples_in, self.samples_out
         );
+        // Clipping on more than 1 % of the samples is no rare shock: said, with what it may
+        // mean (a log at 1 °/s and 0.5 g of range said "37125 saturated" and nothing else).
+        if self.flagged_saturated > 0 && self.flagged_saturated * 100 >= self.samples_in {
+            let _ = writeln!(
+                o,
+                "  WARNING    : {} of {} samples ({:.1} %) clipped at the sensor's range (flagged saturated: their values are the range, not the motion); if the motion should fit, the range or the units may be wrong",
+                self.flagged_saturated,
+                self.samples_in,
+                100.0 * self.flagged_saturated as f64 / self.samples_in.max(1) as f64
+            );
+        }
         if self.samples_partial > 0 {
             let _ = writeln!(
                 o,
