@@ -256,6 +256,7 @@ fn main() -> Result<(), String> {
         let mut report = DiagnoseReport {
             source: format!("{} [{stretch}], rad/s and m/s²", rec.name),
             channels: vec![],
+            warnings: vec![],
         };
         for (i, (nm, v)) in chans.iter().enumerate() {
             let others: Vec<(String, &[f64])> = chans

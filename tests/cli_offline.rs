@@ -451,6 +451,12 @@ fn allan_and_diagnose_on_a_record_not_at_rest_warn_in_every_output() {
     assert!(!g.join("bias.toml").exists());
     let t = std::fs::read_to_string(g.join("report.txt")).unwrap();
     assert!(t.contains("bias.toml is therefore not written"), "{t}");
+    // The same from issue 6's loop (`--paper-split`), its JSON included.
+    let out = run(&["diagnose", log, "--out-dir", gd, "--paper-split"]);
+    assert!(out.contains(warn) && out.contains("no bias.toml"), "{out}");
+    assert!(!g.join("bias.toml").exists());
+    let j: serde_json::Value = common::read_json(g.join("report.json"));
+    assert_eq!(j["warnings"].as_array().map(Vec::len), Some(1), "{j}");
     // The bundled static bench is at rest.
     let s = d.join("s");
     let out = run(&[

@@ -174,6 +174,7 @@ pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added>
     let mut report = DiagnoseReport {
         source: p.source.clone(),
         channels: vec![],
+        warnings: st.motion.iter().cloned().collect(),
     };
     let mut model = BiasModelFile::default();
     let mut added_all: Added = Vec::new();
@@ -223,12 +224,7 @@ pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added>
     }
     none_diagnosed(st.log, model.channels.is_empty())?;
     let json = report.to_json().map_err(|e| anyhow!(e.to_string()))?;
-    let head: String = st
-        .motion
-        .iter()
-        .map(|w| format!("WARNING: {w}\n"))
-        .collect();
-    write_outputs(st, &(head + &report.to_text()), &json, &model, progress)?;
+    write_outputs(st, &report.to_text(), &json, &model, progress)?;
     Ok(added_all)
 }
 

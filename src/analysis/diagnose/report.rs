@@ -15,6 +15,8 @@ pub struct DiagnoseReport {
     pub source: String,
     /// One diagnosis per channel.
     pub channels: Vec<ChannelDiagnosis>,
+    /// What makes the effects doubtful (a record not at rest), one line each.
+    pub warnings: Vec<String>,
 }
 
 impl DiagnoseReport {
@@ -26,6 +28,9 @@ impl DiagnoseReport {
     /// Human-readable text.
     pub fn to_text(&self) -> String {
         let mut o = format!("diagnose: {}\n", self.source);
+        for w in &self.warnings {
+            o.push_str(&format!("WARNING: {w}\n"));
+        }
         for c in &self.channels {
             o.push_str(&channel_text(c));
         }

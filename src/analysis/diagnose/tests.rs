@@ -279,6 +279,7 @@ fn report_serialises_with_contract_effects_and_renders_plots() {
     let rep = crate::analysis::diagnose::report::DiagnoseReport {
         source: "synthetic".into(),
         channels: vec![d],
+        warnings: vec![],
     };
     let json = rep.to_json().unwrap();
     assert!(json.contains("\"kind\": \"vibration_line\""), "{json}");
