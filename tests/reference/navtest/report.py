@@ -115,8 +115,11 @@ def target_lines(s1):
         a = stats(s1["raw"][key])
         b = stats(s1["default"][key])
         ok = b[0] <= a[0] and b[2] <= a[2]
+        # Millimetres: the verdict compares unrounded values, so at centimetres a miss could
+        # print as two equal numbers.
+        mm = lambda x: "%.3f" % x
         out.append("- %s: (b) %s / %s m vs (a) %s / %s m (median / worst): %s" % (
-            name, m(b[0]), m(b[2]), m(a[0]), m(a[2]), "met" if ok else "**missed**"))
+            name, mm(b[0]), mm(b[2]), mm(a[0]), mm(a[2]), "met" if ok else "**missed**"))
     return out
 
 
