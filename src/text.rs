@@ -9,6 +9,19 @@ pub fn count(n: impl Into<u64>, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }
 
+/// A recording's time faults in words, as `import` and the CSV reader both say them: "3 gaps
+/// (12 samples missing), 1 duplicate time stamp, 0 samples stamped behind the latest time".
+/// `duplicate` names what repeated (singular, plural).
+pub fn time_faults(gaps: u64, missing: u64, duplicates: (u64, &str, &str), behind: u64) -> String {
+    format!(
+        "{} ({} missing), {}, {} behind the latest time",
+        count(gaps, "gap", "gaps"),
+        count(missing, "sample", "samples"),
+        count(duplicates.0, duplicates.1, duplicates.2),
+        count(behind, "sample stamped", "samples stamped")
+    )
+}
+
 /// `v` with at most `places` decimals, trailing zeros dropped (100 → "100", 104.26409 →
 /// "104.264" at 3): a rate or range for people, not the float's every digit.
 pub fn trim_decimals(v: f64, places: usize) -> String {

@@ -63,10 +63,9 @@ impl TimeFaults {
 
 impl std::fmt::Display for TimeFaults {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        use crate::text::count;
         write!(
             f,
-            "time: {:.3} Hz nominal from the {} interval ({:.3} ms; median {:.3} ms, mean {:.3} ms){}; {} ({} missing), {}, {} behind the latest time ({} of them {})",
+            "time: {:.3} Hz nominal from the {} interval ({:.3} ms; median {:.3} ms, mean {:.3} ms){}; {} ({} of them {})",
             self.nominal_rate_hz,
             if self.bursty {
                 "mean"
@@ -83,14 +82,16 @@ impl std::fmt::Display for TimeFaults {
             } else {
                 String::new()
             },
-            count(self.gaps, "gap", "gaps"),
-            count(self.missing, "sample", "samples"),
-            count(
-                self.duplicates,
-                "duplicate time stamp",
-                "duplicate time stamps"
+            crate::text::time_faults(
+                self.gaps,
+                self.missing,
+                (
+                    self.duplicates,
+                    "duplicate time stamp",
+                    "duplicate time stamps"
+                ),
+                self.backwards
             ),
-            count(self.backwards, "sample stamped", "samples stamped"),
             self.restarts,
             if self.restarts == 1 {
                 "a restart"

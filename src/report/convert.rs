@@ -134,15 +134,17 @@ pub fn import(
 /// of its samples must not import in silence).
 fn protocol_faults(s: &crate::frame::DecoderStats) -> String {
     let t = format!(
-        "{} ({} missing), {}, {} behind the latest time, {}",
-        count(s.gaps, "gap", "gaps"),
-        count(s.missing_frames, "sample", "samples"),
-        count(
-            s.duplicates,
-            "duplicate time stamp or sequence number",
-            "duplicate time stamps or sequence numbers"
+        "{}, {}",
+        crate::text::time_faults(
+            s.gaps,
+            s.missing_frames,
+            (
+                s.duplicates,
+                "duplicate time stamp or sequence number",
+                "duplicate time stamps or sequence numbers"
+            ),
+            s.time_backwards
         ),
-        count(s.time_backwards, "sample stamped", "samples stamped"),
         count(s.seq_restarts, "restart", "restarts")
     );
     t + &frame_faults(s)
