@@ -1,4 +1,4 @@
-//! `imuprep import` of the CSV layouts a new user brings: EuRoC / TUM-VI `imu0/data.csv`, a ROS
+//! `imuprep import` of the CSV layouts a new user brings: EuRoC / TUM-VI `imu0/data.csv`, Kalibr's `imu0.csv`, a ROS
 //! `rostopic echo -p` export of sensor_msgs/Imu, camelCase (`accX`, `GyrX`), short (`aX`, `gX`,
 //! `wx`) and iOS-style (`rotationRateX`) names; units the header does not state checked against
 //! the data (a canonical `t,gx,..` file holding g and deg/s is read as such and says so, a static
@@ -334,6 +334,37 @@ fn a_static_canonical_file_keeps_si() {
     };
     let (_, _, rep) = read_csv_report(&p, &o).unwrap();
     assert_eq!(us(&rep, "gyro"), ("rad/s", "option"));
+}
+
+/// Kalibr's `imu0.csv` (`timestamp,omega_x,…,alpha_z`; ns, rad/s, m/s² by its format) of a
+/// static bench, where the data cannot tell the gyro unit: before the names were known it
+/// asked for `--gyro-unit`.
+#[test]
+fn a_static_kalibr_imu_csv_imports_in_si_by_its_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(0.0, 6);
+    let p = write(
+        dir.path(),
+        "imu0.csv",
+        "timestamp,omega_x,omega_y,omega_z,alpha_x,alpha_y,alpha_z",
+        &rows,
+        |i, r| {
+            format!(
+                "{},{},{}",
+                T0_NS + i as u64 * 5_000_000,
+                join(&r.g),
+                join(&r.f)
+            )
+        },
+    );
+    let (rate, s, rep) = import(&p);
+    assert_truth("kalibr", rate, &s, &rows);
+    assert_eq!(unit(&rep, "time").0, "ns", "{rep}");
+    let (gu, gs, gh) = unit(&rep, "gyro");
+    assert_eq!((gu, gs), ("rad/s", "convention"), "{gh}");
+    assert!(gh.contains("Kalibr"), "{gh}");
+    assert_eq!(unit(&rep, "accel").0, "m/s²", "{rep}");
+    assert!(rep.warnings.is_empty(), "{rep}");
 }
 
 #[test]

@@ -272,6 +272,12 @@ fn first_of<'a>(
         .find_map(|k| idx[k].map(|p| (k, header[p].trim())))
 }
 
+/// Kalibr's `imu0.csv` names, `omega_x` and `alpha_x` with nothing else: its format fixes rad/s
+/// and m/s² (and time stamps in ns, which the data tell anyway).
+fn kalibr(t: &[String], stem: &str) -> bool {
+    matches!(t, [a, x] if a == stem && ["x", "y", "z"].contains(&x.as_str()))
+}
+
 /// What the gyro columns' names say of their unit (`Unknown` too when there is no gyro).
 pub fn gyro_named(header: &[String], idx: &[Option<usize>; 8]) -> NameUnit<GyroUnit> {
     let Some((k, name)) = first_of(header, idx, 1..=3) else {
@@ -284,6 +290,8 @@ pub fn gyro_named(header: &[String], idx: &[Option<usize>; 8]) -> NameUnit<GyroU
         NameUnit::Stated(u, name.to_string())
     } else if adjacent(&t, &["angular"], &["velocity"]) {
         NameUnit::Convention(GyroUnit::RadS, "ROS sensor_msgs/Imu field")
+    } else if kalibr(&t, "omega") {
+        NameUnit::Convention(GyroUnit::RadS, "Kalibr imu.csv names (omega_x …)")
     } else {
         NameUnit::Unknown
     }
@@ -301,6 +309,8 @@ pub fn accel_named(header: &[String], idx: &[Option<usize>; 8]) -> NameUnit<Acce
         NameUnit::Stated(u, name.to_string())
     } else if adjacent(&t, &["linear"], &["acceleration"]) {
         NameUnit::Convention(AccelUnit::MS2, "ROS sensor_msgs/Imu field")
+    } else if kalibr(&t, "alpha") {
+        NameUnit::Convention(AccelUnit::MS2, "Kalibr imu.csv names (alpha_x …)")
     } else {
         NameUnit::Unknown
     }
@@ -450,6 +460,17 @@ mod tests {
             NameUnit::Convention(AccelUnit::MS2, _)
         ));
         assert_eq!(time_named(&h, &idx), None);
+        // Kalibr's imu0.csv: SI by its format.
+        let h = hdr("timestamp,omega_x,omega_y,omega_z,alpha_x,alpha_y,alpha_z");
+        let idx = resolve(&h, &ImportOptions::default()).unwrap();
+        assert!(matches!(
+            gyro_named(&h, &idx),
+            NameUnit::Convention(GyroUnit::RadS, _)
+        ));
+        assert!(matches!(
+            accel_named(&h, &idx),
+            NameUnit::Convention(AccelUnit::MS2, _)
+        ));
         let h = hdr("timestamp,accX,gyroX");
         let idx = resolve(&h, &ImportOptions::default()).unwrap();
         assert_eq!(gyro_named(&h, &idx), NameUnit::Unknown);
