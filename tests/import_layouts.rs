@@ -4,7 +4,7 @@
 //! the data (a canonical `t,gx,..` file holding g and deg/s is read as such and says so, a static
 //! one keeps SI); stated units the data contradict warned about, never overridden; two columns
 //! for one channel an error naming both; gravity, user acceleration, orientation and bias
-//! columns never taken for the sensor.
+//! columns never taken for the sensor; date-time stamps read as seconds since 1970 UTC.
 //!
 //! Synthetic recordings are seeded: 40 s at 200 Hz of a sensor rolling ±20° about x (period 6 s,
 //! peak rate 21 °/s, so a deg/s gyro stays below the 35 "rad/s" over-range rule and the
@@ -365,6 +365,126 @@ fn a_static_kalibr_imu_csv_imports_in_si_by_its_format() {
     assert!(gh.contains("Kalibr"), "{gh}");
     assert_eq!(unit(&rep, "accel").0, "m/s²", "{rep}");
     assert!(rep.warnings.is_empty(), "{rep}");
+}
+
+/// Date-time stamps (ISO 8601 as loggers, spreadsheets and pandas write them; RFC 3339 with a
+/// zone) are read as seconds since 1970 UTC; they asked for a number before. A number among
+/// date-times (or the reverse) and `--time-unit` with date-times are errors.
+#[test]
+fn date_time_stamps_import_as_utc_seconds() {
+    // 2024-05-01T12:00:00Z.
+    const T0_S: u64 = 1_714_564_800;
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 7);
+    let stamp = |i: usize, sep: char, zone: &str| {
+        let ms = i * 5;
+        let (s, frac) = (ms / 1000, ms % 1000);
+        format!(
+            "2024-05-01{sep}{:02}:{:02}:{:02}.{frac:03}000{zone}",
+            12 + s / 3600,
+            s / 60 % 60,
+            s % 60
+        )
+    };
+    let stamp_row = |i: usize| {
+        let r = &rows[i];
+        format!("{},{},{}", stamp(i, 'T', ""), join(&r.g), join(&r.f))
+    };
+    for (name, sep, zone, how) in [
+        ("pandas.csv", ' ', "", "no zone given: taken as UTC"),
+        ("rfc3339.csv", 'T', "Z", "each with its zone"),
+        ("offset.csv", 'T', "+00:00", "each with its zone"),
+    ] {
+        let p = write(dir.path(), name, "time,gx,gy,gz,ax,ay,az", &rows, |i, r| {
+            format!("{},{},{}", stamp(i, sep, zone), join(&r.g), join(&r.f))
+        });
+        let (rate, s, rep) = import(&p);
+        assert_truth(name, rate, &s, &rows);
+        let (u, src, h) = unit(&rep, "time");
+        assert_eq!((u, src), ("s", "date-time"), "{name}: {h}");
+        assert!(h.ends_with(how), "{name}: {h}");
+        // Seconds since 1970 pass through f64 (ns of 1.7e18): within 256 ns of the stamp.
+        for (i, x) in s.iter().enumerate().step_by(997) {
+            let want = T0_S * 1_000_000_000 + i as u64 * 5_000_000;
+            assert!(x.t_ns.abs_diff(want) <= 256, "{name} row {i}: {}", x.t_ns);
+        }
+        assert!(rep.warnings.is_empty(), "{rep}");
+    }
+    // A zone other than UTC moves the stamps by it.
+    let p = write(
+        dir.path(),
+        "cest.csv",
+        "time,gx,gy,gz,ax,ay,az",
+        &rows,
+        |i, r| {
+            let t = stamp(i, 'T', "+02:00").replacen("T12", "T14", 1);
+            format!("{t},{},{}", join(&r.g), join(&r.f))
+        },
+    );
+    let (_, s, _) = import(&p);
+    assert!(
+        s[0].t_ns.abs_diff(T0_S * 1_000_000_000) <= 256,
+        "{}",
+        s[0].t_ns
+    );
+    // Kinds never mix in one column, and a time unit does not apply.
+    let mixed = |name: &str, line: &dyn Fn(usize, &Row) -> String| {
+        let p = write(dir.path(), name, "time,gx,gy,gz,ax,ay,az", &rows, line);
+        read_csv_report(&p, &ImportOptions::default())
+            .unwrap_err()
+            .to_string()
+    };
+    let e = mixed("num_after.csv", &|i, r| {
+        let t = if i == 100 {
+            "1714564800.5".to_string()
+        } else {
+            stamp(i, 'T', "")
+        };
+        format!("{t},{},{}", join(&r.g), join(&r.f))
+    });
+    assert!(
+        e.contains("num_after.csv:102:")
+            && e.contains("is a number, but the column's first stamp was a date-time"),
+        "{e}"
+    );
+    let e = mixed("dt_after.csv", &|i, r| {
+        let t = if i == 100 {
+            stamp(i, 'T', "")
+        } else {
+            format!("{}", i as f64 * 0.005)
+        };
+        format!("{t},{},{}", join(&r.g), join(&r.f))
+    });
+    assert!(
+        e.contains("dt_after.csv:102:")
+            && e.contains("is a date-time, but the column's first stamp was a number"),
+        "{e}"
+    );
+    // Headerless: a date-time row is data, not a header (it was taken for one, and with
+    // --columns silently dropped).
+    let p = write(dir.path(), "bare.csv", &stamp_row(0), &rows[1..], |i, r| {
+        format!("{},{},{}", stamp(i + 1, 'T', ""), join(&r.g), join(&r.f))
+    });
+    let e = read_csv_report(&p, &ImportOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("bare.csv:1: no header"), "{e}");
+    let o = ImportOptions {
+        positions: imuprep::io::csv::parse_positions("t,gx,gy,gz,ax,ay,az").unwrap(),
+        ..ImportOptions::default()
+    };
+    let (d, s, _) = read_csv_report(&p, &o).unwrap();
+    assert_truth("bare", d.sample_rate_hz, &s, &rows);
+    let p = dir.path().join("pandas.csv");
+    let o = ImportOptions {
+        time_unit: Some(imuprep::io::csv::TimeUnit::Ms),
+        ..ImportOptions::default()
+    };
+    let e = read_csv_report(&p, &o).unwrap_err().to_string();
+    assert!(
+        e.contains("--time-unit applies to numeric time stamps"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -18,6 +18,7 @@ use crate::sample::Sample;
 use std::path::Path;
 
 pub mod columns;
+mod datetime;
 mod error;
 mod layout;
 mod options;
@@ -28,6 +29,7 @@ pub mod sniff;
 pub mod units;
 mod write;
 
+pub use datetime::parse_datetime_s;
 pub use error::CsvError;
 pub use options::{AccelUnit, CANON, G0, GyroUnit, ImportOptions, TimeUnit, parse_positions};
 pub use read::read_table_report;

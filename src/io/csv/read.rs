@@ -2,6 +2,7 @@
 //! preamble, the columns named (header or `--columns`), each row checked and read, the missing
 //! values judged, the units applied, and the report made.
 
+use super::datetime::{DateTimeStamps, parse_datetime_s};
 use super::layout::{Layout, detect};
 use super::options::positions_example;
 use super::report::{ColumnUse, EmptyCells, ImportReport};
@@ -44,7 +45,7 @@ pub fn read_table_report(
             &lay,
             o,
             missing.absent,
-            &rows.raw_t,
+            (&rows.raw_t, rows.datetime.as_ref()),
             &rows.lines,
             &mut rows.out,
             path,
@@ -250,6 +251,9 @@ struct Rows {
     against: &'static str,
     /// The file's last row when it was cut short: (line, cells).
     cut_last: Option<(usize, usize)>,
+    /// The time column's stamps when they are date-times (the first row decides; `raw_t` then
+    /// holds seconds since 1970 UTC).
+    datetime: Option<DateTimeStamps>,
 }
 
 /// Every row after the header (from the one in `rec` when the file has none), each checked for
@@ -274,6 +278,7 @@ fn read_rows(t: &Table, rd: &mut Records, rec: &mut csv::StringRecord) -> Result
         want,
         against,
         cut_last: None,
+        datetime: None,
     };
     // Headerless with --columns: the first record read is the first data row.
     let mut have_row = !fmt.header;
@@ -376,17 +381,17 @@ fn read_row(
                 name: header[p].clone(),
             })
     };
-    let out = &mut rows.out;
     let mut s = Sample {
-        seq: out.len() as u32,
+        seq: rows.out.len() as u32,
         ..Sample::default()
     };
     // Time and channels are kept as the file has them until their units are decided over
     // the whole file (below); the scaling is then the same product as before, value by value.
     if let Some(hz) = o.time_from_index_hz {
-        s.t_ns = (out.len() as f64 / hz * 1e9).round() as u64;
+        s.t_ns = (rows.out.len() as f64 / hz * 1e9).round() as u64;
     } else {
-        rows.raw_t.push(get(0)?.expect("time column resolved"));
+        let t_raw = time_cell(get(0), rows, lineno, path)?;
+        rows.raw_t.push(t_raw);
         rows.lines.push(lineno);
     }
     let mut ch = [f64::NAN; 6];
@@ -409,8 +414,57 @@ fn read_row(
     }
     s.set_channels(&ch);
     s.temp_c = get(7)?;
-    out.push(s);
+    rows.out.push(s);
     Ok(())
+}
+
+/// A row's time stamp from its cell as [`read_row`]'s `get` read it: a number, or — when the
+/// file's first stamp was one — a date-time (seconds since 1970 UTC). Numbers and date-times
+/// never mix in one column: the row that breaks the first row's kind is an error at its line.
+fn time_cell(
+    got: Result<Option<f64>, CsvError>,
+    rows: &mut Rows,
+    lineno: usize,
+    path: &Path,
+) -> Result<f64, CsvError> {
+    let mixed = |cell: &str, is: &str, first: &str| CsvError::Row {
+        path: path.into(),
+        line: lineno,
+        msg: format!(
+            "time {cell:?} is {is}, but the column's first stamp was {first}; nothing was imported"
+        ),
+    };
+    let first_row = rows.raw_t.is_empty();
+    match got {
+        Ok(v) => {
+            let v = v.expect("time column resolved");
+            if rows.datetime.is_some() {
+                return Err(mixed(&v.to_string(), "a number", "a date-time"));
+            }
+            Ok(v)
+        }
+        Err(CsvError::Cell {
+            path: p,
+            line,
+            col,
+            cell,
+            name,
+        }) => match parse_datetime_s(&cell) {
+            Some((secs, zoned)) if first_row || rows.datetime.is_some() => {
+                rows.datetime.get_or_insert_default().add(zoned);
+                Ok(secs)
+            }
+            Some(_) => Err(mixed(&cell, "a date-time", "a number")),
+            None => Err(CsvError::Cell {
+                path: p,
+                line,
+                col,
+                cell,
+                name,
+            }),
+        },
+        Err(e) => Err(e),
+    }
 }
 
 /// The channels absent and the missing values, judged over the whole file.

@@ -1,8 +1,9 @@
 //! The units decided over the whole file, applied: time stamps in ns, channels in rad/s and
 //! m/s².
 
+use super::datetime::DateTimeStamps;
 use super::layout::Layout;
-use super::{AccelUnit, CsvError, G0, GyroUnit, ImportOptions, units};
+use super::{AccelUnit, CsvError, G0, GyroUnit, ImportOptions, TimeUnit, units};
 use crate::sample::Sample;
 use std::path::Path;
 
@@ -15,7 +16,7 @@ pub(super) fn decide_units(
     lay: &Layout,
     o: &ImportOptions,
     absent: u8,
-    raw_t: &[f64],
+    (raw_t, datetime): (&[f64], Option<&DateTimeStamps>),
     lines: &[usize],
     out: &mut [Sample],
     path: &Path,
@@ -29,8 +30,29 @@ pub(super) fn decide_units(
     };
     // Time: the unit, then every stamp (rebased on the first if asked) as before.
     if o.time_from_index_hz.is_none() {
-        let d = units::median_interval(raw_t);
-        let t = units::decide_time(o.time_unit, lay.time.as_ref(), d);
+        let t = match datetime {
+            // Date-times are read in seconds; a unit for them is a mistake, not a choice.
+            Some(_) if o.time_unit.is_some() => {
+                return Err(col_err(
+                    "--time-unit applies to numeric time stamps; this time column holds date-times (read as seconds since 1970 UTC): leave it out".to_string(),
+                ));
+            }
+            Some(dt) => units::Decided {
+                unit: TimeUnit::S,
+                finding: units::UnitFinding {
+                    quantity: "time",
+                    unit: units::time_name(TimeUnit::S),
+                    source: "date-time",
+                    how: dt.how(),
+                },
+                warning: None,
+            },
+            None => units::decide_time(
+                o.time_unit,
+                lay.time.as_ref(),
+                units::median_interval(raw_t),
+            ),
+        };
         let k = t.unit.ns_per_unit();
         let base = match raw_t.first() {
             Some(first) if o.rebase_time => first * k,

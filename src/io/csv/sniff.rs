@@ -246,6 +246,19 @@ pub fn parse_number(cell: &str, decimal_comma: bool) -> Option<f64> {
     }
 }
 
+/// A cell that is a value, not a name: a number, a date-time, or a piece of one split off by a
+/// whitespace delimiter (`2024-05-01`, `12:00:00.010`): only digits and `-:.+TZ`. Which line
+/// is a header is judged by this, so a headerless file whose time column is a date-time keeps
+/// its first row.
+fn is_value(cell: &str, decimal_comma: bool) -> bool {
+    let c = cell.trim();
+    parse_number(c, decimal_comma).is_some()
+        || super::datetime::parse_datetime_s(c).is_some()
+        || (c.bytes().any(|b| b.is_ascii_digit())
+            && c.bytes()
+                .all(|b| b.is_ascii_digit() || b"-:.+TZ".contains(&b)))
+}
+
 /// A cell written with a decimal comma (a number only so).
 fn decimal_comma_cell(cell: &str) -> bool {
     let c = cell.trim();
@@ -400,7 +413,7 @@ pub fn sniff(bytes: &[u8], cut: bool) -> Sniffed {
     // other than the comma; the first line left out when it is names (no number).
     let numeric_share = |s: &Split| {
         let dc = s.d != Delimiter::Comma;
-        let names = s.rows[0].iter().all(|c| parse_number(c, dc).is_none());
+        let names = s.rows[0].iter().all(|c| !is_value(c, dc));
         let from = usize::from(names);
         let (mut num, mut all) = (0usize, 0usize);
         for c in s.rows[from..]
@@ -409,7 +422,7 @@ pub fn sniff(bytes: &[u8], cut: bool) -> Sniffed {
             .filter(|c| !c.trim().is_empty())
         {
             all += 1;
-            num += usize::from(parse_number(c, dc).is_some());
+            num += usize::from(is_value(c, dc));
         }
         if all == 0 {
             0.0
@@ -443,10 +456,7 @@ pub fn sniff(bytes: &[u8], cut: bool) -> Sniffed {
         d != Delimiter::Comma && s.rows.iter().flatten().any(|c| decimal_comma_cell(c));
     let numbers = |r: &[String]| {
         let cells: Vec<&String> = r.iter().filter(|c| !c.trim().is_empty()).collect();
-        let n = cells
-            .iter()
-            .filter(|c| parse_number(c, decimal_comma).is_some())
-            .count();
+        let n = cells.iter().filter(|c| is_value(c, decimal_comma)).count();
         (n, cells.len())
     };
     let mut f = TableFormat {
