@@ -277,6 +277,36 @@ fn a_headerless_file_imports_with_columns_by_position() {
     );
 }
 
+/// A headerless file with a text column (a frame id, as a ROS echo writes it) in every row:
+/// its first row is data — it was taken for a header and, with `--columns`, lost.
+#[test]
+fn a_headerless_file_with_a_text_column_keeps_its_first_row() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(6);
+    let mut text = String::new();
+    for r in &rows {
+        text += &format!("{},imu_link,{}\n", r.t, cells(r)[1..].join(","));
+    }
+    let p = write(dir.path(), "frames.csv", &text);
+    let e = read_csv_report(&p, &ImportOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("frames.csv:1: no header"), "{e}");
+    let o = ImportOptions {
+        positions: imuprep::io::csv::parse_positions("t,_,gx,gy,gz,ax,ay,az").unwrap(),
+        ..Default::default()
+    };
+    let (_, s, rep) = import(&p, &o);
+    assert!(!rep.table.as_ref().unwrap().header, "{rep}");
+    assert_eq!(s.len(), rows.len(), "{rep}");
+    for (k, (s, r)) in s.iter().zip(&rows).enumerate() {
+        for c in 0..3 {
+            assert!((s.gyro[c] - r.g[c]).abs() < 1e-9, "row {k} g{c}");
+            assert!((s.accel[c] - r.f[c]).abs() < 1e-9, "row {k} a{c}");
+        }
+    }
+}
+
 #[test]
 fn a_headerless_file_without_columns_says_so_and_shows_the_first_row() {
     let dir = tempfile::tempdir().unwrap();
@@ -292,7 +322,7 @@ fn a_headerless_file_without_columns_says_so_and_shows_the_first_row() {
     let first = cells(&rows[0]).join(",");
     assert!(
         e.contains(&format!(
-            "data.csv:1: no header: the first row is all numbers ({first}); name the columns by position with --columns, e.g. --columns t,gx,gy,gz,ax,ay,az"
+            "data.csv:1: no header: the first row holds values, not names ({first}); name the columns by position with --columns, e.g. --columns t,gx,gy,gz,ax,ay,az"
         )),
         "{e}"
     );

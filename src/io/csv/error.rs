@@ -16,7 +16,7 @@ pub enum CsvError {
         header: String,
     },
     #[error(
-        "{path}:{line}: no header: the first row is all numbers ({row}); name the columns by position with --columns, e.g. --columns {example} (keys t gx gy gz ax ay az temp, `_` skips a column)"
+        "{path}:{line}: no header: the first row holds values, not names ({row}); name the columns by position with --columns, e.g. --columns {example} (keys t gx gy gz ax ay az temp, `_` skips a column)"
     )]
     Headerless {
         path: PathBuf,

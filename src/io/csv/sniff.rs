@@ -503,8 +503,18 @@ pub fn sniff(bytes: &[u8], cut: bool) -> Sniffed {
             return Sniffed::Table(f);
         }
     }
-    // All numbers: no header. A mix of names and numbers: the header, as it always was read.
-    f.header = num0 < cells0;
+    // All values: no header. A mix of names and values: the header — unless the next row has
+    // names in the same places (a frame id, a status word): then it is data, and taking it
+    // for a header would lose it (with --columns, silently).
+    let names_where_values_follow = || {
+        let next = s.rows.get(1);
+        s.rows[0].iter().enumerate().any(|(i, c)| {
+            !c.trim().is_empty()
+                && !is_value(c, decimal_comma)
+                && next.is_none_or(|r| r.get(i).is_some_and(|n| is_value(n, decimal_comma)))
+        })
+    };
+    f.header = num0 < cells0 && names_where_values_follow();
     if f.header {
         f.first_row = body.get(1).map(|&k| (k + 1, lines[k].to_string()));
     }
