@@ -256,6 +256,51 @@ fn camel_case_and_short_layouts_import_in_g_and_deg_s_from_the_data() {
     }
 }
 
+/// Millidegrees per second and thousandths of g, as ST's MEMS datalogs write them: stated by
+/// the name (`acc_x[mg]`, `gyro_x[mdps]`), or told by the data (median |f| ≈ 1000; gravity
+/// turning with the gyro at scale π/180 000).
+#[test]
+fn mg_and_mdeg_s_import_from_the_name_or_the_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 8);
+    let milli = |v: &[f64; 3], k: f64| v.map(|x| x / k * 1e3);
+    for (name, header, source) in [
+        (
+            "st.csv",
+            "time[us],acc_x[mg],acc_y[mg],acc_z[mg],gyro_x[mdps],gyro_y[mdps],gyro_z[mdps]",
+            "name",
+        ),
+        (
+            "bare.csv",
+            "timestamp,accX,accY,accZ,gyroX,gyroY,gyroZ",
+            "data",
+        ),
+    ] {
+        let p = write(dir.path(), name, header, &rows, |_, r| {
+            format!(
+                "{},{},{}",
+                r.t * 1e6,
+                join(&milli(&r.f, G0)),
+                join(&milli(&r.g, D2R))
+            )
+        });
+        let (rate, s, rep) = import(&p);
+        assert_truth(name, rate, &s, &rows);
+        assert_eq!(us(&rep, "gyro"), ("mdeg/s", source), "{name}: {rep}");
+        assert_eq!(us(&rep, "accel"), ("mg", source), "{name}: {rep}");
+        assert!(rep.warnings.is_empty(), "{name}: {rep}");
+    }
+    // The flags name them too.
+    let o = ImportOptions {
+        gyro_unit: Some(imuprep::io::csv::GyroUnit::MilliDegS),
+        accel_unit: Some(imuprep::io::csv::AccelUnit::MilliG),
+        ..ImportOptions::default()
+    };
+    let (_, s, rep) = read_csv_report(&dir.path().join("bare.csv"), &o).unwrap();
+    assert_truth("flags", FS, &s, &rows);
+    assert_eq!(us(&rep, "gyro"), ("mdeg/s", "option"), "{rep}");
+}
+
 #[test]
 fn a_canonical_file_holding_g_and_deg_s_with_tilting_motion_is_read_as_such_and_says_so() {
     let dir = tempfile::tempdir().unwrap();

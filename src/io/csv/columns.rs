@@ -226,7 +226,9 @@ pub enum NameUnit<U> {
 
 /// Units read from name tokens: `dps`/`deg` → deg/s, `rps`/`rad` → rad/s.
 fn gyro_unit_of(t: &[String]) -> Option<GyroUnit> {
-    if t.iter().any(|x| x == "dps" || x.starts_with("deg")) {
+    if t.iter().any(|x| x == "mdps" || x == "mdeg") {
+        Some(GyroUnit::MilliDegS)
+    } else if t.iter().any(|x| x == "dps" || x.starts_with("deg")) {
         Some(GyroUnit::DegS)
     } else if t.iter().any(|x| x == "rps" || x.starts_with("rad")) {
         Some(GyroUnit::RadS)
@@ -237,7 +239,9 @@ fn gyro_unit_of(t: &[String]) -> Option<GyroUnit> {
 
 /// `g` → g, `mps2`/`ms2`/`m` → m/s² (EuRoC's `[m s^-2]` is m, s, 2).
 fn accel_unit_of(t: &[String]) -> Option<AccelUnit> {
-    if t.iter().any(|x| x == "g") {
+    if t.iter().any(|x| x == "mg") {
+        Some(AccelUnit::MilliG)
+    } else if t.iter().any(|x| x == "g") {
         Some(AccelUnit::G)
     } else if t.iter().any(|x| x == "mps2" || x == "ms2" || x == "m") {
         Some(AccelUnit::MS2)

@@ -11,6 +11,9 @@ pub enum GyroUnit {
     RadS,
     #[value(name = "deg/s")]
     DegS,
+    // Millidegrees per second (ST's datalogs: `gyro_x[mdps]`).
+    #[value(name = "mdeg/s", alias = "mdps")]
+    MilliDegS,
 }
 /// Specific-force unit of the input.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -19,6 +22,9 @@ pub enum AccelUnit {
     MS2,
     #[value(name = "g")]
     G,
+    // Thousandths of g (ST's datalogs: `acc_x[mg]`).
+    #[value(name = "mg")]
+    MilliG,
 }
 /// Time unit of the input.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -27,6 +33,28 @@ pub enum TimeUnit {
     Ms,
     Us,
     Ns,
+}
+
+impl GyroUnit {
+    /// rad/s per unit.
+    pub fn to_rad_s(self) -> f64 {
+        match self {
+            GyroUnit::RadS => 1.0,
+            GyroUnit::DegS => std::f64::consts::PI / 180.0,
+            GyroUnit::MilliDegS => std::f64::consts::PI / 180.0 * 1e-3,
+        }
+    }
+}
+
+impl AccelUnit {
+    /// m/s² per unit.
+    pub fn to_m_s2(self) -> f64 {
+        match self {
+            AccelUnit::MS2 => 1.0,
+            AccelUnit::G => G0,
+            AccelUnit::MilliG => G0 * 1e-3,
+        }
+    }
 }
 
 impl TimeUnit {

@@ -3,7 +3,7 @@
 
 use super::datetime::DateTimeStamps;
 use super::layout::Layout;
-use super::{AccelUnit, CsvError, G0, GyroUnit, ImportOptions, TimeUnit, units};
+use super::{CsvError, ImportOptions, TimeUnit, units};
 use crate::sample::Sample;
 use std::path::Path;
 
@@ -97,9 +97,7 @@ pub(super) fn decide_units(
         let ev = units::gyro_evidence(out, &t_s, norm.map(|x| x.0));
         let g =
             units::decide_gyro(o.gyro_unit, &lay.gyro, first_col(1..=3), &ev).map_err(col_err)?;
-        if g.unit == GyroUnit::DegS {
-            gscale = std::f64::consts::PI / 180.0;
-        }
+        gscale = g.unit.to_rad_s();
         found.push(g.finding);
         warnings.extend(g.warning);
     }
@@ -107,9 +105,7 @@ pub(super) fn decide_units(
     if absent & 0b111_000 != 0b111_000 {
         let a = units::decide_accel(o.accel_unit, &lay.accel, first_col(4..=6), norm)
             .map_err(col_err)?;
-        if a.unit == AccelUnit::G {
-            ascale = G0;
-        }
+        ascale = a.unit.to_m_s2();
         found.push(a.finding);
         warnings.extend(a.warning);
     }

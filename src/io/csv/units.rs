@@ -3,15 +3,15 @@
 //! * **Accelerometer**: the median norm of the triad (rows with all three axes) is near 1 g for
 //!   any recording on Earth, static or moving (a car, a walker, a bench: the median of |f| is
 //!   gravity's, the dynamics are the tails). Read as g it lies in [`ACCEL_G_BAND`] (0.5–2), read
-//!   as m/s² in [`ACCEL_MS2_BAND`] (5–20): a factor 2.5 apart either way, so one reading, never
-//!   both. A median of 2 g would need a sustained 1.7 g of horizontal acceleration; one of 0.5 g
+//!   as m/s² in [`ACCEL_MS2_BAND`] (5–20), as mg in [`ACCEL_MG_BAND`] (500–2000): a factor 2.5
+//!   or more apart, so one reading, never two. A median of 2 g would need a sustained 1.7 g of horizontal acceleration; one of 0.5 g
 //!   a sustained fall.
 //! * **Gyro** (deg/s vs rad/s), strongest evidence first: (1) |ω| beyond [`GYRO_MAX_RAD_S`] (35
 //!   rad/s = 2000 °/s, the top of common MEMS ranges) in at least [`GYRO_OVER_FRACTION`] of the
-//!   samples (a few spikes cannot decide it) can only be deg/s; (2) the rotation of the measured
+//!   samples (a few spikes cannot decide it) can only be deg/s (or mdeg/s, where (2) says so); (2) the rotation of the measured
 //!   gravity direction `u` must agree with the integrated gyro: over short windows at low
 //!   dynamics `Δu ≈ −(∫ω dt) × u`, and the least-squares scale `k` of the gyro's prediction is 1
-//!   for rad/s, π/180 for deg/s ([`TiltFit`]). It counts only with enough tilting rotation
+//!   for rad/s, π/180 for deg/s, π/180 000 for mdeg/s ([`TiltFit`]). It counts only with enough tilting rotation
 //!   (measured by the accelerometer, so it does not depend on the gyro's unit) and a fit that
 //!   explains at least half of the measured tilt (R² ≥ [`TILT_MIN_R2`]); a static bench, a file
 //!   without accelerometer or a car that never tilts leave it undecided.
@@ -28,6 +28,8 @@ use crate::stats::robust::median;
 pub const ACCEL_G_BAND: (f64, f64) = (0.5, 2.0);
 /// Median |f| of a triad in m/s².
 pub const ACCEL_MS2_BAND: (f64, f64) = (5.0, 20.0);
+/// Median |f| of a triad in mg.
+pub const ACCEL_MG_BAND: (f64, f64) = (500.0, 2000.0);
 /// Beyond any common MEMS gyro range read as rad/s (2000 °/s = 34.9 rad/s).
 pub const GYRO_MAX_RAD_S: f64 = 35.0;
 /// Fraction of samples beyond [`GYRO_MAX_RAD_S`] that makes the rad/s reading impossible.
@@ -74,6 +76,8 @@ pub fn accel_unit_of_norm(m: f64) -> Option<AccelUnit> {
         Some(AccelUnit::G)
     } else if within(ACCEL_MS2_BAND) {
         Some(AccelUnit::MS2)
+    } else if within(ACCEL_MG_BAND) {
+        Some(AccelUnit::MilliG)
     } else {
         None
     }
@@ -110,6 +114,8 @@ impl TiltFit {
             Some(GyroUnit::RadS)
         } else if self.r2 >= TILT_MIN_R2 && near(DEG) {
             Some(GyroUnit::DegS)
+        } else if self.r2 >= TILT_MIN_R2 && near(DEG * 1e-3) {
+            Some(GyroUnit::MilliDegS)
         } else if self.rms_ratio >= TILT_RMS_NOT_RAD && self.rms_ratio * DEG <= TILT_RMS_NOT_RAD {
             // Read as rad/s the gyro turns gravity's direction several times more than it
             // turned: whatever else moved the accelerometer (linear acceleration only adds to
@@ -136,10 +142,15 @@ pub struct GyroEvidence {
 impl GyroEvidence {
     /// The unit the data say, strongest evidence first; `None`: they cannot tell.
     pub fn unit(&self) -> Option<GyroUnit> {
+        let tilt = self.tilt.and_then(|t| t.unit());
         if self.over_range() {
-            return Some(GyroUnit::DegS);
+            // Not rad/s; mdeg/s only where gravity's turning says so (it runs past 35 at 35 mdeg/s).
+            return Some(
+                tilt.filter(|u| *u == GyroUnit::MilliDegS)
+                    .unwrap_or(GyroUnit::DegS),
+            );
         }
-        self.tilt.and_then(|t| t.unit())
+        tilt
     }
 
     fn over_range(&self) -> bool {
@@ -364,6 +375,7 @@ pub fn gyro_name(u: GyroUnit) -> &'static str {
     match u {
         GyroUnit::RadS => "rad/s",
         GyroUnit::DegS => "deg/s",
+        GyroUnit::MilliDegS => "mdeg/s",
     }
 }
 /// As people read it; the flag's spelling is [`accel_flag`].
@@ -371,6 +383,7 @@ pub fn accel_name(u: AccelUnit) -> &'static str {
     match u {
         AccelUnit::MS2 => "m/s²",
         AccelUnit::G => "g",
+        AccelUnit::MilliG => "mg",
     }
 }
 /// The `--accel-unit` spelling.
@@ -378,6 +391,7 @@ pub fn accel_flag(u: AccelUnit) -> &'static str {
     match u {
         AccelUnit::MS2 => "m/s2",
         AccelUnit::G => "g",
+        AccelUnit::MilliG => "mg",
     }
 }
 /// The `--time-unit` spelling.
@@ -499,8 +513,9 @@ pub fn decide_accel(
     let as_in = |v: AccelUnit| match v {
         AccelUnit::G => "≈ 1, gravity in g",
         AccelUnit::MS2 => "≈ 9.8, gravity in m/s²",
+        AccelUnit::MilliG => "≈ 1000, gravity in mg",
     };
-    let neither = "neither ≈ 1 g nor ≈ 9.8 m/s², as an accelerometer on Earth reads, static or moving (gravity removed? another unit?)";
+    let neither = "neither ≈ 1 g, ≈ 9.8 m/s² nor ≈ 1000 mg, as an accelerometer on Earth reads, static or moving (gravity removed? another unit?)";
     let finding = |u: AccelUnit, source: &'static str, how: String| UnitFinding {
         quantity: "accel",
         unit: accel_name(u),
