@@ -299,6 +299,28 @@ fn mg_and_mdeg_s_import_from_the_name_or_the_data() {
     let (_, s, rep) = read_csv_report(&dir.path().join("bare.csv"), &o).unwrap();
     assert_truth("flags", FS, &s, &rows);
     assert_eq!(us(&rep, "gyro"), ("mdeg/s", "option"), "{rep}");
+    // At rest the data cannot tell mdeg/s from deg/s (both beyond 35 "rad/s", no tilt): the
+    // range says deg/s, and a warning names the other reading and its flag.
+    let bench = motion(0.0, 9);
+    let p = write(
+        dir.path(),
+        "bench.csv",
+        "timestamp,accX,accY,accZ,gyroX,gyroY,gyroZ",
+        &bench,
+        |_, r| {
+            // A 0.5 °/s bias, as MEMS gyros have: 500 mdeg/s on every sample.
+            let g = r.g.map(|x| x / D2R * 1e3 + 500.0);
+            format!("{},{},{}", r.t, join(&milli(&r.f, G0)), join(&g))
+        },
+    );
+    let (_, _, rep) = import(&p);
+    assert_eq!(us(&rep, "gyro"), ("deg/s", "data"), "{rep}");
+    assert!(
+        rep.warnings
+            .iter()
+            .any(|w| w.contains("pass --gyro-unit mdeg/s")),
+        "{rep}"
+    );
 }
 
 #[test]

@@ -153,6 +153,16 @@ impl GyroEvidence {
         tilt
     }
 
+    /// Read as deg/s by the range alone while most samples lie beyond it and the tilt fit
+    /// says nothing: a deg/s gyro turning above 35 °/s most of the time, or an mdeg/s one at
+    /// rest — worth a warning, not a guess.
+    fn maybe_milli(&self, decided: GyroUnit) -> bool {
+        decided == GyroUnit::DegS
+            && self.over_range()
+            && 2 * self.over > self.n
+            && self.tilt.and_then(|t| t.unit()).is_none()
+    }
+
     fn over_range(&self) -> bool {
         self.n > 0 && self.over as f64 >= GYRO_OVER_FRACTION * self.n as f64
     }
@@ -475,7 +485,18 @@ pub fn decide_gyro(
         (_, Some(v)) => Ok(Decided {
             unit: v,
             finding: finding(v, "data", format!("not stated; {}", ev.describe())),
-            warning: None,
+            warning: ev.maybe_milli(v).then(|| {
+                format!(
+                    "gyro: read as deg/s by its range, but |ω| is beyond {GYRO_MAX_RAD_S} in {} of {} samples as read and gravity's direction tells nothing ({}): a gyro in mdeg/s reads so at rest; if so, pass --gyro-unit mdeg/s",
+                    ev.over,
+                    ev.n,
+                    ev.tilt.map_or("no accelerometer triad".to_string(), |t| format!(
+                        "{} tilt windows, {:.1}° in all",
+                        t.windows,
+                        t.tilt_rad.to_degrees()
+                    ))
+                )
+            }),
         }),
         (NameUnit::Convention(u, why), None) => Ok(Decided {
             unit: *u,
