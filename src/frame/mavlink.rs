@@ -57,6 +57,24 @@ const LEN_RAW: usize = 29;
 /// v2 incompatibility flag: the frame is signed (13 bytes follow the checksum).
 const IFLAG_SIGNED: u8 = 0x01;
 const SIGNATURE_LEN: usize = 13;
+/// A tlog's time stamp before each message, bytes.
+const TLOG_STAMP: usize = 8;
+
+fn is_stx(b: Option<u8>) -> bool {
+    matches!(b, Some(STX_V1 | STX_V2))
+}
+
+/// A tlog record starts at the front: a big-endian µs time stamp between 2000 and 2100, then a
+/// message start.
+fn tlog_stamp_at(buf: &[u8]) -> bool {
+    const Y2000_US: u64 = 946_684_800_000_000;
+    const Y2100_US: u64 = 4_102_444_800_000_000;
+    buf.len() > TLOG_STAMP
+        && is_stx(Some(buf[TLOG_STAMP]))
+        && (Y2000_US..Y2100_US).contains(&u64::from_be_bytes(
+            buf[..TLOG_STAMP].try_into().expect("8 bytes"),
+        ))
+}
 /// Standard gravity, m/s² per g (1 mG = 9.80665e-3 m/s²).
 const MG_M_S2: f64 = 9.80665e-3;
 /// HIGHRES_IMU `fields_updated` bit of channel `c` (gx gy gz ax ay az): gyro 3..6, accel 0..3.
@@ -195,6 +213,12 @@ pub struct MavlinkDecoder {
     seen_fields: u16,
     /// The selected stream's first samples, held until its channel set is known.
     settle: Settle,
+    /// A telemetry log (`.tlog` of QGroundControl, Mission Planner, MAVProxy): every message
+    /// after an 8-byte big-endian time stamp (µs since 1970). Decided on the input's first
+    /// bytes; `None` until 9 have come.
+    tlog: Option<bool>,
+    /// tlog time stamps read (not garbage).
+    tlog_stamps: u64,
 }
 
 super::protocol::default_from_options!(MavlinkDecoder, MavlinkOptions);
@@ -214,6 +238,8 @@ impl MavlinkDecoder {
             v2: 0,
             seen_fields: 0,
             settle: Settle::default(),
+            tlog: None,
+            tlog_stamps: 0,
         }
     }
 
@@ -395,9 +421,33 @@ impl MavlinkDecoder {
         self.next_held()
     }
 
+    /// In a tlog, the time stamp before the next message: read (and counted as such) when the
+    /// front holds a plausible one with a message start after it. `false`: wait for more bytes.
+    fn tlog_stamp(&mut self, buf: &mut BytesMut) -> bool {
+        if self.tlog.is_none() {
+            if buf.len() < TLOG_STAMP + 1 && !self.eof {
+                return false;
+            }
+            self.tlog = Some(tlog_stamp_at(buf));
+        }
+        if self.tlog == Some(true) && !is_stx(buf.first().copied()) {
+            if buf.len() < TLOG_STAMP + 1 && !self.eof {
+                return false;
+            }
+            if tlog_stamp_at(buf) {
+                self.f.take(buf, TLOG_STAMP);
+                self.tlog_stamps += 1;
+            }
+        }
+        true
+    }
+
     /// One frame from the front of `buf`, or `None` when more bytes are needed.
     fn step(&mut self, buf: &mut BytesMut) -> Option<Decoded> {
         loop {
+            if !self.tlog_stamp(buf) {
+                return None;
+            }
             if !self.f.seek(buf, |b| b == STX_V1 || b == STX_V2) || buf.len() < 2 {
                 return None;
             }
@@ -432,11 +482,18 @@ impl MavlinkDecoder {
                     }
                 }
                 None => {
-                    // Unknown id: trust the frame only if another frame starts right after it.
-                    if buf.len() == total && !self.eof {
+                    // Unknown id: trust the frame only if another frame starts right after it
+                    // (in a tlog, after its time stamp).
+                    let next = total
+                        + if self.tlog == Some(true) {
+                            TLOG_STAMP
+                        } else {
+                            0
+                        };
+                    if buf.len() <= next && !self.eof {
                         return None;
                     }
-                    if buf.len() > total && buf[total] != STX_V1 && buf[total] != STX_V2 {
+                    if buf.len() > next && !is_stx(Some(buf[next])) {
                         self.f.bad(buf, Fault::UnknownType);
                         continue;
                     }
@@ -487,6 +544,12 @@ impl ProtocolDecoder for MavlinkDecoder {
         }
         if self.streams.is_empty() {
             s.push_str(" none");
+        }
+        if self.tlog == Some(true) {
+            s.push_str(&format!(
+                "; a tlog: {} read before the messages",
+                crate::text::count(self.tlog_stamps, "time stamp", "time stamps")
+            ));
         }
         s
     }
@@ -668,6 +731,71 @@ mod tests {
             st.duplicates, 0,
             "the other instance's same time stamps are not duplicates"
         );
+    }
+
+    /// A tlog (an 8-byte big-endian µs stamp before every message): the stamps are read as
+    /// such, not as garbage; an unknown message is trusted when a stamp and a message follow;
+    /// a corrupt message costs only itself.
+    #[test]
+    fn a_tlog_reads_its_stamps_and_every_message() {
+        let t0_us: u64 = 1_714_564_800_000_000;
+        let mut b = BytesMut::new();
+        let mut unknown = 0;
+        for i in 0..200u64 {
+            b.extend_from_slice(&(t0_us + i * 5000).to_be_bytes());
+            encode_v2(
+                i as u8,
+                1,
+                1,
+                MSG_HIGHRES_IMU,
+                &highres_payload(&sample(i), 0),
+                &mut b,
+            );
+            if i % 20 == 0 {
+                b.extend_from_slice(&(t0_us + i * 5000 + 100).to_be_bytes());
+                encode_v2(i as u8, 1, 1, 60_000, &[1, 2, 3, 4], &mut b);
+                unknown += 1;
+            }
+        }
+        for chunk in [1, 7, 4096] {
+            let mut d = MavlinkDecoder::new(MavlinkOptions::default());
+            let (out, st) = crate::frame::protocol::decode_chunked(&mut d, &b, chunk);
+            let n = out.iter().filter_map(Decoded::sample).count();
+            assert_eq!(n, 200, "chunk {chunk}");
+            assert_eq!(
+                (st.garbage_bytes, st.resyncs, st.crc_errors, st.unknown_type),
+                (0, 0, 0, 0),
+                "chunk {chunk}: {st:?}"
+            );
+            assert_eq!(st.other_messages, unknown, "chunk {chunk}");
+            assert!(
+                d.found()
+                    .ends_with("a tlog: 210 time stamps read before the messages"),
+                "{}",
+                d.found()
+            );
+        }
+        // One message's checksum broken: that message is lost, counted, and the rest read.
+        let mut bad = b.to_vec();
+        let at = 8 + 10 + 2; // inside the first record's payload
+        bad[at] ^= 0xff;
+        let mut d = MavlinkDecoder::new(MavlinkOptions::default());
+        let (out, st) = crate::frame::protocol::decode_chunked(&mut d, &bad, 64);
+        assert_eq!(out.iter().filter_map(Decoded::sample).count(), 199);
+        assert_eq!(st.crc_errors, 1, "{st:?}");
+        // A plain stream is no tlog.
+        let mut plain = BytesMut::new();
+        encode_v2(
+            0,
+            1,
+            1,
+            MSG_HIGHRES_IMU,
+            &highres_payload(&sample(0), 0),
+            &mut plain,
+        );
+        let mut d = MavlinkDecoder::new(MavlinkOptions::default());
+        crate::frame::protocol::decode_chunked(&mut d, &plain, 4096);
+        assert!(!d.found().contains("tlog"), "{}", d.found());
     }
 
     #[test]
