@@ -17,6 +17,7 @@ const UBX_EXPECTED: &str = include_str!("reference/ubx_expected.csv");
 const MAV: &[u8] = include_bytes!("reference/mavlink_stream.bin");
 const MAV_EXPECTED: &str = include_str!("reference/mavlink_expected.csv");
 const ULOG_EXPECTED: &str = include_str!("reference/ulog_expected.csv");
+const MAV_TLOG: &[u8] = include_bytes!("reference/mavlink_stream.tlog");
 
 fn run(d: &mut dyn ProtocolDecoder, bytes: &[u8], chunk: usize) -> (Vec<Decoded>, DecoderStats) {
     imuprep::frame::protocol::decode_chunked(d, bytes, chunk)
@@ -130,6 +131,32 @@ fn mavlink_every_stream_equals_pymavlink() {
                 }
             }
         }
+    }
+}
+
+/// The same messages as a telemetry log (an 8-byte stamp before each, read back by pymavlink's
+/// tlog reader: gen_tlog_reference.py): the same samples as the plain stream, every stamp read
+/// as one, not a byte of garbage.
+#[test]
+fn mavlink_tlog_reads_as_the_plain_stream() {
+    for chunk in [1, 50, 100_000] {
+        let mut plain = MavlinkDecoder::default();
+        let (a, _) = run(&mut plain, MAV, chunk);
+        let mut tlog = MavlinkDecoder::default();
+        let (b, st) = run(&mut tlog, MAV_TLOG, chunk);
+        assert_eq!(samples(&b), samples(&a), "chunk {chunk}");
+        assert_eq!(st.frames_ok, 185);
+        assert_eq!(
+            (st.crc_errors, st.garbage_bytes, st.resyncs, st.unverified),
+            (0, 0, 0, 0),
+            "chunk {chunk}"
+        );
+        assert!(
+            tlog.found()
+                .ends_with("a tlog: 185 time stamps read before the messages"),
+            "{}",
+            tlog.found()
+        );
     }
 }
 
