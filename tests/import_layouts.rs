@@ -52,6 +52,16 @@ fn write(
     p
 }
 
+/// A row as EuRoC and Kalibr write it: ns from [`T0_NS`] at 200 Hz, gyro, then accel.
+fn ns_gyro_accel(i: usize, r: &Row) -> String {
+    format!(
+        "{},{},{}",
+        T0_NS + i as u64 * 5_000_000,
+        join(&r.g),
+        join(&r.f)
+    )
+}
+
 fn join(v: &[f64]) -> String {
     v.iter()
         .map(|x| format!("{x}"))
@@ -109,14 +119,7 @@ fn euroc_imu0_data_csv_imports_with_ns_time_and_bracketed_si_units() {
         "data.csv",
         "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]",
         &rows,
-        |i, r| {
-            format!(
-                "{},{},{}",
-                T0_NS + i as u64 * 5_000_000,
-                join(&r.g),
-                join(&r.f)
-            )
-        },
+        ns_gyro_accel,
     );
     let (rate, s, rep) = import(&p);
     assert_truth("euroc", rate, &s, &rows);
@@ -415,14 +418,7 @@ fn a_static_kalibr_imu_csv_imports_in_si_by_its_format() {
         "imu0.csv",
         "timestamp,omega_x,omega_y,omega_z,alpha_x,alpha_y,alpha_z",
         &rows,
-        |i, r| {
-            format!(
-                "{},{},{}",
-                T0_NS + i as u64 * 5_000_000,
-                join(&r.g),
-                join(&r.f)
-            )
-        },
+        ns_gyro_accel,
     );
     let (rate, s, rep) = import(&p);
     assert_truth("kalibr", rate, &s, &rows);

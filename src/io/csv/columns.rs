@@ -453,28 +453,30 @@ mod tests {
             NameUnit::Stated(AccelUnit::MS2, _)
         ));
         assert_eq!(time_named(&h, &idx).map(|x| x.0), Some(TimeUnit::Ns));
-        let h = hdr("%time,field.angular_velocity.x,field.linear_acceleration.x");
-        let idx = resolve(&h, &ImportOptions::default()).unwrap();
-        assert!(matches!(
-            gyro_named(&h, &idx),
-            NameUnit::Convention(GyroUnit::RadS, _)
-        ));
-        assert!(matches!(
-            accel_named(&h, &idx),
-            NameUnit::Convention(AccelUnit::MS2, _)
-        ));
-        assert_eq!(time_named(&h, &idx), None);
-        // Kalibr's imu0.csv: SI by its format.
-        let h = hdr("timestamp,omega_x,omega_y,omega_z,alpha_x,alpha_y,alpha_z");
-        let idx = resolve(&h, &ImportOptions::default()).unwrap();
-        assert!(matches!(
-            gyro_named(&h, &idx),
-            NameUnit::Convention(GyroUnit::RadS, _)
-        ));
-        assert!(matches!(
-            accel_named(&h, &idx),
-            NameUnit::Convention(AccelUnit::MS2, _)
-        ));
+        // ROS sensor_msgs/Imu fields and Kalibr's imu0.csv names: SI by their convention, no
+        // time unit in the name.
+        for header in [
+            "%time,field.angular_velocity.x,field.linear_acceleration.x",
+            "timestamp,omega_x,omega_y,omega_z,alpha_x,alpha_y,alpha_z",
+        ] {
+            let h = hdr(header);
+            let idx = resolve(&h, &ImportOptions::default()).unwrap();
+            assert!(
+                matches!(
+                    gyro_named(&h, &idx),
+                    NameUnit::Convention(GyroUnit::RadS, _)
+                ),
+                "{header}"
+            );
+            assert!(
+                matches!(
+                    accel_named(&h, &idx),
+                    NameUnit::Convention(AccelUnit::MS2, _)
+                ),
+                "{header}"
+            );
+            assert_eq!(time_named(&h, &idx), None, "{header}");
+        }
         let h = hdr("timestamp,accX,gyroX");
         let idx = resolve(&h, &ImportOptions::default()).unwrap();
         assert_eq!(gyro_named(&h, &idx), NameUnit::Unknown);
