@@ -443,27 +443,19 @@ fn time_cell(
             }
             Ok(v)
         }
-        Err(CsvError::Cell {
-            path: p,
-            line,
-            col,
-            cell,
-            name,
-        }) => match parse_datetime_s(&cell) {
-            Some((secs, zoned)) if first_row || rows.datetime.is_some() => {
-                rows.datetime.get_or_insert_default().add(zoned);
-                Ok(secs)
+        Err(e) => {
+            let CsvError::Cell { cell, .. } = &e else {
+                return Err(e);
+            };
+            match parse_datetime_s(cell) {
+                Some((secs, zoned)) if first_row || rows.datetime.is_some() => {
+                    rows.datetime.get_or_insert_default().add(zoned);
+                    Ok(secs)
+                }
+                Some(_) => Err(mixed(cell, "a date-time", "a number")),
+                None => Err(e),
             }
-            Some(_) => Err(mixed(&cell, "a date-time", "a number")),
-            None => Err(CsvError::Cell {
-                path: p,
-                line,
-                col,
-                cell,
-                name,
-            }),
-        },
-        Err(e) => Err(e),
+        }
     }
 }
 
