@@ -33,7 +33,7 @@ impl DateTimeStamps {
 
 /// A date-time cell's seconds since 1970-01-01 UTC, and whether it gave its zone; `None` for
 /// anything else (a number is no date-time).
-pub fn parse_datetime_s(cell: &str) -> Option<(f64, bool)> {
+pub(super) fn parse_datetime_s(cell: &str) -> Option<(f64, bool)> {
     use chrono::{DateTime, NaiveDateTime};
     let c = cell.trim();
     // `YYYY-MM-DD?hh:mm:ss` at the least: nothing shorter is worth trying.

@@ -29,7 +29,6 @@ pub mod sniff;
 pub mod units;
 mod write;
 
-pub use datetime::parse_datetime_s;
 pub use error::CsvError;
 pub use options::{AccelUnit, CANON, G0, GyroUnit, ImportOptions, TimeUnit, parse_positions};
 pub use read::read_table_report;
