@@ -4,17 +4,19 @@
 //!   any recording on Earth, static or moving (a car, a walker, a bench: the median of |f| is
 //!   gravity's, the dynamics are the tails). Read as g it lies in [`ACCEL_G_BAND`] (0.5–2), read
 //!   as m/s² in [`ACCEL_MS2_BAND`] (5–20), as mg in [`ACCEL_MG_BAND`] (500–2000): a factor 2.5
-//!   or more apart, so one reading, never two. A median of 2 g would need a sustained 1.7 g of horizontal acceleration; one of 0.5 g
-//!   a sustained fall.
-//! * **Gyro** (deg/s vs rad/s), strongest evidence first: (1) |ω| beyond [`GYRO_MAX_RAD_S`] (35
-//!   rad/s = 2000 °/s, the top of common MEMS ranges) in at least [`GYRO_OVER_FRACTION`] of the
-//!   samples (a few spikes cannot decide it) can only be deg/s (or mdeg/s, where (2) says so); (2) the rotation of the measured
-//!   gravity direction `u` must agree with the integrated gyro: over short windows at low
-//!   dynamics `Δu ≈ −(∫ω dt) × u`, and the least-squares scale `k` of the gyro's prediction is 1
-//!   for rad/s, π/180 for deg/s, π/180 000 for mdeg/s ([`TiltFit`]). It counts only with enough tilting rotation
-//!   (measured by the accelerometer, so it does not depend on the gyro's unit) and a fit that
-//!   explains at least half of the measured tilt (R² ≥ [`TILT_MIN_R2`]); a static bench, a file
-//!   without accelerometer or a car that never tilts leave it undecided.
+//!   or more apart, so one reading, never two. A median of 2 g would need a sustained 1.7 g of
+//!   horizontal acceleration; one of 0.5 g a sustained fall.
+//! * **Gyro** (rad/s, deg/s or mdeg/s), strongest evidence first: (1) |ω| beyond
+//!   [`GYRO_MAX_RAD_S`] (35 rad/s = 2000 °/s, the top of common MEMS ranges) in at least
+//!   [`GYRO_OVER_FRACTION`] of the samples (a few spikes cannot decide it) can only be deg/s, or
+//!   mdeg/s where (2) says so; (2) the rotation of the measured gravity direction `u` must agree
+//!   with the integrated gyro: over short windows at low dynamics `Δu ≈ −(∫ω dt) × u`, and the
+//!   least-squares scale `k` of the gyro's prediction is 1 for rad/s, π/180 for deg/s, π/180 000
+//!   for mdeg/s ([`TiltFit`]). It counts only with enough tilting rotation (measured by the
+//!   accelerometer, so it does not depend on the gyro's unit) and a fit that explains at least
+//!   half of the measured tilt (R² ≥ [`TILT_MIN_R2`]); a static bench, a file without
+//!   accelerometer or a car that never tilts leave it undecided. At rest, deg/s and mdeg/s are
+//!   not told apart: (1) says deg/s and a warning names the other reading.
 //! * **Time**: a seconds reading whose median interval gives a rate outside [`TIME_RATE_HZ`]
 //!   (2 Hz–100 kHz) is no IMU; ms, µs, ns are tried in that order and the first in the band
 //!   taken.
