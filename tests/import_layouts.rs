@@ -756,3 +756,89 @@ fn the_real_walk_in_euroc_layout_imports_to_the_same_samples_as_the_original() {
     }
     assert!(worst_t <= 512, "time differs by {worst_t} ns");
 }
+
+#[test]
+fn gyro_and_accel_on_separate_rows_merge_onto_one_stream_and_say_so() {
+    // A logger writing each sensor event on its own row (phone apps, two ROS topics merged):
+    // gyro rows and accel rows, the other triad's cells empty, in deg/s and g (so the units are
+    // decided on the merged samples, by the gravity-direction fit).
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 11);
+    let empty = ",,";
+    // Both stamped alike, the accel row first: each gyro row's accel is its own time's (the
+    // interpolation weight is 0), so the merged samples are the truth.
+    let p = write(
+        dir.path(),
+        "same_time.csv",
+        "t,gx,gy,gz,ax,ay,az",
+        &rows,
+        |_, r| {
+            format!(
+                "{t},{empty},{}\n{t},{},{empty}",
+                join(&in_g(&r.f)),
+                join(&deg(&r.g)),
+                t = r.t
+            )
+        },
+    );
+    let (rate, s, rep) = import(&p);
+    assert_truth("separate rows, same stamps", rate, &s, &rows);
+    let m = rep.streams.as_ref().expect("merged");
+    assert_eq!(
+        (m.rows_read, m.gyro_only, m.accel_only),
+        (2 * N as u64, N as u64, N as u64)
+    );
+    assert_eq!((m.same_time, m.interpolated, m.unpaired), (N as u64, 0, 0));
+    assert_eq!(
+        (us(&rep, "gyro"), us(&rep, "accel")),
+        (("deg/s", "data"), ("g", "data"))
+    );
+    assert!(rep.empty_cells.is_empty(), "{rep}");
+
+    // The accel half a sample late, after its gyro row: a gyro row's accel is the mean of the
+    // accel rows on each side; the first gyro row has none before it, so its accel is missing.
+    let p = write(
+        dir.path(),
+        "offset.csv",
+        "t,gx,gy,gz,ax,ay,az",
+        &rows,
+        |_, r| {
+            format!(
+                "{},{},{empty}\n{},{empty},{}",
+                r.t,
+                join(&r.g),
+                r.t + 0.5 / FS,
+                join(&r.f)
+            )
+        },
+    );
+    let (rate, s, rep) = import(&p);
+    assert!((rate - FS).abs() < 1e-6, "{rate}");
+    assert_eq!(s.len(), N);
+    assert!(s[0].accel.iter().all(|v| v.is_nan()));
+    for k in 1..N {
+        for c in 0..3 {
+            let want = 0.5 * (rows[k - 1].f[c] + rows[k].f[c]);
+            assert!((s[k].accel[c] - want).abs() < 1e-9, "row {k} a{c}");
+            assert!((s[k].gyro[c] - rows[k].g[c]).abs() < 1e-9, "row {k} g{c}");
+        }
+    }
+    let m = rep.streams.as_ref().expect("merged");
+    assert_eq!(
+        (m.same_time, m.interpolated, m.unpaired),
+        (0, N as u64 - 1, 1)
+    );
+    assert_eq!(rep.empty_cells.len(), 3, "{rep}");
+    // The CLI says it.
+    let log = dir.path().join("offset.log");
+    let out = common::run_cli(&["import", p.to_str().unwrap(), "-o", log.to_str().unwrap()]);
+    assert!(
+        out.contains("two streams in one table (16000 rows read: 8000 with only the gyro, 8000 with only the accel, 0 with both): merged onto the gyro's time stamps"),
+        "{out}"
+    );
+    assert!(
+        out.contains("1 sample with no accel row on each side"),
+        "{out}"
+    );
+    assert!(out.contains("imported 8000 samples"), "{out}");
+}

@@ -26,6 +26,7 @@ mod read;
 mod report;
 mod scale;
 pub mod sniff;
+pub mod streams;
 pub mod units;
 mod write;
 

@@ -35,6 +35,7 @@ pub fn read_table_report(
         header: &header,
     };
     let mut rows = read_rows(&t, &mut rd, &mut rec)?;
+    let streams = two_streams(&t, &mut rows);
     let missing = missing_values(&t, &rows)?;
     // No rows, nothing to decide (the caller says there is nothing to import).
     let units = if rows.out.is_empty() {
@@ -54,7 +55,36 @@ pub fn read_table_report(
     for s in rows.out.iter_mut() {
         s.absent = missing.absent;
     }
-    Ok(finish(&t, rows, missing, units))
+    let (d, out, mut report) = finish(&t, rows, missing, units);
+    report.streams = streams;
+    Ok((d, out, report))
+}
+
+/// A table holding two streams (the gyro on some rows, the accelerometer on others) merged onto
+/// one's time stamps ([`super::streams`]); the empty cells recounted over the merged samples.
+/// Not with `--rate`: rows timed by their index have no time to merge on.
+fn two_streams(t: &Table, rows: &mut Rows) -> Option<super::streams::StreamMerge> {
+    if t.o.time_from_index_hz.is_some() {
+        return None;
+    }
+    let present = !t.lay.absent & crate::sample::ALL_CHANNELS;
+    let r = super::streams::merge(&mut rows.out, &mut rows.raw_t, &mut rows.lines, present)?;
+    rows.empty = [0; 6];
+    rows.first_empty = [None; 6];
+    rows.holey_rows.clear();
+    for (s, &line) in rows.out.iter().zip(&rows.lines) {
+        let v = s.channels();
+        let mut m = 0u8;
+        for c in (0..6).filter(|c| present & (1 << c) != 0 && v[*c].is_nan()) {
+            rows.empty[c] += 1;
+            rows.first_empty[c].get_or_insert(line);
+            m |= 1 << c;
+        }
+        if m != 0 {
+            rows.holey_rows.push((line, m));
+        }
+    }
+    Some(r)
 }
 
 /// The table being read: its file, format, options (with `--columns`' names), layout and header.

@@ -27,7 +27,7 @@ pub struct ImportReport {
     /// How the text table was read when it is not a comma-separated file with its header on
     /// line 1: the delimiter, decimal commas, comment lines skipped, no header.
     pub table: Option<TableFormat>,
-    /// Rows read (= samples).
+    /// Samples: the rows read (with two streams merged, the merged samples).
     pub rows: u64,
     /// The columns read (absent channels and, with `--rate`, the time column left out).
     pub columns: Vec<ColumnUse>,
@@ -48,6 +48,9 @@ pub struct ImportReport {
     pub empty_rows: u64,
     /// Line of the first such row.
     pub first_empty_row: Option<usize>,
+    /// The table held two streams (gyro rows and accelerometer rows) and was merged onto one's
+    /// time stamps; `rows` counts the merged samples.
+    pub streams: Option<super::streams::StreamMerge>,
 }
 
 impl std::fmt::Display for ImportReport {
@@ -67,6 +70,9 @@ impl std::fmt::Display for ImportReport {
                 "; channels absent (no column, or every cell empty): {} — written as absent, not as zeros",
                 self.absent.join(", ")
             )?;
+        }
+        if let Some(m) = &self.streams {
+            write!(f, "\n{m}")?;
         }
         // Missing values on a line of their own: a user must see them, not find them at the
         // end of the time summary.
