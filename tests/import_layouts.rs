@@ -842,3 +842,63 @@ fn gyro_and_accel_on_separate_rows_merge_onto_one_stream_and_say_so() {
     );
     assert!(out.contains("imported 8000 samples"), "{out}");
 }
+
+#[test]
+fn xsens_exports_are_timed_by_sample_time_fine_in_the_product_s_ticks() {
+    // MT Manager's export of an MTi: a comment preamble, tab-separated, PacketCounter, then
+    // SampleTimeFine in 100-µs ticks (10 kHz), Acc_X.. in m/s², Gyr_X.. in rad/s (the data
+    // decide the gyro unit: the sensor rolls).
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 5);
+    let mut text = String::from(
+        "// Start Time: Unknown\n// Update Rate: 200.0Hz\n// Filter Profile: human (46.1)\n\
+         PacketCounter\tSampleTimeFine\tAcc_X\tAcc_Y\tAcc_Z\tGyr_X\tGyr_Y\tGyr_Z\n",
+    );
+    let tab = |v: &[f64; 3]| join(v).replace(',', "\t");
+    for (i, r) in rows.iter().enumerate() {
+        // 50 ticks per sample from an arbitrary start.
+        writeln!(
+            text,
+            "{}\t{}\t{}\t{}",
+            i % 65536,
+            7_000_000 + 50 * i,
+            tab(&r.f),
+            tab(&r.g)
+        )
+        .unwrap();
+    }
+    let p = dir.path().join("MT_01.txt");
+    std::fs::write(&p, text).unwrap();
+    let (rate, s, rep) = import(&p);
+    common::assert_rows("xsens mti", (rate, FS), &s, &rows);
+    let (u, src, how) = unit(&rep, "time");
+    assert_eq!((u, src), ("100us", "name"), "{how}");
+    assert!(how.contains("as the Xsens MTi counts it"), "{how}");
+    assert_eq!(s[1].t_ns - s[0].t_ns, 5_000_000);
+    assert!(
+        columns(&rep).starts_with("t=SampleTimeFine,gx=Gyr_X"),
+        "{rep}"
+    );
+
+    // Xsens DOT (at most 120 Hz) counts µs: at 60 Hz, 16667 apart, which as 100-µs ticks
+    // would be 0.6 Hz.
+    let dot = common::rocking(2400, 60.0, 0.0, 20.0, 6);
+    let p = write(
+        dir.path(),
+        "dot.csv",
+        "PacketCounter,SampleTimeFine,Acc_X,Acc_Y,Acc_Z,Gyr_X,Gyr_Y,Gyr_Z",
+        &dot,
+        |i, r| {
+            let us = (i as f64 * 1e6 / 60.0).round() as u64;
+            format!("{i},{},{},{}", 1_000_000 + us, join(&r.f), join(&deg(&r.g)))
+        },
+    );
+    let (rate, s, rep) = import(&p);
+    assert!((rate - 60.0).abs() < 0.01, "{rate}");
+    assert_eq!(s.len(), dot.len());
+    let (u, src, how) = unit(&rep, "time");
+    assert_eq!((u, src), ("us", "name"), "{how}");
+    assert!(how.contains("as Xsens DOT counts it"), "{how}");
+    assert_eq!(us(&rep, "gyro"), ("deg/s", "data"), "{rep}");
+    assert!(rep.warnings.is_empty(), "{rep}");
+}

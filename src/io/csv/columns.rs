@@ -150,12 +150,19 @@ pub fn channel_of(t: &[String]) -> Result<Option<usize>, &'static str> {
     }
 }
 
-/// A time column: the first token `t`, `time`, `timestamp` or `gpst`, no `tick`.
+/// A time column: the first token `t`, `time`, `timestamp` or `gpst`, no `tick`; or Xsens'
+/// `SampleTimeFine`.
 fn is_time(t: &[String]) -> bool {
-    matches!(
+    (matches!(
         t.first().map(String::as_str),
         Some("t" | "time" | "timestamp" | "gpst")
-    ) && !t.iter().any(|x| x == "tick")
+    ) && !t.iter().any(|x| x == "tick"))
+        || xsens_fine(t)
+}
+
+/// Xsens' `SampleTimeFine` (MT Manager's exports): a 10 kHz counter, 100 µs per tick.
+fn xsens_fine(t: &[String]) -> bool {
+    t == ["sample", "time", "fine"]
 }
 
 /// Resolve the columns of t, gx, gy, gz, ax, ay, az, temp: `--col` names, exact canonical names,
@@ -323,7 +330,11 @@ pub fn accel_named(header: &[String], idx: &[Option<usize>; 8]) -> NameUnit<Acce
 /// What the time column's name says of its unit (`None`: nothing, the data are checked).
 pub fn time_named(header: &[String], idx: &[Option<usize>; 8]) -> Option<(TimeUnit, String)> {
     let name = header[idx[0]?].trim();
-    time_unit_of(&tokens(name)).map(|u| (u, name.to_string()))
+    let t = tokens(name);
+    if xsens_fine(&t) {
+        return Some((TimeUnit::Tick100Us, name.to_string()));
+    }
+    time_unit_of(&t).map(|u| (u, name.to_string()))
 }
 
 #[cfg(test)]

@@ -33,6 +33,9 @@ pub enum TimeUnit {
     Ms,
     Us,
     Ns,
+    /// Ticks of 100 µs (a 10 kHz clock: Xsens' `SampleTimeFine`).
+    #[value(name = "100us")]
+    Tick100Us,
 }
 
 impl GyroUnit {
@@ -64,6 +67,7 @@ impl TimeUnit {
             TimeUnit::Ms => 1e6,
             TimeUnit::Us => 1e3,
             TimeUnit::Ns => 1.0,
+            TimeUnit::Tick100Us => 1e5,
         }
     }
 }

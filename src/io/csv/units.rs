@@ -413,6 +413,7 @@ pub fn time_name(u: TimeUnit) -> &'static str {
         TimeUnit::Ms => "ms",
         TimeUnit::Us => "us",
         TimeUnit::Ns => "ns",
+        TimeUnit::Tick100Us => "100us",
     }
 }
 
@@ -620,13 +621,38 @@ pub fn decide_time(
 ) -> Decided<TimeUnit> {
     let plausible = plausible_time_unit(d);
     let rate = |u: TimeUnit| format!("{} Hz", num(rate_as(d, u)));
+    let fits = |u: TimeUnit| (TIME_RATE_HZ.0..=TIME_RATE_HZ.1).contains(&rate_as(d, u));
     let stated = match (opt, named) {
         (Some(u), _) => Some((u, stated_by(true, "", "--time-unit"), "option")),
+        // Xsens' `SampleTimeFine` counts 100-µs ticks on the MTi family and µs on Xsens DOT
+        // (≤ 120 Hz, so ≥ 8333 µs apart: below 2 Hz as 100-µs ticks); the rate picks.
+        (None, Some((TimeUnit::Tick100Us, col))) => {
+            let (u, which) = if !fits(TimeUnit::Tick100Us) && fits(TimeUnit::Us) {
+                (TimeUnit::Us, "µs, as Xsens DOT counts it")
+            } else {
+                (
+                    TimeUnit::Tick100Us,
+                    "100-µs ticks, as the Xsens MTi counts it",
+                )
+            };
+            Some((
+                u,
+                format!(
+                    "{} ({which}: the MTi's 100-µs ticks give {}, DOT's µs {})",
+                    stated_by(false, col, ""),
+                    rate(TimeUnit::Tick100Us),
+                    rate(TimeUnit::Us)
+                ),
+                "name",
+            ))
+        }
         (None, Some((u, col))) => Some((*u, stated_by(false, col, ""), "name")),
         _ => None,
     };
     if let Some((u, by, source)) = stated {
-        let warning = plausible.filter(|v| *v != u).map(|v| {
+        // Only when the stated unit gives no IMU's rate: another unit giving one too (a 2 kHz
+        // file stamped in ms reads as 2 Hz in s) contradicts nothing.
+        let warning = plausible.filter(|v| *v != u && !fits(u)).map(|v| {
             format!(
                 "time: {by} says {}, but then the median interval {} {} gives {}, no IMU's rate; as {} it gives {}: if so, pass --time-unit {}",
                 time_name(u),

@@ -66,3 +66,28 @@ fn accel_bands_and_time_units() {
     assert_eq!(plausible_time_unit(5e6), Some(TimeUnit::Ns));
     assert_eq!(plausible_time_unit(1e12), None);
 }
+
+#[test]
+fn a_stated_time_unit_is_warned_about_only_when_it_gives_no_imu_rate() {
+    let ms = Some((TimeUnit::Ms, "time_ms".to_string()));
+    // 2 kHz stamped in ms (0.5 ms apart) is an IMU's rate: read as s it would be 2 Hz, which
+    // contradicts nothing.
+    let d = decide_time(None, ms.as_ref(), 0.5);
+    assert_eq!(d.unit, TimeUnit::Ms);
+    assert!(d.warning.is_none(), "{:?}", d.warning);
+    // 1 Hz in "ms" (1000 apart) is none; as µs it is 1 kHz: warned, kept.
+    let d = decide_time(None, ms.as_ref(), 1000.0);
+    assert_eq!(d.unit, TimeUnit::Ms);
+    assert!(d.warning.unwrap().contains("--time-unit us"));
+    // Xsens' SampleTimeFine: the rate picks the product's tick.
+    let fine = Some((TimeUnit::Tick100Us, "SampleTimeFine".to_string()));
+    assert_eq!(
+        decide_time(None, fine.as_ref(), 10.0).unit,
+        TimeUnit::Tick100Us
+    );
+    assert_eq!(decide_time(None, fine.as_ref(), 8333.0).unit, TimeUnit::Us);
+    assert_eq!(
+        decide_time(Some(TimeUnit::Ns), fine.as_ref(), 8333.0).unit,
+        TimeUnit::Ns
+    );
+}
