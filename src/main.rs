@@ -73,6 +73,11 @@ enum Cmd {
         /// Output replay log (native).
         #[arg(short, long)]
         output: PathBuf,
+        /// The accelerometer's own table, when each sensor has a file (phone sensor apps): INPUT
+        /// is then the gyro's. Bare x, y, z columns are each file's triad; the rows are merged
+        /// onto the file with more rows, the other interpolated between its rows on each side.
+        #[arg(long, value_name = "FILE")]
+        accel_file: Option<PathBuf>,
         /// Column mapping by header name, repeatable: --col gx=gyro_x_dps (keys: t gx gy gz ax
         /// ay az temp).
         #[arg(long = "col")]
@@ -431,6 +436,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             input,
             proto,
             output,
+            accel_file,
             cols,
             columns,
             gyro_unit,
@@ -453,7 +459,11 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             };
             report::convert::parse_columns(&cols, &mut o)?;
             report::convert::parse_positions(columns.as_deref(), &mut o)?;
-            eprint!("{}", report::convert::import(&input, &output, &proto, &o)?);
+            let r = match accel_file {
+                Some(a) => report::convert::import_per_sensor(&input, &a, &output, &o)?,
+                None => report::convert::import(&input, &output, &proto, &o)?,
+            };
+            eprint!("{r}");
             Ok(ExitCode::SUCCESS)
         }
         Cmd::Simulate {

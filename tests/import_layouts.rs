@@ -902,3 +902,93 @@ fn xsens_exports_are_timed_by_sample_time_fine_in_the_product_s_ticks() {
     assert_eq!(us(&rep, "gyro"), ("deg/s", "data"), "{rep}");
     assert!(rep.warnings.is_empty(), "{rep}");
 }
+
+#[test]
+fn one_table_per_sensor_imports_merged_with_accel_file() {
+    // A phone sensor app's export: Gyroscope.csv and TotalAcceleration.csv, each `time` (ns since
+    // 1970), `seconds_elapsed`, then bare z, y, x; the accelerometer 1 ms after the gyro. Units
+    // are stated nowhere: the gravity-direction fit decides them on the merged samples.
+    use imuprep::io::csv::read_per_sensor_report;
+    const T0: u64 = 1_700_000_000_000_000_000;
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 8);
+    let header = "time,seconds_elapsed,z,y,x";
+    let zyx = |v: &[f64; 3]| format!("{},{},{}", v[2], v[1], v[0]);
+    let stamp = |i: usize, late_ns: u64| T0 + i as u64 * 5_000_000 + late_ns;
+    let g = write(dir.path(), "Gyroscope.csv", header, &rows, |i, r| {
+        format!("{},{},{}", stamp(i, 0), r.t, zyx(&r.g))
+    });
+    let a = write(
+        dir.path(),
+        "TotalAcceleration.csv",
+        header,
+        &rows,
+        |i, r| format!("{},{},{}", stamp(i, 1_000_000), r.t + 0.001, zyx(&r.f)),
+    );
+    let (d, s, rep) =
+        read_per_sensor_report(&g, &a, &ImportOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert!((d.sample_rate_hz - FS).abs() < 1e-6);
+    assert_eq!(s.len(), N);
+    // Gyro rows unaltered; each accel the linear interpolation between the accel rows on each
+    // side, at the weight the stamps give as read (f64 of the ns integers); the first gyro row
+    // has none before it.
+    assert!(s[0].accel.iter().all(|v| v.is_nan()));
+    for k in 1..N {
+        let (ta, tb, ti) = (
+            stamp(k - 1, 1_000_000) as f64,
+            stamp(k, 1_000_000) as f64,
+            stamp(k, 0) as f64,
+        );
+        let w = (ti - ta) / (tb - ta);
+        for c in 0..3 {
+            let want = rows[k - 1].f[c] + w * (rows[k].f[c] - rows[k - 1].f[c]);
+            assert!((s[k].accel[c] - want).abs() < 1e-9, "row {k} a{c}");
+            assert!((s[k].gyro[c] - rows[k].g[c]).abs() < 1e-9, "row {k} g{c}");
+        }
+    }
+    let m = rep.streams.as_ref().expect("merged");
+    assert_eq!(
+        (m.gyro_only, m.accel_only, m.interpolated, m.unpaired),
+        (8000, 8000, 7999, 1)
+    );
+    assert_eq!(us(&rep, "gyro"), ("rad/s", "data"), "{rep}");
+    assert_eq!(us(&rep, "accel"), ("m/s²", "data"), "{rep}");
+    assert_eq!(us(&rep, "time"), ("ns", "data"), "{rep}");
+    assert!(
+        columns(&rep).contains("gx=Gyroscope.csv:x")
+            && columns(&rep).contains("az=TotalAcceleration.csv:z"),
+        "{rep}"
+    );
+    // The CLI.
+    let log = dir.path().join("phone.log");
+    let out = common::run_cli(&[
+        "import",
+        g.to_str().unwrap(),
+        "--accel-file",
+        a.to_str().unwrap(),
+        "-o",
+        log.to_str().unwrap(),
+    ]);
+    assert!(
+        out.contains("two streams in one table (16000 rows read"),
+        "{out}"
+    );
+    assert!(out.contains("TotalAcceleration.csv into"), "{out}");
+
+    // Refused, each with the reason: the same file twice, time in different units, no overlap.
+    let refused = |accel: &Path, why: &str| {
+        let e = read_per_sensor_report(&g, accel, &ImportOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(why), "{e}");
+    };
+    refused(&g, "names the input itself");
+    let secs = write(dir.path(), "acc_s.csv", header, &rows, |_, r| {
+        format!("{},{},{}", r.t + 1.7e9, r.t, zyx(&r.f))
+    });
+    refused(&secs, "two time units?");
+    let later = write(dir.path(), "acc_later.csv", header, &rows, |i, r| {
+        format!("{},{},{}", stamp(i + 2 * N, 0), r.t, zyx(&r.f))
+    });
+    refused(&later, "do not overlap");
+}

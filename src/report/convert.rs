@@ -46,6 +46,8 @@ pub fn parse_positions(spec: Option<&str>, o: &mut ImportOptions) -> Result<()> 
 #[derive(Debug, Clone, Serialize)]
 pub struct ImportReport {
     pub input: PathBuf,
+    /// The accelerometer's own table (`--accel-file`; `input` is then the gyro's).
+    pub accel_input: Option<PathBuf>,
     pub output: PathBuf,
     /// `"<protocol> input: <what was found>"` when the input went through a protocol decoder.
     pub decoded: Option<String>,
@@ -117,9 +119,22 @@ pub fn import(
             timing,
         )
     };
-    csvio::write_log(output, &d, &samples)?;
+    written(input, None, output, (&d, &samples), decoded, timing)
+}
+
+/// The imported samples written to `output` as a native log, and the report of it.
+fn written(
+    input: &Path,
+    accel_input: Option<&Path>,
+    output: &Path,
+    (d, samples): (&crate::frame::Descriptor, &[crate::sample::Sample]),
+    decoded: Option<String>,
+    timing: Option<String>,
+) -> Result<ImportReport> {
+    csvio::write_log(output, d, samples)?;
     Ok(ImportReport {
         input: input.to_path_buf(),
+        accel_input: accel_input.map(Path::to_path_buf),
         output: output.to_path_buf(),
         decoded,
         timing,
@@ -127,6 +142,25 @@ pub fn import(
         duration_s: samples.last().map_or(0.0, |s| s.t_s() - samples[0].t_s()),
         sample_rate_hz: d.sample_rate_hz,
     })
+}
+
+/// `import GYRO --accel-file ACCEL`: one table per sensor, merged
+/// ([`csvio::read_per_sensor_report`]).
+pub fn import_per_sensor(
+    gyro: &Path,
+    accel: &Path,
+    output: &Path,
+    o: &ImportOptions,
+) -> Result<ImportReport> {
+    let (d, s, report) = csvio::read_per_sensor_report(gyro, accel, o)?;
+    written(
+        gyro,
+        Some(accel),
+        output,
+        (&d, &s),
+        None,
+        Some(report.to_string()),
+    )
 }
 
 /// A native log's sequence and frame faults, said at import as a CSV's time faults are (they
@@ -182,11 +216,14 @@ impl fmt::Display for ImportReport {
         }
         writeln!(
             f,
-            "imported {} ({:.1} s at {:.2} Hz) from {} into {}",
+            "imported {} ({:.1} s at {:.2} Hz) from {}{} into {}",
             count(self.samples as u64, "sample", "samples"),
             self.duration_s,
             self.sample_rate_hz,
             self.input.display(),
+            self.accel_input
+                .as_ref()
+                .map_or(String::new(), |a| format!(" and {}", a.display())),
             self.output.display()
         )
     }

@@ -19,6 +19,7 @@
 //! orientation, quaternion, Euler angles, magnetometer, covariance, ...). An exact canonical name
 //! (`gx`) wins over token matches; two token matches for one channel are an error naming both.
 
+use super::streams::Triad;
 use super::{AccelUnit, CANON, GyroUnit, ImportOptions, TimeUnit};
 
 /// Tokens that make a column no sensor column (an estimate or a derived quantity).
@@ -175,6 +176,23 @@ pub fn resolve(header: &[String], o: &ImportOptions) -> Result<[Option<usize>; 8
     for (p, t) in toks.iter().enumerate() {
         if let Some(c) = channel_of(t).map_err(|m| format!("column {:?} {m}", header[p]))? {
             cand[c].push(p);
+        }
+    }
+    // One table per sensor: its triad's columns only, and bare `x`, `y`, `z` are its axes.
+    if let Some(only) = o.only {
+        let first = if only == Triad::Gyro { 0 } else { 3 };
+        for (c, v) in cand.iter_mut().enumerate() {
+            if !(first..first + 3).contains(&c) {
+                v.clear();
+            }
+        }
+        for (p, t) in toks.iter().enumerate() {
+            if let [x] = t.as_slice()
+                && let Some(a) = ["x", "y", "z"].iter().position(|n| n == x)
+                && cand[first + a].is_empty()
+            {
+                cand[first + a].push(p);
+            }
         }
     }
     for (k, canon) in CANON.iter().enumerate() {

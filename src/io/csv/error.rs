@@ -32,6 +32,9 @@ pub enum CsvError {
         cell: String,
         name: String,
     },
+    /// Two files that cannot be read as one recording (`import --accel-file`).
+    #[error("{path}: {msg}")]
+    Pair { path: PathBuf, msg: String },
     #[error("{path}:{line}: {msg}")]
     Row {
         path: PathBuf,

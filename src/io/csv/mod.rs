@@ -22,6 +22,7 @@ mod datetime;
 mod error;
 mod layout;
 mod options;
+mod per_sensor;
 mod read;
 mod report;
 mod scale;
@@ -32,6 +33,7 @@ mod write;
 
 pub use error::CsvError;
 pub use options::{AccelUnit, CANON, G0, GyroUnit, ImportOptions, TimeUnit, parse_positions};
+pub use per_sensor::read_per_sensor_report;
 pub use read::read_table_report;
 pub use report::{ColumnUse, EmptyCells, ImportReport};
 pub use sniff::{Delimiter, Sniffed, TableFormat, sniff_file};

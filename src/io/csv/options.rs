@@ -92,6 +92,9 @@ pub struct ImportOptions {
     pub gyro_range_rad_s: f32,
     pub accel_range_m_s2: f32,
     pub device_id: u32,
+    /// The file holds this triad only (one table per sensor, `import --accel-file`): the other
+    /// triad's columns are not read, and bare `x`, `y`, `z` columns are this triad's.
+    pub only: Option<super::streams::Triad>,
 }
 
 /// The keys of `--col` and `--columns`, in the order of [`ImportOptions::columns`].

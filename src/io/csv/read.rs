@@ -34,16 +34,26 @@ pub fn read_table_report(
         lay: &lay,
         header: &header,
     };
-    let mut rows = read_rows(&t, &mut rd, &mut rec)?;
-    let streams = two_streams(&t, &mut rows);
-    let missing = missing_values(&t, &rows)?;
+    let rows = read_rows(&t, &mut rd, &mut rec)?;
+    conclude(&t, rows)
+}
+
+/// The rows read, concluded: two streams merged ([`two_streams`]), the missing values judged,
+/// the units decided and applied, the report made.
+pub(super) fn conclude(
+    t: &Table,
+    mut rows: Rows,
+) -> Result<(Descriptor, Vec<Sample>, ImportReport), CsvError> {
+    let (header, lay, o, path) = (t.header, t.lay, t.o, t.path);
+    let streams = two_streams(t, &mut rows);
+    let missing = missing_values(t, &rows)?;
     // No rows, nothing to decide (the caller says there is nothing to import).
     let units = if rows.out.is_empty() {
         Default::default()
     } else {
         decide_units(
-            &header,
-            &lay,
+            header,
+            lay,
             o,
             missing.absent,
             (&rows.raw_t, rows.datetime.as_ref()),
@@ -55,7 +65,7 @@ pub fn read_table_report(
     for s in rows.out.iter_mut() {
         s.absent = missing.absent;
     }
-    let (d, out, mut report) = finish(&t, rows, missing, units);
+    let (d, out, mut report) = finish(t, rows, missing, units);
     report.streams = streams;
     Ok((d, out, report))
 }
@@ -63,7 +73,7 @@ pub fn read_table_report(
 /// A table holding two streams (the gyro on some rows, the accelerometer on others) merged onto
 /// one's time stamps ([`super::streams`]); the empty cells recounted over the merged samples.
 /// Not with `--rate`: rows timed by their index have no time to merge on.
-fn two_streams(t: &Table, rows: &mut Rows) -> Option<super::streams::StreamMerge> {
+pub(super) fn two_streams(t: &Table, rows: &mut Rows) -> Option<super::streams::StreamMerge> {
     if t.o.time_from_index_hz.is_some() {
         return None;
     }
@@ -88,12 +98,12 @@ fn two_streams(t: &Table, rows: &mut Rows) -> Option<super::streams::StreamMerge
 }
 
 /// The table being read: its file, format, options (with `--columns`' names), layout and header.
-struct Table<'a> {
-    path: &'a Path,
-    fmt: &'a TableFormat,
-    o: &'a ImportOptions,
-    lay: &'a Layout,
-    header: &'a [String],
+pub(super) struct Table<'a> {
+    pub(super) path: &'a Path,
+    pub(super) fmt: &'a TableFormat,
+    pub(super) o: &'a ImportOptions,
+    pub(super) lay: &'a Layout,
+    pub(super) header: &'a [String],
 }
 
 fn open_text(path: &Path) -> Result<Box<dyn BufRead>, CsvError> {
@@ -110,7 +120,7 @@ fn open_text(path: &Path) -> Result<Box<dyn BufRead>, CsvError> {
 }
 
 /// The table's records after its preamble, read errors said at the file's line.
-struct Records<'a> {
+pub(super) struct Records<'a> {
     rd: csv::Reader<Box<dyn Read>>,
     path: &'a Path,
     /// The preamble's lines: the `csv` crate's line numbers are this short of the file's.
@@ -119,7 +129,7 @@ struct Records<'a> {
 }
 
 impl<'a> Records<'a> {
-    fn open(path: &'a Path, fmt: &TableFormat) -> Result<Records<'a>, CsvError> {
+    pub(super) fn open(path: &'a Path, fmt: &TableFormat) -> Result<Records<'a>, CsvError> {
         let io_err = |err| CsvError::Io {
             path: path.into(),
             err,
@@ -183,7 +193,7 @@ impl<'a> Records<'a> {
 
 /// The first record's cells, trimmed (a byte-order mark before the first dropped, a header's
 /// marker cell skipped); left in `rec` too, the first data row of a headerless file.
-fn first_record(
+pub(super) fn first_record(
     rd: &mut Records,
     rec: &mut csv::StringRecord,
     fmt: &TableFormat,
@@ -210,7 +220,7 @@ fn first_record(
 
 /// The header, or (columns by position) names for the columns, and the options with the
 /// positions' names; `first` is the first data row when the file has no header.
-fn name_columns(
+pub(super) fn name_columns(
     path: &Path,
     o: &ImportOptions,
     fmt: &TableFormat,
@@ -266,29 +276,33 @@ fn name_columns(
 }
 
 /// The rows read, channels as the file has them (the time stamped only with `--rate`).
-struct Rows {
-    out: Vec<Sample>,
+pub(super) struct Rows {
+    pub(super) out: Vec<Sample>,
     /// The time column's numbers and each row's line (for errors), in the file's unit.
-    raw_t: Vec<f64>,
-    lines: Vec<usize>,
+    pub(super) raw_t: Vec<f64>,
+    pub(super) lines: Vec<usize>,
     /// Empty cells per channel, and the line of the first; the rows with any empty channel cell
     /// (line, mask of the empty channels), to find those left with no value at all.
-    empty: [usize; 6],
-    first_empty: [Option<usize>; 6],
-    holey_rows: Vec<(usize, u8)>,
+    pub(super) empty: [usize; 6],
+    pub(super) first_empty: [Option<usize>; 6],
+    pub(super) holey_rows: Vec<(usize, u8)>,
     /// The cells a row must have, and what has them ("header" or "first row").
-    want: usize,
-    against: &'static str,
+    pub(super) want: usize,
+    pub(super) against: &'static str,
     /// The file's last row when it was cut short: (line, cells).
-    cut_last: Option<(usize, usize)>,
+    pub(super) cut_last: Option<(usize, usize)>,
     /// The time column's stamps when they are date-times (the first row decides; `raw_t` then
     /// holds seconds since 1970 UTC).
-    datetime: Option<DateTimeStamps>,
+    pub(super) datetime: Option<DateTimeStamps>,
 }
 
 /// Every row after the header (from the one in `rec` when the file has none), each checked for
 /// its count of cells and read by [`read_row`].
-fn read_rows(t: &Table, rd: &mut Records, rec: &mut csv::StringRecord) -> Result<Rows, CsvError> {
+pub(super) fn read_rows(
+    t: &Table,
+    rd: &mut Records,
+    rec: &mut csv::StringRecord,
+) -> Result<Rows, CsvError> {
     let (path, fmt, header) = (t.path, t.fmt, t.header);
     // A row must have the header's cells (trailing empty ones aside): a short row, or one with
     // cells past the header, is a line cut short, another delimiter or decimal commas in a
@@ -490,7 +504,7 @@ fn time_cell(
 }
 
 /// The channels absent and the missing values, judged over the whole file.
-struct Missing {
+pub(super) struct Missing {
     /// Channels without a column or with a column empty in every row (bit `c` for channel `c`).
     absent: u8,
     empty_cells: Vec<EmptyCells>,
@@ -500,7 +514,7 @@ struct Missing {
 
 /// Which channels are absent, which cells and rows are missing values; an error when no
 /// channel has any value.
-fn missing_values(t: &Table, rows: &Rows) -> Result<Missing, CsvError> {
+pub(super) fn missing_values(t: &Table, rows: &Rows) -> Result<Missing, CsvError> {
     // A channel column empty in every row is an absent channel (the sensor has no such
     // channel); an empty cell in a column with values elsewhere is a missing value: the row is
     // kept (its other channels are measurements), the value NaN, which the decoders and the
@@ -547,7 +561,7 @@ fn missing_values(t: &Table, rows: &Rows) -> Result<Missing, CsvError> {
 
 /// The report of the import and the descriptor it implies, the samples' sequence and time
 /// faults derived from their time stamps (with `--rate`, the rate given).
-fn finish(
+pub(super) fn finish(
     t: &Table,
     rows: Rows,
     missing: Missing,

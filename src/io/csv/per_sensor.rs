@@ -1,0 +1,205 @@
+//! One table per sensor (`imuprep import GYRO.csv --accel-file ACCEL.csv`): phone sensor apps and
+//! many loggers write the gyro and the accelerometer to files of their own, each with its own
+//! time stamps. Each file is read as a table of its triad (bare `x`, `y`, `z` columns are that
+//! triad's; the other triad's columns are not read), the rows of both are interleaved by time,
+//! and the result is concluded as one table holding two streams ([`super::streams`]): merged onto
+//! the stream with more rows, units decided on the merged samples, every count in the report.
+
+use super::layout::{Layout, detect};
+use super::read::{Records, Rows, Table, conclude, first_record, name_columns, read_rows};
+use super::sniff::{Sniffed, TableFormat, sniff_file};
+use super::streams::Triad;
+use super::{CsvError, ImportOptions, ImportReport};
+use crate::frame::Descriptor;
+use crate::sample::Sample;
+use std::path::Path;
+
+/// The most the two files' median intervals may differ, ×: more is two time units, not two
+/// rates (phones run their sensors within a few × of each other; units differ by 1000×).
+const MAX_RATE_RATIO: f64 = 30.0;
+
+/// One file read as the table of one triad.
+struct Part {
+    header: Vec<String>,
+    lay: Layout,
+    rows: Rows,
+}
+
+fn read_part(path: &Path, o: &ImportOptions, only: Triad) -> Result<Part, CsvError> {
+    let fmt = match sniff_file(path) {
+        Sniffed::Table(f) => f,
+        _ => TableFormat::default(),
+    };
+    let mut o = o.clone();
+    o.only = Some(only);
+    let mut rd = Records::open(path, &fmt)?;
+    let mut rec = csv::StringRecord::new();
+    let first = first_record(&mut rd, &mut rec, &fmt)?;
+    let (header, named) = name_columns(path, &o, &fmt, first)?;
+    let mut lay = detect(&header, &named, path)?;
+    // Not the other triad's, even by canonical name or `--col`: this file is this triad's.
+    let other = if only == Triad::Gyro { 4..=6 } else { 1..=3 };
+    for k in other {
+        lay.idx[k] = None;
+        lay.absent |= 1 << (k - 1);
+    }
+    let t = Table {
+        path,
+        fmt: &fmt,
+        o: &named,
+        lay: &lay,
+        header: &header,
+    };
+    let rows = read_rows(&t, &mut rd, &mut rec)?;
+    Ok(Part { header, lay, rows })
+}
+
+fn median_step(t: &[f64]) -> f64 {
+    let mut d: Vec<f64> = t
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
+        .collect();
+    if d.is_empty() {
+        f64::NAN
+    } else {
+        crate::stats::robust::median(&mut d)
+    }
+}
+
+/// Read the gyro's table and the accelerometer's, and merge them (module docs).
+pub fn read_per_sensor_report(
+    gyro: &Path,
+    accel: &Path,
+    o: &ImportOptions,
+) -> Result<(Descriptor, Vec<Sample>, ImportReport), CsvError> {
+    let problem = |msg: String| CsvError::Pair {
+        path: accel.into(),
+        msg,
+    };
+    if !o.positions.is_empty() || o.time_from_index_hz.is_some() {
+        return Err(problem(
+            "--accel-file reads each file's header and time column: --columns and --rate do not apply"
+                .into(),
+        ));
+    }
+    if gyro.canonicalize().ok() == accel.canonicalize().ok() {
+        return Err(problem(
+            "--accel-file names the input itself: give the accelerometer's own table".into(),
+        ));
+    }
+    let g = read_part(gyro, o, Triad::Gyro)?;
+    let a = read_part(accel, o, Triad::Accel)?;
+    for (p, path) in [(&g, gyro), (&a, accel)] {
+        if p.rows.out.is_empty() {
+            return Err(problem(format!("{}: no data rows", path.display())));
+        }
+        if p.rows.datetime.is_some() != g.rows.datetime.is_some() {
+            return Err(problem(
+                "one file's time column holds date-times, the other's numbers: they cannot be interleaved".into(),
+            ));
+        }
+    }
+    let (dg, da) = (median_step(&g.rows.raw_t), median_step(&a.rows.raw_t));
+    let ratio = (dg / da).max(da / dg);
+    // NaN (a file with fewer than two distinct stamps) is refused too.
+    if ratio.is_nan() || ratio > MAX_RATE_RATIO {
+        return Err(problem(format!(
+            "the two files' time stamps are {} vs {} apart (median, in each file's numbers): {}× — two time units? Both files' time columns must count in the same unit",
+            super::units::num(dg),
+            super::units::num(da),
+            super::units::num(ratio)
+        )));
+    }
+    let span = |r: &Rows| {
+        let (lo, hi) = r
+            .raw_t
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), t| {
+                (l.min(*t), h.max(*t))
+            });
+        (lo, hi)
+    };
+    let (sg, sa) = (span(&g.rows), span(&a.rows));
+    if sg.1 < sa.0 || sa.1 < sg.0 {
+        return Err(problem(format!(
+            "the two files' time stamps do not overlap (gyro {}…{}, accelerometer {}…{}): not one recording, or different clocks",
+            super::units::num(sg.0),
+            super::units::num(sg.1),
+            super::units::num(sa.0),
+            super::units::num(sa.1)
+        )));
+    }
+    // One header: the gyro file's columns, then the accelerometer file's, each named with its
+    // file (both may have an `x`).
+    let shift = g.header.len();
+    let file = |p: &Path| {
+        p.file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into_owned())
+    };
+    let header: Vec<String> = g
+        .header
+        .iter()
+        .map(|h| format!("{}:{h}", file(gyro)))
+        .chain(a.header.iter().map(|h| format!("{}:{h}", file(accel))))
+        .collect();
+    // Time and gyro from the gyro's file, accel from the accelerometer's, temperature from
+    // either.
+    let mut idx = g.lay.idx;
+    for (k, v) in idx.iter_mut().enumerate().skip(4) {
+        let theirs = a.lay.idx[k].map(|p| p + shift);
+        *v = if k == 7 { v.or(theirs) } else { theirs };
+    }
+    let lay = Layout {
+        idx,
+        gyro: g.lay.gyro.clone(),
+        accel: a.lay.accel.clone(),
+        time: g.lay.time.clone().or(a.lay.time.clone()),
+        absent: (g.lay.absent & 0b000111) | (a.lay.absent & 0b111000),
+    };
+    // The rows of both, interleaved by time (each file's own order kept).
+    let (gr, ar) = (g.rows, a.rows);
+    let n = gr.out.len() + ar.out.len();
+    let mut rows = Rows {
+        out: Vec::with_capacity(n),
+        raw_t: Vec::with_capacity(n),
+        lines: Vec::with_capacity(n),
+        empty: [0; 6],
+        first_empty: [None; 6],
+        holey_rows: Vec::new(),
+        want: gr.want,
+        against: gr.against,
+        cut_last: gr.cut_last.or(ar.cut_last),
+        datetime: gr.datetime,
+    };
+    let (mut i, mut j) = (0, 0);
+    while i < gr.out.len() || j < ar.out.len() {
+        let take_g = j >= ar.out.len() || (i < gr.out.len() && gr.raw_t[i] <= ar.raw_t[j]);
+        let (src, k) = if take_g { (&gr, i) } else { (&ar, j) };
+        rows.out.push(src.out[k]);
+        rows.raw_t.push(src.raw_t[k]);
+        rows.lines.push(src.lines[k]);
+        if take_g {
+            i += 1;
+        } else {
+            j += 1;
+        }
+    }
+    let fmt = TableFormat::default();
+    let t = Table {
+        path: gyro,
+        fmt: &fmt,
+        o,
+        lay: &lay,
+        header: &header,
+    };
+    let (d, s, mut report) = conclude(&t, rows)?;
+    if report.streams.is_none() {
+        return Err(problem(
+            "the gyro's and the accelerometer's rows could not be merged (one file holds no values?)"
+                .into(),
+        ));
+    }
+    report.table = None;
+    Ok((d, s, report))
+}
