@@ -901,6 +901,34 @@ fn xsens_exports_are_timed_by_sample_time_fine_in_the_product_s_ticks() {
     assert!(how.contains("as Xsens DOT counts it"), "{how}");
     assert_eq!(us(&rep, "gyro"), ("deg/s", "data"), "{rep}");
     assert!(rep.warnings.is_empty(), "{rep}");
+    assert!(rep.notes.is_empty(), "{rep}");
+
+    // DOT's µs counter wraps at 2³² (1.2 h): started 10 s before the wrap, the stamps run on.
+    let start = (1u64 << 32) - 10_000_000;
+    let p = write(
+        dir.path(),
+        "dot_wrap.csv",
+        "PacketCounter,SampleTimeFine,Acc_X,Acc_Y,Acc_Z,Gyr_X,Gyr_Y,Gyr_Z",
+        &dot,
+        |i, r| {
+            let us = start + (i as f64 * 1e6 / 60.0).round() as u64;
+            format!("{i},{},{},{}", us % (1 << 32), join(&r.f), join(&deg(&r.g)))
+        },
+    );
+    let (rate, s, rep) = import(&p);
+    assert!((rate - 60.0).abs() < 0.01, "{rate}");
+    assert_eq!(
+        (rep.time.gaps, rep.time.backwards, rep.time.restarts),
+        (0, 0, 0),
+        "{rep}"
+    );
+    let span = s.last().unwrap().t_ns - s[0].t_ns;
+    assert_eq!(span, (2399.0f64 * 1e6 / 60.0).round() as u64 * 1000);
+    assert!(
+        rep.to_string()
+            .contains("the 32-bit counter \"SampleTimeFine\" wrapped 1 time"),
+        "{rep}"
+    );
 }
 
 #[test]

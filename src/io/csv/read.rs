@@ -45,6 +45,14 @@ pub(super) fn conclude(
     mut rows: Rows,
 ) -> Result<(Descriptor, Vec<Sample>, ImportReport), CsvError> {
     let (header, lay, o, path) = (t.header, t.lay, t.o, t.path);
+    // Xsens' SampleTimeFine is a 32-bit counter: it wraps after 1.2 h on DOT (µs), 119 h on
+    // the MTi (100-µs ticks). A step back by most of 2³² is a wrap, not time running backwards.
+    let xsens = matches!(lay.time, Some((super::TimeUnit::Tick100Us, _)));
+    let wraps = if xsens && o.time_from_index_hz.is_none() {
+        unwrap_u32(&mut rows.raw_t)
+    } else {
+        0
+    };
     let streams = two_streams(t, &mut rows);
     let missing = missing_values(t, &rows)?;
     // No rows, nothing to decide (the caller says there is nothing to import).
@@ -67,7 +75,30 @@ pub(super) fn conclude(
     }
     let (d, out, mut report) = finish(t, rows, missing, units);
     report.streams = streams;
+    if wraps > 0 {
+        report.notes.push(format!(
+            "time: the 32-bit counter {:?} wrapped {} (a step back by more than 2³¹ counts): unwrapped",
+            header[lay.idx[0].unwrap_or(0)],
+            crate::text::count(wraps, "time", "times")
+        ));
+    }
     Ok((d, out, report))
+}
+
+/// A 32-bit counter's wraps taken out of `t` (each step back by more than 2³¹ adds 2³² to
+/// every later value); how many.
+fn unwrap_u32(t: &mut [f64]) -> u64 {
+    const M: f64 = 4_294_967_296.0;
+    let (mut add, mut wraps, mut prev) = (0.0, 0u64, f64::NAN);
+    for v in t.iter_mut() {
+        if *v < prev - M / 2.0 {
+            add += M;
+            wraps += 1;
+        }
+        prev = *v;
+        *v += add;
+    }
+    wraps
 }
 
 /// A table holding two streams (the gyro on some rows, the accelerometer on others) merged onto

@@ -51,6 +51,8 @@ pub struct ImportReport {
     /// The table held two streams (gyro rows and accelerometer rows) and was merged onto one's
     /// time stamps; `rows` counts the merged samples.
     pub streams: Option<super::streams::StreamMerge>,
+    /// What the import did to the time stamps besides the unit (a counter's wraps unwrapped).
+    pub notes: Vec<String>,
 }
 
 impl std::fmt::Display for ImportReport {
@@ -113,6 +115,9 @@ impl std::fmt::Display for ImportReport {
         }
         for u in &self.units {
             write!(f, "\n{u}")?;
+        }
+        for n in &self.notes {
+            write!(f, "\n{n}")?;
         }
         for w in &self.warnings {
             write!(f, "\nWARNING: {w}")?;
