@@ -1,4 +1,5 @@
 use super::*;
+use crate::io::csv::TimeUnit;
 use crate::rng::Rng;
 
 /// A seeded IMU tilting ±`amp_deg` about a horizontal axis (period `period_s`) at 100 Hz,
