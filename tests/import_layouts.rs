@@ -1020,3 +1020,49 @@ fn one_table_per_sensor_imports_merged_with_accel_file() {
     });
     refused(&later, "do not overlap");
 }
+
+#[test]
+fn a_micros_wrap_is_unwrapped_and_a_restart_is_not() {
+    // An Arduino sketch printing micros(): the 32-bit µs count wraps 71.6 min after boot; this
+    // log starts 20 s before it.
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(20.0, 9);
+    let start = (1u64 << 32) - 20_000_000;
+    let p = write(
+        dir.path(),
+        "ard.csv",
+        "micros,gx,gy,gz,ax,ay,az",
+        &rows,
+        |i, r| {
+            let us = (start + i as u64 * 5_000) % (1 << 32);
+            format!("{us},{},{}", join(&r.g), join(&r.f))
+        },
+    );
+    let (rate, s, rep) = import(&p);
+    assert_truth("micros across the wrap", rate, &s, &rows);
+    assert_eq!(us(&rep, "time"), ("us", "name"));
+    assert_eq!((rep.time.backwards, rep.time.gaps), (0, 0), "{rep}");
+    assert_eq!(s[N - 1].t_ns - s[0].t_ns, (N as u64 - 1) * 5_000_000);
+    assert!(
+        rep.to_string().contains("\"micros\" wrapped 1 time"),
+        "{rep}"
+    );
+    // A reboot half-way (the count restarts near 0.3 s of uptime): kept as a restart.
+    let p = write(
+        dir.path(),
+        "reboot.csv",
+        "micros,gx,gy,gz,ax,ay,az",
+        &rows,
+        |i, r| {
+            let us = if i < N / 2 {
+                3_000_000_000 + i as u64 * 5_000
+            } else {
+                300_000 + (i - N / 2) as u64 * 5_000
+            };
+            format!("{us},{},{}", join(&r.g), join(&r.f))
+        },
+    );
+    let (_, _, rep) = import(&p);
+    assert_eq!((rep.time.backwards, rep.time.restarts), (1, 1), "{rep}");
+    assert!(rep.notes.is_empty(), "{rep}");
+}

@@ -139,9 +139,22 @@ fn written(
         decoded,
         timing,
         samples: samples.len(),
-        duration_s: samples.last().map_or(0.0, |s| s.t_s() - samples[0].t_s()),
+        // The span of the stamps: first to last would be negative across a restart.
+        duration_s: span_s(samples),
         sample_rate_hz: d.sample_rate_hz,
     })
+}
+
+/// Latest minus earliest time stamp, s.
+fn span_s(samples: &[crate::sample::Sample]) -> f64 {
+    let (lo, hi) = samples
+        .iter()
+        .fold((u64::MAX, 0), |(l, h), s| (l.min(s.t_ns), h.max(s.t_ns)));
+    if samples.is_empty() {
+        0.0
+    } else {
+        (hi - lo) as f64 * 1e-9
+    }
 }
 
 /// `import GYRO --accel-file ACCEL`: one table per sensor, merged

@@ -151,13 +151,15 @@ pub fn channel_of(t: &[String]) -> Result<Option<usize>, &'static str> {
     }
 }
 
-/// A time column: the first token `t`, `time`, `timestamp` or `gpst`, no `tick`; or Xsens'
+/// A time column: the first token `t`, `time`, `timestamp` or `gpst`, no `tick`; Arduino's
+/// `micros` / `millis` (the functions' names, as sketches print them); or Xsens'
 /// `SampleTimeFine`.
 fn is_time(t: &[String]) -> bool {
     (matches!(
         t.first().map(String::as_str),
         Some("t" | "time" | "timestamp" | "gpst")
     ) && !t.iter().any(|x| x == "tick"))
+        || matches!(t, [x] if x == "micros" || x == "millis")
         || xsens_fine(t)
 }
 
