@@ -665,8 +665,15 @@ fn daemon(cfg: Config, summary_json: Option<PathBuf>) -> Result<ExitCode> {
     eprint!("{}", health.text());
     report::daemon::write_summary(&health, summary_json.as_deref())?;
     // An input that ended by itself (a replayed log, stdin) with nothing or mostly garbage in
-    // it is a failed run, said loudly; a live daemon stopped by a signal only warns.
-    if let Some(problem) = health.input_problem() {
+    // it is a failed run, said loudly; a live daemon stopped by a signal only warns. A replayed
+    // file in a format imuprep does not read is said as such.
+    let foreign = match &cfg.source {
+        imuprep::config::SourceConfig::Replay { path, .. } if health.samples_in == 0 => {
+            imuprep::frame::detect::foreign_file(path).map(|w| format!("{}: {w}", path.display()))
+        }
+        _ => None,
+    };
+    if let Some(problem) = foreign.or_else(|| health.input_problem()) {
         if health.ended_by == "end of input" {
             eprintln!("imuprep: ERROR: {problem}");
             return Ok(ExitCode::from(report::INPUT_PROBLEM_EXIT));

@@ -552,3 +552,36 @@ fn a_live_run_stopped_by_a_signal_before_any_sample_warns_not_errors() {
     );
     assert!(!err.contains("ERROR"), "{err}");
 }
+
+#[test]
+fn a_recording_format_imuprep_does_not_read_is_named_with_the_way_in() {
+    // A ROS 1 bag, a ROS 2 .db3, a phone app's zip, an HDF5 file and an ArduPilot DataFlash log
+    // decoded to nothing but "garbage bytes"; each is now said for what it is, with what to do.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.log");
+    for (name, magic, said) in [
+        ("a.bag", &b"#ROSBAG V2.0\n"[..], "a ROS 1 bag"),
+        ("a.db3", &b"SQLite format 3\0"[..], "rosbags-convert"),
+        ("a.zip", &b"PK\x03\x04"[..], "unpack it"),
+        ("a.h5", &b"\x89HDF\r\n\x1a\n"[..], "an HDF5 file"),
+        (
+            "a.bin",
+            &[0xA3, 0x95, 0x80, 0x80, 0x59][..],
+            "mavlogdump.py",
+        ),
+    ] {
+        let mut b = magic.to_vec();
+        b.extend(garbage(4000, 21));
+        let f = write(&dir.path().join(name), &b);
+        for args in [
+            vec!["import", &f, "-o", out.to_str().unwrap()],
+            vec!["replay", &f, "--protocol", "auto"],
+            vec!["replay", &f],
+        ] {
+            let (code, err) = run(&args);
+            assert_ne!(code, 0, "{args:?}: {err}");
+            assert!(err.contains(said), "{args:?}: {err}");
+            assert!(!err.contains("garbage bytes"), "{args:?}: {err}");
+        }
+    }
+}

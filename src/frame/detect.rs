@@ -234,6 +234,54 @@ impl ProtocolArgs {
     }
 }
 
+/// A recording format imuprep does not read, told by its first bytes, and what to do instead
+/// (said where such a file decodes to nothing, instead of a count of garbage bytes).
+pub fn foreign_format(head: &[u8]) -> Option<&'static str> {
+    if head.starts_with(b"#ROSBAG V2.0") {
+        Some(
+            "a ROS 1 bag, which imuprep does not read: convert it to a ROS 2 bag in MCAP with the \
+             Python rosbags package (`rosbags-convert --src IN.bag --dst OUT --dst-storage mcap`) and \
+             import OUT/OUT.mcap (a build with `--features ros2`), or export its Imu topic as CSV \
+             (`rostopic echo -b IN.bag -p /imu/data > imu.csv`) and import that",
+        )
+    } else if head.starts_with(b"SQLite ") {
+        Some(
+            "an SQLite database (a ROS 2 bag's .db3?): imuprep reads ROS 2 bags in MCAP; convert \
+             it (`ros2 bag convert`, or `rosbags-convert --src BAG_DIR --dst OUT --dst-storage \
+             mcap`) and import the .mcap (a build with `--features ros2`)",
+        )
+    } else if head.starts_with(b"PK\x03\x04") {
+        Some(
+            "a zip archive (phone sensor apps export one): unpack it and import the table inside \
+             (a file per sensor: `imuprep import Gyroscope.csv --accel-file \
+             TotalAcceleration.csv -o OUT.log`)",
+        )
+    } else if head.starts_with(b"\x89HDF\r\n\x1a\n") {
+        Some(
+            "an HDF5 file, which imuprep does not read: write its IMU datasets as a table (t, gx, \
+             gy, gz, ax, ay, az) and import that",
+        )
+    } else if head.starts_with(&[0xA3, 0x95, 0x80]) {
+        Some(
+            "an ArduPilot DataFlash log (.bin), which imuprep does not read: export its IMU \
+             messages as a table with pymavlink (`mavlogdump.py --types IMU --format csv LOG.bin > \
+             imu.csv`) and import that (TimeUS in µs, GyrX.. in rad/s, AccX.. in m/s²)",
+        )
+    } else {
+        None
+    }
+}
+
+/// The first bytes of `path` told as a [`foreign_format`] (nothing when it cannot be read).
+pub fn foreign_file(path: &std::path::Path) -> Option<&'static str> {
+    use std::io::Read;
+    let mut head = [0u8; 16];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .ok()?;
+    foreign_format(&head[..n])
+}
+
 /// The protocol whose decoder finds the most in `head`.
 pub fn detect(head: &[u8], c: &ProtocolConfig) -> Protocol {
     if head.starts_with(&LOG_MAGIC) {

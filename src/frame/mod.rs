@@ -242,6 +242,10 @@ pub enum LogHeaderError {
     LooksLike(Protocol, [u8; 8]),
     #[error("unsupported log version {0} (this build reads version {LOG_VERSION})")]
     BadVersion(u16),
+    /// A recording format imuprep does not read ([`detect::foreign_format`]): what it is and
+    /// what to do instead.
+    #[error("not an imuprep log: {0}")]
+    Foreign(&'static str),
 }
 
 /// ", it starts with text (a CSV?)" when the first bytes are printable ASCII, else nothing.
@@ -262,6 +266,9 @@ pub fn check_log_header(h: &[u8]) -> Result<(), LogHeaderError> {
     }
     let mut magic = [0u8; 8];
     magic.copy_from_slice(&h[..8]);
+    if let Some(what) = detect::foreign_format(h) {
+        return Err(LogHeaderError::Foreign(what));
+    }
     if magic != LOG_MAGIC {
         return Err(LogHeaderError::BadMagic(magic));
     }

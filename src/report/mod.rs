@@ -44,7 +44,13 @@ impl std::error::Error for InputProblem {}
 /// held nothing usable.
 pub fn check_input(what: &Path, samples: u64, stats: &crate::frame::DecoderStats) -> Result<()> {
     match stats.input_problem(samples) {
-        Some(problem) => Err(InputProblem(format!("{}: {problem}", what.display())).into()),
+        Some(problem) => Err(
+            InputProblem(match crate::frame::detect::foreign_file(what) {
+                Some(what_it_is) if samples == 0 => format!("{}: {what_it_is}", what.display()),
+                _ => format!("{}: {problem}", what.display()),
+            })
+            .into(),
+        ),
         None => Ok(()),
     }
 }
