@@ -264,8 +264,9 @@ pub fn foreign_format(head: &[u8]) -> Option<&'static str> {
     } else if head.starts_with(&[0xA3, 0x95, 0x80]) {
         Some(
             "an ArduPilot DataFlash log (.bin), which imuprep does not read: export its IMU \
-             messages as a table with pymavlink (`mavlogdump.py --types IMU --format csv LOG.bin > \
-             imu.csv`) and import that (TimeUS in µs, GyrX.. in rad/s, AccX.. in m/s²)",
+             messages of one sensor as a table with pymavlink (`mavlogdump.py --types IMU \
+             --condition 'IMU.I==0' --format csv LOG.bin > imu.csv`) and import that (TimeUS in \
+             µs, GyrX.. in rad/s, AccX.. in m/s²)",
         )
     } else {
         None
