@@ -430,6 +430,45 @@ fn a_static_kalibr_imu_csv_imports_in_si_by_its_format() {
     assert!(rep.warnings.is_empty(), "{rep}");
 }
 
+#[test]
+fn a_static_ardupilot_imu_export_imports_in_si_by_its_message_fields() {
+    // `mavlogdump.py --types IMU --format csv`: timestamp (s), TimeUS, instance, GyrX.. (rad/s),
+    // AccX.. (m/s²), error counts, temperature, health and rates. At rest the data cannot tell
+    // the gyro unit; the message defines it.
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(0.0, 12);
+    let p = write(
+        dir.path(),
+        "imu.csv",
+        "timestamp,TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ,EG,EA,T,GH,AH,GHz,AHz",
+        &rows,
+        |i, r| {
+            format!(
+                "{},{},0,{},{},0,0,45.5,1,1,200,200",
+                1.7e9 + r.t,
+                123_456 + i * 5000,
+                join(&r.g),
+                join(&r.f)
+            )
+        },
+    );
+    let (rate, s, rep) = import(&p);
+    // Seconds since 1970 in f64: within 1e-6 s of 200 Hz spacing, so the rate to 1e-6 Hz.
+    assert!((rate - FS).abs() < 1e-3, "{rate}");
+    assert_eq!(s.len(), N);
+    assert!((s[7].gyro[1] - rows[7].g[1]).abs() < 1e-12);
+    assert_eq!(
+        columns(&rep),
+        "t=timestamp,gx=GyrX,gy=GyrY,gz=GyrZ,ax=AccX,ay=AccY,az=AccZ"
+    );
+    let (gu, gs, gh) = unit(&rep, "gyro");
+    assert_eq!((gu, gs), ("rad/s", "convention"), "{gh}");
+    assert!(gh.contains("ArduPilot"), "{gh}");
+    // The data tell the accelerometer's (median |f| ≈ 9.8): they win over any convention.
+    assert_eq!(us(&rep, "accel"), ("m/s²", "data"), "{rep}");
+    assert!(rep.warnings.is_empty(), "{rep}");
+}
+
 /// Date-time stamps (ISO 8601 as loggers, spreadsheets and pandas write them; RFC 3339 with a
 /// zone) are read as seconds since 1970 UTC; they asked for a number before. A number among
 /// date-times (or the reverse) and `--time-unit` with date-times are errors.

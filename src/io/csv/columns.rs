@@ -309,12 +309,21 @@ fn kalibr(t: &[String], stem: &str) -> bool {
     matches!(t, [a, x] if a == stem && ["x", "y", "z"].contains(&x.as_str()))
 }
 
+/// ArduPilot's IMU message as pymavlink's `mavlogdump.py --format csv` writes it: `TimeUS`
+/// beside `GyrX` / `AccX`, whose units the message defines (rad/s, m/s²).
+fn ardupilot(header: &[String], name: &str, stem: &str) -> bool {
+    header.iter().any(|h| h.trim() == "TimeUS") && name.len() == 4 && name.starts_with(stem)
+}
+
 /// What the gyro columns' names say of their unit (`Unknown` too when there is no gyro).
 pub fn gyro_named(header: &[String], idx: &[Option<usize>; 8]) -> NameUnit<GyroUnit> {
     let Some((k, name)) = first_of(header, idx, 1..=3) else {
         return NameUnit::Unknown;
     };
     let t = tokens(name);
+    if ardupilot(header, name, "Gyr") {
+        return NameUnit::Convention(GyroUnit::RadS, "ArduPilot IMU message fields (GyrX …)");
+    }
     if name == CANON[k] {
         NameUnit::Convention(GyroUnit::RadS, "canonical names")
     } else if let Some(u) = gyro_unit_of(&t) {
@@ -334,6 +343,9 @@ pub fn accel_named(header: &[String], idx: &[Option<usize>; 8]) -> NameUnit<Acce
         return NameUnit::Unknown;
     };
     let t = tokens(name);
+    if ardupilot(header, name, "Acc") {
+        return NameUnit::Convention(AccelUnit::MS2, "ArduPilot IMU message fields (AccX …)");
+    }
     if name == CANON[k] {
         NameUnit::Convention(AccelUnit::MS2, "canonical names")
     } else if let Some(u) = accel_unit_of(&t) {
