@@ -78,6 +78,10 @@ enum Cmd {
         /// onto the file with more rows, the other interpolated between its rows on each side.
         #[arg(long, value_name = "FILE")]
         accel_file: Option<PathBuf>,
+        /// Only the rows whose COLUMN cell is VALUE: one sensor of several in one table (a
+        /// multi-IMU rig's id column, ArduPilot's IMU instance `I`).
+        #[arg(long = "where", value_name = "COLUMN=VALUE")]
+        select: Option<String>,
         /// Column mapping by header name, repeatable: --col gx=gyro_x_dps (keys: t gx gy gz ax
         /// ay az temp).
         #[arg(long = "col")]
@@ -437,6 +441,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             proto,
             output,
             accel_file,
+            select,
             cols,
             columns,
             gyro_unit,
@@ -458,6 +463,12 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 ..Default::default()
             };
             report::convert::parse_columns(&cols, &mut o)?;
+            if let Some(w) = select {
+                let (c, v) = w
+                    .split_once('=')
+                    .with_context(|| format!("--where {w:?}: expected COLUMN=VALUE"))?;
+                o.select = Some((c.trim().to_string(), v.trim().to_string()));
+            }
             report::convert::parse_positions(columns.as_deref(), &mut o)?;
             let r = match accel_file {
                 Some(a) => report::convert::import_per_sensor(&input, &a, &output, &o)?,

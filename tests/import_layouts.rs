@@ -1105,3 +1105,78 @@ fn a_micros_wrap_is_unwrapped_and_a_restart_is_not() {
     assert_eq!((rep.time.backwards, rep.time.restarts), (1, 1), "{rep}");
     assert!(rep.notes.is_empty(), "{rep}");
 }
+
+#[test]
+fn rows_of_several_sensors_are_refused_until_where_picks_one() {
+    // An ArduPilot IMU export with two instances: each time stamp has a row of IMU 0 and one of
+    // IMU 1 (here the second sensor reads twice the first's rate and 0.5 m/s² more on x).
+    let dir = tempfile::tempdir().unwrap();
+    let rows = motion(0.0, 13);
+    let header = "timestamp,TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ";
+    let p = write(dir.path(), "two.csv", header, &rows, |i, r| {
+        let second = [2.0 * r.g[0], 2.0 * r.g[1], 2.0 * r.g[2]];
+        let f2 = [r.f[0] + 0.5, r.f[1], r.f[2]];
+        let t = 123_456 + i * 5000;
+        format!(
+            "{s},{t},0,{},{}\n{s},{t},1,{},{}",
+            join(&r.g),
+            join(&r.f),
+            join(&second),
+            join(&f2),
+            s = 1.7e9 + r.t
+        )
+    });
+    let e = read_csv_report(&p, &ImportOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("column \"I\" holds the rows of several sensors (0: 8000 rows, 1: 8000 rows)")
+            && e.contains("--where I=0"),
+        "{e}"
+    );
+    for (want, scale, dx) in [("1", 2.0, 0.5), ("0.0", 1.0, 0.0)] {
+        let o = ImportOptions {
+            select: Some(("I".into(), want.into())),
+            ..Default::default()
+        };
+        let (_, s, rep) = read_csv_report(&p, &o).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.len(), N);
+        assert_eq!(rep.time.duplicates, 0, "{rep}");
+        for k in (0..N).step_by(997) {
+            assert!((s[k].gyro[2] - scale * rows[k].g[2]).abs() < 1e-12);
+            assert!((s[k].accel[0] - rows[k].f[0] - dx).abs() < 1e-12);
+        }
+        assert!(
+            rep.to_string().contains(&format!(
+                "rows where I = {want}: 8000 read, 8000 of other values left out"
+            )),
+            "{rep}"
+        );
+    }
+    let none = ImportOptions {
+        select: Some(("I".into(), "2".into())),
+        ..Default::default()
+    };
+    let e = read_csv_report(&p, &none).unwrap_err().to_string();
+    assert!(e.contains("no row has I = \"2\""), "{e}");
+    // The CLI flag.
+    let log = dir.path().join("i1.log");
+    let out = common::run_cli(&[
+        "import",
+        p.to_str().unwrap(),
+        "--where",
+        "I=1",
+        "-o",
+        log.to_str().unwrap(),
+    ]);
+    assert!(out.contains("imported 8000 samples"), "{out}");
+    // A sample counter named `id` is no instance column.
+    let p = write(
+        dir.path(),
+        "ids.csv",
+        "id,t,gx,gy,gz,ax,ay,az",
+        &rows,
+        |i, r| format!("{i},{},{},{}", r.t, join(&r.g), join(&r.f)),
+    );
+    assert_eq!(import(&p).1.len(), N);
+}

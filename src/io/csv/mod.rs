@@ -20,6 +20,7 @@ use std::path::Path;
 pub mod columns;
 mod datetime;
 mod error;
+mod instance;
 mod layout;
 mod options;
 mod per_sensor;

@@ -95,6 +95,9 @@ pub struct ImportOptions {
     /// The file holds this triad only (one table per sensor, `import --accel-file`): the other
     /// triad's columns are not read, and bare `x`, `y`, `z` columns are this triad's.
     pub only: Option<super::streams::Triad>,
+    /// `--where COL=VALUE`: only the rows whose COL cell is VALUE (one sensor of several in one
+    /// table, [`super::instance`]).
+    pub select: Option<(String, String)>,
 }
 
 /// The keys of `--col` and `--columns`, in the order of [`ImportOptions::columns`].

@@ -49,6 +49,7 @@ fn read_part(path: &Path, o: &ImportOptions, only: Triad) -> Result<Part, CsvErr
         o: &named,
         lay: &lay,
         header: &header,
+        instance: None,
     };
     let rows = read_rows(&t, &mut rd, &mut rec)?;
     Ok(Part { header, lay, rows })
@@ -77,9 +78,9 @@ pub fn read_per_sensor_report(
         path: accel.into(),
         msg,
     };
-    if !o.positions.is_empty() || o.time_from_index_hz.is_some() {
+    if !o.positions.is_empty() || o.time_from_index_hz.is_some() || o.select.is_some() {
         return Err(problem(
-            "--accel-file reads each file's header and time column: --columns and --rate do not apply"
+            "--accel-file reads each file's header and time column: --columns, --rate and --where do not apply"
                 .into(),
         ));
     }
@@ -171,6 +172,8 @@ pub fn read_per_sensor_report(
         against: gr.against,
         cut_last: gr.cut_last.or(ar.cut_last),
         datetime: gr.datetime,
+        instances: Default::default(),
+        left_out: 0,
     };
     let (mut i, mut j) = (0, 0);
     while i < gr.out.len() || j < ar.out.len() {
@@ -192,6 +195,7 @@ pub fn read_per_sensor_report(
         o,
         lay: &lay,
         header: &header,
+        instance: None,
     };
     let (d, s, mut report) = conclude(&t, rows)?;
     if report.streams.is_none() {

@@ -27,15 +27,64 @@ pub fn read_table_report(
     let (header, named) = name_columns(path, o, fmt, first)?;
     let o = &named;
     let lay = detect(&header, o, path)?;
+    let instance = instance_of(path, o, &header)?;
     let t = Table {
         path,
         fmt,
         o,
         lay: &lay,
         header: &header,
+        instance,
     };
     let rows = read_rows(&t, &mut rd, &mut rec)?;
+    one_sensor(&t, &rows)?;
     conclude(&t, rows)
+}
+
+/// The column `--where` names (an error when there is none), else one named as an instance.
+fn instance_of(
+    path: &Path,
+    o: &ImportOptions,
+    header: &[String],
+) -> Result<Option<usize>, CsvError> {
+    match &o.select {
+        Some((col, _)) => header
+            .iter()
+            .position(|h| h.trim() == col)
+            .map(Some)
+            .ok_or_else(|| CsvError::Columns {
+                path: path.into(),
+                msg: format!("--where names no column {col:?}"),
+                header: header.join(","),
+            }),
+        None => Ok(super::instance::instance_column(header)),
+    }
+}
+
+/// Rows of one sensor: with `--where`, some row must match; without it, an instance column
+/// holding several sensors' rows is an error naming them and the flag ([`super::instance`]).
+fn one_sensor(t: &Table, rows: &Rows) -> Result<(), CsvError> {
+    let Some(p) = t.instance else { return Ok(()) };
+    let col = t.header[p].trim();
+    let seen = &rows.instances;
+    let msg = match &t.o.select {
+        Some((_, want)) if rows.out.is_empty() => format!(
+            "no row has {col} = {want:?} (values seen: {}{})",
+            seen.said(),
+            if seen.more { ", and more" } else { "" }
+        ),
+        None if seen.several(rows.out.len() as u64) => format!(
+            "column {col:?} holds the rows of several sensors ({}): read as one stream they would interleave; pick one with --where {col}={}",
+            seen.said(),
+            seen.counts.keys().next().map_or("VALUE", String::as_str)
+        ),
+        _ => return Ok(()),
+    };
+    Err(CsvError::Columns {
+        path: t.path.into(),
+        msg,
+        header: t.header.join(","),
+    })
 }
 
 /// The rows read, concluded: two streams merged ([`two_streams`]), the missing values judged,
@@ -72,8 +121,17 @@ pub(super) fn conclude(
     for s in rows.out.iter_mut() {
         s.absent = missing.absent;
     }
+    let selected = t.o.select.as_ref().map(|(c, v)| {
+        format!(
+            "rows where {c} = {v}: {} read, {} of other values left out ({})",
+            rows.out.len(),
+            rows.left_out,
+            rows.instances.said()
+        )
+    });
     let (d, out, mut report) = finish(t, rows, missing, units);
     report.streams = streams;
+    report.selected = selected;
     if wraps > 0 {
         report.notes.push(format!(
             "time: the 32-bit counter {:?} wrapped {} (stepped back by about 2³² counts and ran on): unwrapped",
@@ -148,6 +206,8 @@ pub(super) struct Table<'a> {
     pub(super) o: &'a ImportOptions,
     pub(super) lay: &'a Layout,
     pub(super) header: &'a [String],
+    /// The column telling sensors apart (`--where`'s, or one named as an instance).
+    pub(super) instance: Option<usize>,
 }
 
 fn open_text(path: &Path) -> Result<Box<dyn BufRead>, CsvError> {
@@ -338,6 +398,10 @@ pub(super) struct Rows {
     /// The time column's stamps when they are date-times (the first row decides; `raw_t` then
     /// holds seconds since 1970 UTC).
     pub(super) datetime: Option<DateTimeStamps>,
+    /// The instance column's values over every row read (before `--where`), and the rows
+    /// `--where` left out.
+    pub(super) instances: super::instance::Instances,
+    pub(super) left_out: u64,
 }
 
 /// Every row after the header (from the one in `rec` when the file has none), each checked for
@@ -367,6 +431,8 @@ pub(super) fn read_rows(
         against,
         cut_last: None,
         datetime: None,
+        instances: Default::default(),
+        left_out: 0,
     };
     // Headerless with --columns: the first record read is the first data row.
     let mut have_row = !fmt.header;
@@ -418,6 +484,16 @@ pub(super) fn read_rows(
                     want
                 ),
             });
+        }
+        if let Some(p) = t.instance {
+            let cell = rec.get(p).unwrap_or("");
+            rows.instances.add(cell);
+            if let Some((_, want)) = &t.o.select
+                && !super::instance::matches(cell, want, fmt.decimal_comma)
+            {
+                rows.left_out += 1;
+                continue;
+            }
         }
         read_row(t, rec, lineno, &mut rows)?;
     }

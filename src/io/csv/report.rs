@@ -53,6 +53,8 @@ pub struct ImportReport {
     pub streams: Option<super::streams::StreamMerge>,
     /// What the import did to the time stamps besides the unit (a counter's wraps unwrapped).
     pub notes: Vec<String>,
+    /// `--where COL=VALUE`: the rows read and those left out.
+    pub selected: Option<String>,
 }
 
 impl std::fmt::Display for ImportReport {
@@ -72,6 +74,9 @@ impl std::fmt::Display for ImportReport {
                 "; channels absent (no column, or every cell empty): {} — written as absent, not as zeros",
                 self.absent.join(", ")
             )?;
+        }
+        if let Some(s) = &self.selected {
+            write!(f, "\n{s}")?;
         }
         if let Some(m) = &self.streams {
             write!(f, "\n{m}")?;
