@@ -1050,6 +1050,10 @@ fn one_table_per_sensor_imports_merged_with_accel_file() {
         assert!(e.contains(why), "{e}");
     };
     refused(&g, "names the input itself");
+    let grav = write(dir.path(), "Gravity.csv", header, &rows, |i, r| {
+        format!("{},{},{}", stamp(i, 1_000_000), r.t, zyx(&r.f))
+    });
+    refused(&grav, "the file name says \"gravity\"");
     let secs = write(dir.path(), "acc_s.csv", header, &rows, |_, r| {
         format!("{},{},{}", r.t + 1.7e9, r.t, zyx(&r.f))
     });

@@ -18,6 +18,18 @@ use std::path::Path;
 /// rates (phones run their sensors within a few × of each other; units differ by 1000×).
 const MAX_RATE_RATIO: f64 = 30.0;
 
+/// File-name parts of a phone sensor app's exports that are no gyro or accelerometer
+/// measurement: gravity and gravity-free (linear, user) acceleration, attitude, the magnetometer.
+const NOT_A_SENSOR: [&str; 7] = [
+    "gravity",
+    "linear",
+    "useracc",
+    "orientation",
+    "rotationvector",
+    "magnet",
+    "attitude",
+];
+
 /// One file read as the table of one triad.
 struct Part {
     header: Vec<String>,
@@ -88,6 +100,21 @@ pub fn read_per_sensor_report(
         return Err(problem(
             "--accel-file names the input itself: give the accelerometer's own table".into(),
         ));
+    }
+    // A phone app's other exports hold derived or other sensors' vectors in the same bare x, y,
+    // z columns: refused by their file names, never read as the gyro or the accelerometer.
+    for (path, what) in [(gyro, "gyro"), (accel, "accelerometer")] {
+        let name = path
+            .file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().to_ascii_lowercase());
+        if let Some(k) = NOT_A_SENSOR.iter().find(|k| name.contains(*k)) {
+            return Err(CsvError::Pair {
+                path: path.into(),
+                msg: format!(
+                    "the file name says {k:?}: a derived or another sensor's vector, not the {what}'s measurement (phone apps: Gyroscope and TotalAcceleration, or Accelerometer where it holds gravity)"
+                ),
+            });
+        }
     }
     let g = read_part(gyro, o, Triad::Gyro)?;
     let a = read_part(accel, o, Triad::Accel)?;
