@@ -9,8 +9,11 @@
 //!   fill at least [`MIN_SHARE`] of the rows is an error naming the values and the flag. A
 //!   sample counter (thousands of values) or a constant column is no instance column.
 
+use super::read::{Rows, Table};
 use super::sniff::parse_number;
+use super::{CsvError, ImportOptions};
 use std::collections::BTreeMap;
+use std::path::Path;
 
 /// More distinct values than this is a counter or a measurement, not sensor instances.
 pub const MAX_INSTANCES: usize = 8;
@@ -92,6 +95,52 @@ impl Instances {
                 .values()
                 .all(|n| *n as f64 >= MIN_SHARE * rows as f64)
     }
+}
+
+/// The column `--where` names (an error when there is none), else one named as an instance.
+pub(super) fn instance_of(
+    path: &Path,
+    o: &ImportOptions,
+    header: &[String],
+) -> Result<Option<usize>, CsvError> {
+    match &o.select {
+        Some((col, _)) => header
+            .iter()
+            .position(|h| h.trim() == col)
+            .map(Some)
+            .ok_or_else(|| CsvError::Columns {
+                path: path.into(),
+                msg: format!("--where names no column {col:?}"),
+                header: header.join(","),
+            }),
+        None => Ok(instance_column(header)),
+    }
+}
+
+/// Rows of one sensor: with `--where`, some row must match; without it, an instance column
+/// holding several sensors' rows is an error naming them and the flag (the module docs).
+pub(super) fn one_sensor(t: &Table, rows: &Rows) -> Result<(), CsvError> {
+    let Some(p) = t.instance else { return Ok(()) };
+    let col = t.header[p].trim();
+    let seen = &rows.instances;
+    let msg = match &t.o.select {
+        Some((_, want)) if rows.out.is_empty() => format!(
+            "no row has {col} = {want:?} (values seen: {}{})",
+            seen.said(),
+            if seen.more { ", and more" } else { "" }
+        ),
+        None if seen.several(rows.out.len() as u64) => format!(
+            "column {col:?} holds the rows of several sensors ({}): read as one stream they would interleave; pick one with --where {col}={}",
+            seen.said(),
+            seen.counts.keys().next().map_or("VALUE", String::as_str)
+        ),
+        _ => return Ok(()),
+    };
+    Err(CsvError::Columns {
+        path: t.path.into(),
+        msg,
+        header: t.header.join(","),
+    })
 }
 
 #[cfg(test)]

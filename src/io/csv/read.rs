@@ -27,7 +27,7 @@ pub fn read_table_report(
     let (header, named) = name_columns(path, o, fmt, first)?;
     let o = &named;
     let lay = detect(&header, o, path)?;
-    let instance = instance_of(path, o, &header)?;
+    let instance = super::instance::instance_of(path, o, &header)?;
     let t = Table {
         path,
         fmt,
@@ -37,54 +37,8 @@ pub fn read_table_report(
         instance,
     };
     let rows = read_rows(&t, &mut rd, &mut rec)?;
-    one_sensor(&t, &rows)?;
+    super::instance::one_sensor(&t, &rows)?;
     conclude(&t, rows)
-}
-
-/// The column `--where` names (an error when there is none), else one named as an instance.
-fn instance_of(
-    path: &Path,
-    o: &ImportOptions,
-    header: &[String],
-) -> Result<Option<usize>, CsvError> {
-    match &o.select {
-        Some((col, _)) => header
-            .iter()
-            .position(|h| h.trim() == col)
-            .map(Some)
-            .ok_or_else(|| CsvError::Columns {
-                path: path.into(),
-                msg: format!("--where names no column {col:?}"),
-                header: header.join(","),
-            }),
-        None => Ok(super::instance::instance_column(header)),
-    }
-}
-
-/// Rows of one sensor: with `--where`, some row must match; without it, an instance column
-/// holding several sensors' rows is an error naming them and the flag ([`super::instance`]).
-fn one_sensor(t: &Table, rows: &Rows) -> Result<(), CsvError> {
-    let Some(p) = t.instance else { return Ok(()) };
-    let col = t.header[p].trim();
-    let seen = &rows.instances;
-    let msg = match &t.o.select {
-        Some((_, want)) if rows.out.is_empty() => format!(
-            "no row has {col} = {want:?} (values seen: {}{})",
-            seen.said(),
-            if seen.more { ", and more" } else { "" }
-        ),
-        None if seen.several(rows.out.len() as u64) => format!(
-            "column {col:?} holds the rows of several sensors ({}): read as one stream they would interleave; pick one with --where {col}={}",
-            seen.said(),
-            seen.counts.keys().next().map_or("VALUE", String::as_str)
-        ),
-        _ => return Ok(()),
-    };
-    Err(CsvError::Columns {
-        path: t.path.into(),
-        msg,
-        header: t.header.join(","),
-    })
 }
 
 /// The rows read, concluded: two streams merged ([`two_streams`]), the missing values judged,
@@ -97,7 +51,7 @@ pub(super) fn conclude(
     // A 32-bit counter's wraps: Arduino's `micros()` after 71.6 min, `millis()` after 49.7 days,
     // Xsens DOT's SampleTimeFine after 1.2 h.
     let wraps = if o.time_from_index_hz.is_none() && rows.datetime.is_none() {
-        unwrap_u32(&mut rows.raw_t)
+        super::units::unwrap_u32(&mut rows.raw_t)
     } else {
         0
     };
@@ -140,36 +94,6 @@ pub(super) fn conclude(
         ));
     }
     Ok((d, out, report))
-}
-
-/// The most median intervals a wrapped step may span: a counter that wraps runs on (a sample or
-/// a few lost at the wrap aside); a logger restarting from a small count does not.
-const WRAP_STEP_INTERVALS: f64 = 10.0;
-
-/// A 32-bit counter's wraps taken out of `t`, when every stamp lies in [0, 2³²): a step back by
-/// more than 2³¹ that, with 2³² added, is a step forward of at most [`WRAP_STEP_INTERVALS`]
-/// median intervals adds 2³² to every later stamp (any other step back stays, for the time
-/// checks to flag). How many.
-pub(super) fn unwrap_u32(t: &mut [f64]) -> u64 {
-    const M: f64 = 4_294_967_296.0;
-    if !t.iter().all(|v| (0.0..M).contains(v)) {
-        return 0;
-    }
-    let d = super::units::median_interval(t);
-    if d.is_nan() || d <= 0.0 {
-        return 0;
-    }
-    let (mut add, mut wraps, mut prev) = (0.0, 0u64, f64::NAN);
-    for v in t.iter_mut() {
-        let step = *v + M - prev;
-        if *v < prev - M / 2.0 && step > 0.0 && step <= WRAP_STEP_INTERVALS * d {
-            add += M;
-            wraps += 1;
-        }
-        prev = *v;
-        *v += add;
-    }
-    wraps
 }
 
 /// A table holding two streams (the gyro on some rows, the accelerometer on others) merged onto
@@ -746,33 +670,4 @@ pub(super) fn finish(
         absent,
     };
     (d, out, report)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::unwrap_u32;
-
-    const M: f64 = 4_294_967_296.0;
-
-    #[test]
-    fn a_32_bit_counter_that_wraps_and_runs_on_is_unwrapped() {
-        // µs at 200 Hz across the wrap, one sample lost at it.
-        let mut t = vec![M - 10_000.0, M - 5_000.0, 5_000.0 - 1.0, 10_000.0 - 1.0];
-        assert_eq!(unwrap_u32(&mut t), 1);
-        assert_eq!(t, [M - 10_000.0, M - 5_000.0, M + 4_999.0, M + 9_999.0]);
-    }
-
-    #[test]
-    fn a_restart_or_a_stamp_past_32_bits_is_left_for_the_time_checks() {
-        // A logger restarting from a small count: 2³² added would be a step of 0.4 s at 5 ms.
-        let before = vec![M - 10_000.0, M - 5_000.0, 400_000.0, 405_000.0];
-        let mut t = before.clone();
-        assert_eq!(unwrap_u32(&mut t), 0);
-        assert_eq!(t, before);
-        // ns since 1970: not a 32-bit counter.
-        let before = vec![1.7e18, 1.7e18 + 5e6, 1.0, 5e6 + 1.0];
-        let mut t = before.clone();
-        assert_eq!(unwrap_u32(&mut t), 0);
-        assert_eq!(t, before);
-    }
 }

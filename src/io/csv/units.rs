@@ -571,7 +571,7 @@ pub fn decide_accel(
 }
 
 mod time;
-pub use time::{decide_time, median_interval, plausible_time_unit, rate_as, time_name};
+pub use time::{decide_time, median_interval, plausible_time_unit, rate_as, time_name, unwrap_u32};
 
 #[cfg(test)]
 mod tests;

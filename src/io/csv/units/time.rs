@@ -155,3 +155,62 @@ pub fn decide_time(
         warning: None,
     }
 }
+
+/// The most median intervals a wrapped step may span: a counter that wraps runs on (a sample or
+/// a few lost at the wrap aside); a logger restarting from a small count does not.
+const WRAP_STEP_INTERVALS: f64 = 10.0;
+
+/// A 32-bit counter's wraps taken out of `t`, when every stamp lies in [0, 2³²): a step back by
+/// more than 2³¹ that, with 2³² added, is a step forward of at most [`WRAP_STEP_INTERVALS`]
+/// median intervals adds 2³² to every later stamp (any other step back stays, for the time
+/// checks to flag). How many.
+pub fn unwrap_u32(t: &mut [f64]) -> u64 {
+    const M: f64 = 4_294_967_296.0;
+    if !t.iter().all(|v| (0.0..M).contains(v)) {
+        return 0;
+    }
+    let d = median_interval(t);
+    if d.is_nan() || d <= 0.0 {
+        return 0;
+    }
+    let (mut add, mut wraps, mut prev) = (0.0, 0u64, f64::NAN);
+    for v in t.iter_mut() {
+        let step = *v + M - prev;
+        if *v < prev - M / 2.0 && step > 0.0 && step <= WRAP_STEP_INTERVALS * d {
+            add += M;
+            wraps += 1;
+        }
+        prev = *v;
+        *v += add;
+    }
+    wraps
+}
+
+#[cfg(test)]
+mod tests {
+    use super::unwrap_u32;
+
+    const M: f64 = 4_294_967_296.0;
+
+    #[test]
+    fn a_32_bit_counter_that_wraps_and_runs_on_is_unwrapped() {
+        // µs at 200 Hz across the wrap, one sample lost at it.
+        let mut t = vec![M - 10_000.0, M - 5_000.0, 5_000.0 - 1.0, 10_000.0 - 1.0];
+        assert_eq!(unwrap_u32(&mut t), 1);
+        assert_eq!(t, [M - 10_000.0, M - 5_000.0, M + 4_999.0, M + 9_999.0]);
+    }
+
+    #[test]
+    fn a_restart_or_a_stamp_past_32_bits_is_left_for_the_time_checks() {
+        // A logger restarting from a small count: 2³² added would be a step of 0.4 s at 5 ms.
+        let before = vec![M - 10_000.0, M - 5_000.0, 400_000.0, 405_000.0];
+        let mut t = before.clone();
+        assert_eq!(unwrap_u32(&mut t), 0);
+        assert_eq!(t, before);
+        // ns since 1970: not a 32-bit counter.
+        let before = vec![1.7e18, 1.7e18 + 5e6, 1.0, 5e6 + 1.0];
+        let mut t = before.clone();
+        assert_eq!(unwrap_u32(&mut t), 0);
+        assert_eq!(t, before);
+    }
+}
