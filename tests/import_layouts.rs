@@ -1062,6 +1062,36 @@ fn one_table_per_sensor_imports_merged_with_accel_file() {
         format!("{},{},{}", stamp(i + 2 * N, 0), r.t, zyx(&r.f))
     });
     refused(&later, "do not overlap");
+
+    // Both files stamped by a 32-bit µs counter that wraps 10 s in: each file's wrap is undone
+    // before the rows are interleaved (after it, one file's wrapped rows would sort first).
+    let start = (1u64 << 32) - 10_000_000;
+    let us = |i: usize, late: u64| (start + i as u64 * 5_000 + late) % (1 << 32);
+    let gw = write(
+        dir.path(),
+        "gyro_us.csv",
+        "micros,gx,gy,gz",
+        &rows,
+        |i, r| format!("{},{}", us(i, 0), join(&r.g)),
+    );
+    let aw = write(
+        dir.path(),
+        "acc_us.csv",
+        "micros,ax,ay,az",
+        &rows,
+        |i, r| format!("{},{}", us(i, 2_500), join(&r.f)),
+    );
+    let (_, s, rep) = read_per_sensor_report(&gw, &aw, &ImportOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.len(), N);
+    assert_eq!((rep.time.backwards, rep.time.gaps), (0, 0), "{rep}");
+    let m = rep.streams.as_ref().expect("merged");
+    assert_eq!((m.interpolated, m.unpaired), (N as u64 - 1, 1), "{rep}");
+    assert_eq!(rep.notes.len(), 2, "{rep}");
+    for k in [1, N / 2, N - 1] {
+        let want = 0.5 * (rows[k - 1].f[2] + rows[k].f[2]);
+        assert!((s[k].accel[2] - want).abs() < 1e-9, "row {k}");
+    }
 }
 
 #[test]

@@ -9,6 +9,7 @@ use super::layout::{Layout, detect};
 use super::read::{Records, Rows, Table, conclude, first_record, name_columns, read_rows};
 use super::sniff::{Sniffed, TableFormat, sniff_file};
 use super::streams::Triad;
+use super::units::{median_interval, unwrap_u32};
 use super::{CsvError, ImportOptions, ImportReport};
 use crate::frame::Descriptor;
 use crate::sample::Sample;
@@ -67,19 +68,6 @@ fn read_part(path: &Path, o: &ImportOptions, only: Triad) -> Result<Part, CsvErr
     Ok(Part { header, lay, rows })
 }
 
-fn median_step(t: &[f64]) -> f64 {
-    let mut d: Vec<f64> = t
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .filter(|d| *d > 0.0)
-        .collect();
-    if d.is_empty() {
-        f64::NAN
-    } else {
-        crate::stats::robust::median(&mut d)
-    }
-}
-
 /// Read the gyro's table and the accelerometer's, and merge them (module docs).
 pub fn read_per_sensor_report(
     gyro: &Path,
@@ -116,8 +104,11 @@ pub fn read_per_sensor_report(
             });
         }
     }
-    let g = read_part(gyro, o, Triad::Gyro)?;
-    let a = read_part(accel, o, Triad::Accel)?;
+    let mut g = read_part(gyro, o, Triad::Gyro)?;
+    let mut a = read_part(accel, o, Triad::Accel)?;
+    // A 32-bit counter's wraps undone in each file before the rows are interleaved by time
+    // (after it, one file's wrapped rows would sort before the other's last ones).
+    let wraps = [unwrap_u32(&mut g.rows.raw_t), unwrap_u32(&mut a.rows.raw_t)];
     for (p, path) in [(&g, gyro), (&a, accel)] {
         if p.rows.out.is_empty() {
             return Err(problem(format!("{}: no data rows", path.display())));
@@ -128,7 +119,10 @@ pub fn read_per_sensor_report(
             ));
         }
     }
-    let (dg, da) = (median_step(&g.rows.raw_t), median_step(&a.rows.raw_t));
+    let (dg, da) = (
+        median_interval(&g.rows.raw_t),
+        median_interval(&a.rows.raw_t),
+    );
     let ratio = (dg / da).max(da / dg);
     // NaN (a file with fewer than two distinct stamps) is refused too.
     if ratio.is_nan() || ratio > MAX_RATE_RATIO {
@@ -232,5 +226,14 @@ pub fn read_per_sensor_report(
         ));
     }
     report.table = None;
+    for (n, path) in wraps.into_iter().zip([gyro, accel]) {
+        if n > 0 {
+            report.notes.push(format!(
+                "time: the 32-bit counter of {} wrapped {} (stepped back by about 2³² counts and ran on): unwrapped",
+                path.display(),
+                crate::text::count(n, "time", "times")
+            ));
+        }
+    }
     Ok((d, s, report))
 }

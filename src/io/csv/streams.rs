@@ -163,16 +163,11 @@ pub fn merge(
         Triad::Accel => has[i].1,
     };
     let other_rows: Vec<usize> = (0..n).filter(|&i| holds_other(i)).collect();
-    let mut steps: Vec<f64> = other_rows
-        .windows(2)
-        .map(|w| t[w[1]] - t[w[0]])
-        .filter(|d| *d > 0.0)
-        .collect();
-    let interval = if steps.is_empty() {
-        0.0
-    } else {
-        crate::stats::robust::median(&mut steps)
-    };
+    let other_t: Vec<f64> = other_rows.iter().map(|&i| t[i]).collect();
+    // No two distinct stamps: no interval, nothing bridged (only same-stamp rows are taken).
+    let interval = Some(super::units::median_interval(&other_t))
+        .filter(|d| !d.is_nan())
+        .unwrap_or(0.0);
     let limit = BRACKET_INTERVALS * interval;
     let mut r = StreamMerge {
         rows_read: n as u64,
