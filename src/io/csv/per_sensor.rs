@@ -113,11 +113,11 @@ pub fn read_per_sensor_report(
         if p.rows.out.is_empty() {
             return Err(problem(format!("{}: no data rows", path.display())));
         }
-        if p.rows.datetime.is_some() != g.rows.datetime.is_some() {
-            return Err(problem(
-                "one file's time column holds date-times, the other's numbers: they cannot be interleaved".into(),
-            ));
-        }
+    }
+    if g.rows.datetime.is_some() != a.rows.datetime.is_some() {
+        return Err(problem(
+            "one file's time column holds date-times, the other's numbers: they cannot be interleaved".into(),
+        ));
     }
     let (dg, da) = (
         median_interval(&g.rows.raw_t),
@@ -134,13 +134,11 @@ pub fn read_per_sensor_report(
         )));
     }
     let span = |r: &Rows| {
-        let (lo, hi) = r
-            .raw_t
+        r.raw_t
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), t| {
                 (l.min(*t), h.max(*t))
-            });
-        (lo, hi)
+            })
     };
     let (sg, sa) = (span(&g.rows), span(&a.rows));
     if sg.1 < sa.0 || sa.1 < sg.0 {
