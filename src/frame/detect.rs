@@ -238,12 +238,16 @@ impl ProtocolArgs {
 /// (said where such a file decodes to nothing, instead of a count of garbage bytes).
 pub fn foreign_format(head: &[u8]) -> Option<&'static str> {
     if head.starts_with(b"#ROSBAG V2.0") {
-        Some(
-            "a ROS 1 bag, which imuprep does not read: convert it to a ROS 2 bag in MCAP with the \
-             Python rosbags package (`rosbags-convert --src IN.bag --dst OUT --dst-storage mcap`) and \
-             import OUT/OUT.mcap (a build with `--features ros2`), or export its Imu topic as CSV \
-             (`rostopic echo -b IN.bag -p /imu/data > imu.csv`) and import that",
-        )
+        Some(if cfg!(feature = "ros1") {
+            "a ROS 1 bag, which the decoders do not stream: import it first (`imuprep import \
+             IN.bag -o OUT.log`, `--topic /imu/data` to choose the Imu topic) and use OUT.log"
+        } else {
+            "a ROS 1 bag, which this build does not read: a build with `--features ros1` imports \
+             it (`imuprep import IN.bag -o OUT.log`); or convert it to a ROS 2 bag in MCAP with \
+             the Python rosbags package (`rosbags-convert --src IN.bag --dst OUT --dst-storage \
+             mcap`) and import OUT/OUT.mcap (a build with `--features ros2`), or export its Imu \
+             topic as CSV (`rostopic echo -b IN.bag -p /imu/data > imu.csv`) and import that"
+        })
     } else if head.starts_with(b"SQLite ") {
         Some(
             "an SQLite database (a ROS 2 bag's .db3?): imuprep reads ROS 2 bags in MCAP; convert \

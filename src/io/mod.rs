@@ -7,6 +7,8 @@ pub mod format;
 pub mod log;
 #[cfg(feature = "ros2")]
 pub mod mcap_sink;
+#[cfg(feature = "ros1")]
+pub mod ros1;
 pub mod sim_log;
 pub mod sink;
 pub mod source;

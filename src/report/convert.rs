@@ -69,6 +69,10 @@ pub fn import(
     if let Some(r) = o.time_from_index_hz {
         ensure!(r.is_finite() && r > 0.0, "--rate must be > 0 Hz");
     }
+    #[cfg(feature = "ros1")]
+    if crate::io::ros1::is_bag(input) {
+        return import_ros1(input, output, proto, o);
+    }
     // A text table by its name (.csv, .csv.gz: read as one whatever its content, as always), or
     // by its content (any other name: text with a consistent delimiter; a binary file goes to
     // the protocol decoders, text that is no table is said to be so).
@@ -120,6 +124,46 @@ pub fn import(
         )
     };
     written(input, None, output, (&d, &samples), decoded, timing)
+}
+
+/// A ROS 1 bag ([`crate::io::ros1`]): its Imu topic's samples, with time faults and the rate
+/// derived over the whole file as for every other import.
+#[cfg(feature = "ros1")]
+fn import_ros1(
+    input: &Path,
+    output: &Path,
+    proto: &ProtocolArgs,
+    o: &ImportOptions,
+) -> Result<ImportReport> {
+    let mut pc = ProtocolConfig::auto();
+    proto.apply(&mut pc);
+    let mut bag = crate::io::ros1::read_bag(input, &pc.mcap).map_err(|e| {
+        InputProblem(format!(
+            "{}: a ROS 1 bag that cannot be imported: {e}",
+            input.display()
+        ))
+    })?;
+    if bag.samples.is_empty() {
+        return Err(InputProblem(format!(
+            "{}: a ROS 1 bag, but no sensor_msgs/Imu message could be read: {}",
+            input.display(),
+            bag.found
+        ))
+        .into());
+    }
+    let tf = crate::io::timing::rederive_sequence(&mut bag.samples);
+    let mut d = bag.descriptor;
+    d.sample_rate_hz = tf.nominal_rate_hz;
+    d.gyro_range_rad_s = o.gyro_range_rad_s;
+    d.accel_range_m_s2 = o.accel_range_m_s2;
+    written(
+        input,
+        None,
+        output,
+        (&d, &bag.samples),
+        Some(format!("ROS 1 bag input: {}", bag.found)),
+        Some(tf.to_string()),
+    )
 }
 
 /// The imported samples written to `output` as a native log, and the report of it.
