@@ -603,7 +603,7 @@ fn accel_step_statistic_against_its_noise() {
         }
         let (out, _) = cleaned(&samples, 100.0, false);
         let mut line = format!("seed {seed}:");
-        for c in 3..6 {
+        for (c, name) in CHANNEL_NAMES.iter().enumerate().skip(3) {
             let d = d_series(&out, c);
             let pre: Vec<f64> = d.iter().filter(|x| x.0 <= 800.0).map(|x| x.1).collect();
             let rms = (pre.iter().map(|v| v * v).sum::<f64>() / pre.len() as f64).sqrt();
@@ -614,8 +614,7 @@ fn accel_step_statistic_against_its_noise() {
                     .collect(),
             );
             line += &format!(
-                "  {}: pre RMS {rms:.3}, post median {post:.3} ({:.1}×)",
-                CHANNEL_NAMES[c],
+                "  {name}: pre RMS {rms:.3}, post median {post:.3} ({:.1}×)",
                 post / rms
             );
         }
