@@ -561,7 +561,7 @@ fn a_recording_format_imuprep_does_not_read_is_named_with_the_way_in() {
     let out = dir.path().join("o.log");
     for (name, magic, said) in [
         ("a.bag", &b"#ROSBAG V2.0\n"[..], "a ROS 1 bag"),
-        ("a.db3", &b"SQLite format 3\0"[..], "rosbags-convert"),
+        ("a.db3", &b"SQLite format 3\0"[..], "SQLite"),
         ("a.zip", &b"PK\x03\x04"[..], "unpack it"),
         ("a.h5", &b"\x89HDF\r\n\x1a\n"[..], "an HDF5 file"),
         (

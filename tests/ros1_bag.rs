@@ -169,7 +169,7 @@ fn import_writes_a_log_with_the_gap_flagged_and_replay_runs_it() {
 }
 
 /// `bytes` written to a temporary file, read.
-fn read_bytes(bytes: &[u8], tag: &str) -> Result<imuprep::io::ros1::Ros1Bag, Ros1Error> {
+fn read_bytes(bytes: &[u8], tag: &str) -> Result<imuprep::io::bag::BagRead, Ros1Error> {
     let p = std::env::temp_dir().join(format!("imuprep_ros1_{}_{tag}.bag", std::process::id()));
     std::fs::write(&p, bytes).unwrap();
     let r = read_bag(&p, &McapOptions::default());

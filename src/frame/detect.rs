@@ -249,11 +249,16 @@ pub fn foreign_format(head: &[u8]) -> Option<&'static str> {
              topic as CSV (`rostopic echo -b IN.bag -p /imu/data > imu.csv`) and import that"
         })
     } else if head.starts_with(b"SQLite ") {
-        Some(
-            "an SQLite database (a ROS 2 bag's .db3?): imuprep reads ROS 2 bags in MCAP; convert \
-             it (`ros2 bag convert`, or `rosbags-convert --src BAG_DIR --dst OUT --dst-storage \
-             mcap`) and import the .mcap (a build with `--features ros2`)",
-        )
+        Some(if cfg!(feature = "ros2-sqlite") {
+            "an SQLite database (a ROS 2 bag's .db3?), which the decoders do not stream: import \
+             it first (`imuprep import BAG_DIR -o OUT.log`, `--topic /imu/data` to choose the Imu \
+             topic) and use OUT.log"
+        } else {
+            "an SQLite database (a ROS 2 bag's .db3?), which this build does not read: a build \
+             with `--features ros2-sqlite` imports it (`imuprep import BAG_DIR -o OUT.log`); or \
+             convert it (`ros2 bag convert`, or `rosbags-convert --src BAG_DIR --dst OUT \
+             --dst-storage mcap`) and import the .mcap (a build with `--features ros2`)"
+        })
     } else if head.starts_with(b"PK\x03\x04") {
         Some(
             "a zip archive (phone sensor apps export one): unpack it and import the table inside \

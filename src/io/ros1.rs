@@ -26,9 +26,9 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use super::bag::{BagRead, Found, imu_sample, join_temperature, ros_descriptor, stamp_or_log};
+use crate::frame::DecoderStats;
 use crate::frame::ros2::{COVARIANCE_NOT_AVAILABLE, McapOptions};
-use crate::frame::{AxisConvention, DecoderStats, Descriptor};
-use crate::sample::Sample;
 use crate::text::count;
 use rosbag::{ChunkRecord, IndexRecord, MessageRecord, RosBag};
 
@@ -62,18 +62,6 @@ pub enum Ros1Error {
         asked: String,
         have: String,
     },
-}
-
-/// What [`read_bag`] read.
-#[derive(Debug, Clone)]
-pub struct Ros1Bag {
-    pub descriptor: Descriptor,
-    pub samples: Vec<Sample>,
-    /// Counts of what was read and what was not (bad messages in `bad_payload`, damaged chunks
-    /// in `crc_errors`'s place: `truncated`).
-    pub stats: DecoderStats,
-    /// One line: the topic read, what else the bag holds, what could not be read.
-    pub found: String,
 }
 
 /// `index_pos` from the bag header record (the crate's own parse would take a 0 or a position
@@ -269,7 +257,7 @@ fn pick(
 /// `path`, as samples, with the temperature of `opts.temperature_topic` (else the first
 /// Temperature topic; `""` none) joined: the latest reading at or before each sample, unless
 /// older than `temperature_max_age_s`.
-pub fn read_bag(path: &Path, opts: &McapOptions) -> Result<Ros1Bag, Ros1Error> {
+pub fn read_bag(path: &Path, opts: &McapOptions) -> Result<BagRead, Ros1Error> {
     let len = std::fs::metadata(path)?.len();
     let mut head = vec![0u8; 4096];
     let n = {
@@ -335,11 +323,7 @@ pub fn read_bag(path: &Path, opts: &McapOptions) -> Result<Ros1Bag, Ros1Error> {
         };
     let header_time = opts.time != "log";
     let time_of = |secs: u32, nsecs: u32, record: u64| {
-        if header_time && (secs, nsecs) != (0, 0) {
-            secs as u64 * 1_000_000_000 + nsecs as u64
-        } else {
-            record
-        }
+        stamp_or_log(header_time, secs.into(), nsecs.into(), record)
     };
 
     let mut stats = DecoderStats {
@@ -356,13 +340,7 @@ pub fn read_bag(path: &Path, opts: &McapOptions) -> Result<Ros1Bag, Ros1Error> {
         if imu_ids.contains(&m.conn_id) {
             match decode_imu(m.data) {
                 Some((secs, nsecs, channels, absent)) => {
-                    let mut s = Sample {
-                        t_ns: time_of(secs, nsecs, m.time),
-                        ..Sample::default()
-                    };
-                    s.set_channels(&channels);
-                    crate::frame::protocol::mark_absent(&mut s, absent);
-                    samples.push(s);
+                    samples.push(imu_sample(time_of(secs, nsecs, m.time), &channels, absent));
                     stats.frames_ok += 1;
                     stats.samples += 1;
                 }
@@ -384,84 +362,43 @@ pub fn read_bag(path: &Path, opts: &McapOptions) -> Result<Ros1Bag, Ros1Error> {
     });
     stats.truncated = walk.damaged;
 
-    // The temperature join: the latest reading at or before each sample, if fresh enough.
-    temps.sort_by_key(|t| t.0);
-    let max_age_ns = opts.temperature_max_age_s * 1e9;
-    let mut joined = 0u64;
-    for s in &mut samples {
-        let at = temps.partition_point(|(t, _)| *t <= s.t_ns);
-        if let Some(&(t, c)) = at.checked_sub(1).map(|i| &temps[i])
-            && (max_age_ns <= 0.0 || (s.t_ns - t) as f64 <= max_age_ns)
-        {
-            s.temp_c = Some(c);
-            joined += 1;
-        }
-    }
-
-    let others: Vec<String> = conns
-        .values()
-        .filter(|(n, t)| t == IMU_TYPE && *n != topic)
-        .map(|(n, _)| n.clone())
-        .collect();
-    let mut found = format!(
-        "{} on {topic} ({}",
-        count(
-            stats.samples,
-            "sensor_msgs/Imu message",
-            "sensor_msgs/Imu messages"
-        ),
-        count(walk.chunks, "chunk", "chunks"),
-    );
-    if stats.bad_payload > 0 {
-        found += &format!(
-            ", {} not a sensor_msgs/Imu of ROS 1's layout, left out",
-            count(stats.bad_payload, "message", "messages")
-        );
-    }
-    found += ")";
-    match &temp {
-        Some((t, _)) => {
-            found += &format!(
-                "; temperature from {t}, joined to {joined} of {} samples",
-                samples.len()
-            );
-            if bad_temp > 0 {
-                found += &format!(" ({} unreadable)", count(bad_temp, "reading", "readings"));
-            }
-        }
-        None => found += "; no temperature topic",
-    }
-    if !others.is_empty() {
-        found += &format!(
-            "; other Imu topics not read: {} (choose with --topic)",
-            others.join(", ")
-        );
-    }
-    found += &format!("; {} on other topics", count(other, "message", "messages"));
+    let joined = join_temperature(&mut samples, temps, opts.temperature_max_age_s);
+    let mut warnings = Vec::new();
     if let Some(e) = &index.damage {
-        found += &format!(
-            "; WARNING: the bag's index is damaged ({e}): its topics were taken from the chunks"
-        );
+        warnings.push(format!(
+            "the bag's index is damaged ({e}): its topics were taken from the chunks"
+        ));
     }
     if let Some(e) = walk.first_error {
-        found += &format!(
-            "; WARNING: {} damaged ({e}): {} lost",
+        warnings.push(format!(
+            "{} damaged ({e}): {} lost",
             count(walk.damaged, "record", "records"),
             if walk.lost_rest {
                 "the messages after the damage (the rest of the bag: no index to find the next chunk by) are"
             } else {
                 "the messages of a damaged chunk, or after the damage in it, are"
             }
-        );
+        ));
     }
-    Ok(Ros1Bag {
-        descriptor: Descriptor {
-            axes: AxisConvention::Flu,
-            ..Descriptor::default()
-        },
+    let found = Found {
+        imu_type: IMU_TYPE,
+        other_imu: conns
+            .values()
+            .filter(|(n, t)| t == IMU_TYPE && *n != topic)
+            .map(|(n, _)| n.clone())
+            .collect(),
+        topic,
+        containers: count(walk.chunks, "chunk", "chunks"),
+        temperature: temp.map(|(t, _)| (t, bad_temp)),
+        joined,
+        other,
+        warnings,
+    };
+    Ok(BagRead {
+        descriptor: ros_descriptor(),
         samples,
+        found: found.line(&stats),
         stats,
-        found,
     })
 }
 

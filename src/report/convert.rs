@@ -69,9 +69,26 @@ pub fn import(
     if let Some(r) = o.time_from_index_hz {
         ensure!(r.is_finite() && r > 0.0, "--rate must be > 0 Hz");
     }
+    // Bags read whole by their own readers (each behind its feature).
     #[cfg(feature = "ros1")]
     if crate::io::ros1::is_bag(input) {
-        return import_ros1(input, output, proto, o);
+        let pc = protocol_config(proto);
+        let bag = crate::io::ros1::read_bag(input, &pc.mcap);
+        return import_bag(
+            input,
+            output,
+            o,
+            "a ROS 1 bag that cannot be imported",
+            "ROS 1 bag",
+            bag,
+        );
+    }
+    #[cfg(feature = "ros2-sqlite")]
+    if crate::io::ros2_db3::is_db3(input) {
+        let pc = protocol_config(proto);
+        let bag = crate::io::ros2_db3::read_db3(input, &pc.mcap);
+        let what = "an SQLite file that cannot be imported as a ROS 2 bag";
+        return import_bag(input, output, o, what, "ROS 2 bag (SQLite)", bag);
     }
     // A text table by its name (.csv, .csv.gz: read as one whatever its content, as always), or
     // by its content (any other name: text with a consistent delimiter; a binary file goes to
@@ -126,26 +143,30 @@ pub fn import(
     written(input, None, output, (&d, &samples), decoded, timing)
 }
 
-/// A ROS 1 bag ([`crate::io::ros1`]): its Imu topic's samples, with time faults and the rate
-/// derived over the whole file as for every other import.
-#[cfg(feature = "ros1")]
-fn import_ros1(
-    input: &Path,
-    output: &Path,
-    proto: &ProtocolArgs,
-    o: &ImportOptions,
-) -> Result<ImportReport> {
+/// The protocol options as the flags set them (`--topic` for a bag).
+#[cfg(any(feature = "ros1", feature = "ros2-sqlite"))]
+fn protocol_config(proto: &ProtocolArgs) -> ProtocolConfig {
     let mut pc = ProtocolConfig::auto();
     proto.apply(&mut pc);
-    let mut bag = crate::io::ros1::read_bag(input, &pc.mcap).map_err(|e| {
-        InputProblem(format!(
-            "{}: a ROS 1 bag that cannot be imported: {e}",
-            input.display()
-        ))
-    })?;
+    pc
+}
+
+/// A bag read whole ([`crate::io::bag`]): its Imu topic's samples, with time faults and the
+/// rate derived over the whole file as for every other import. `what` says the input's
+/// error, `label` names it on the import's first line.
+#[cfg(any(feature = "ros1", feature = "ros2-sqlite"))]
+fn import_bag<E: std::fmt::Display>(
+    input: &Path,
+    output: &Path,
+    o: &ImportOptions,
+    what: &str,
+    label: &str,
+    bag: std::result::Result<crate::io::bag::BagRead, E>,
+) -> Result<ImportReport> {
+    let mut bag = bag.map_err(|e| InputProblem(format!("{}: {what}: {e}", input.display())))?;
     if bag.samples.is_empty() {
         return Err(InputProblem(format!(
-            "{}: a ROS 1 bag, but no sensor_msgs/Imu message could be read: {}",
+            "{}: a {label}, but no Imu message could be read: {}",
             input.display(),
             bag.found
         ))
@@ -161,7 +182,7 @@ fn import_ros1(
         None,
         output,
         (&d, &bag.samples),
-        Some(format!("ROS 1 bag input: {}", bag.found)),
+        Some(format!("{label} input: {}", bag.found)),
         Some(tf.to_string()),
     )
 }
