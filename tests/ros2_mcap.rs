@@ -2,7 +2,10 @@
 //! rosbags reads from it (tests/reference/gen_mcap_reference.py); inline re-encoding keeps every
 //! message; the MCAP sink's bag is read back by the `mcap` crate here and by rosbags
 //! (tests/reference/check_mcap_sink.py, its result committed). Needs `--features ros2`.
+mod common;
+
 use bytes::BytesMut;
+use common::bag_opts;
 use imuprep::frame::detect::{ProtocolChoice, ProtocolConfig, decode_bytes};
 use imuprep::frame::inline::InlineEncoder;
 use imuprep::frame::mcap::{McapDecoder, McapOptions};
@@ -53,14 +56,6 @@ fn expected(topic: &str) -> Vec<Row> {
         .collect()
 }
 
-fn opts(topic: Option<&str>, time: &str) -> McapOptions {
-    McapOptions {
-        topic: topic.map(str::to_string),
-        time: time.into(),
-        ..McapOptions::default()
-    }
-}
-
 /// Every record of an MCAP file, through the `mcap` crate (a second opinion on our output).
 fn crate_messages(bytes: &[u8]) -> Vec<(String, String, u64, Vec<u8>)> {
     mcap::MessageStream::new(bytes)
@@ -87,7 +82,7 @@ fn values_equal_rosbags_at_every_chunking() {
     let want = expected("/imu/data");
     assert_eq!(want.len(), 60);
     for chunk in [1, 7, 512, 4096, BAG.len()] {
-        let mut d = McapDecoder::new(opts(None, "header"));
+        let mut d = McapDecoder::new(bag_opts(None, "header"));
         let (items, st) = run(&mut d, BAG, chunk);
         let got = samples(&items);
         assert_eq!(got.len(), 60, "chunk {chunk}: {}", d.found());
@@ -145,7 +140,7 @@ fn covariances_and_the_whole_message_stay_in_the_carrier() {
 fn topic_and_time_source_are_selectable() {
     let want = expected("/imu/second");
     assert_eq!(want.len(), 20);
-    let mut d = McapDecoder::new(opts(Some("/imu/second"), "log"));
+    let mut d = McapDecoder::new(bag_opts(Some("/imu/second"), "log"));
     let (items, _) = run(&mut d, BAG, 333);
     let got = samples(&items);
     assert_eq!(got.len(), 20);
@@ -154,7 +149,7 @@ fn topic_and_time_source_are_selectable() {
         assert_eq!(s.channels().to_vec(), r.v[..6].to_vec());
     }
     // A topic that is not there: nothing read, and the summary says so.
-    let mut d = McapDecoder::new(opts(Some("/nope"), "header"));
+    let mut d = McapDecoder::new(bag_opts(Some("/nope"), "header"));
     let (items, st) = run(&mut d, BAG, 4096);
     assert!(samples(&items).is_empty());
     assert_eq!(st.samples, 0);

@@ -2,6 +2,7 @@
 //! bags in SQLite): the samples read with what was found, the time rule, the temperature join
 //! over the whole file, and the import's first line.
 
+use crate::frame::ros2::McapOptions;
 use crate::frame::{AxisConvention, DecoderStats, Descriptor};
 use crate::sample::Sample;
 use crate::text::count;
@@ -16,6 +17,90 @@ pub struct BagRead {
     pub stats: DecoderStats,
     /// One line: the topic read, what else the bag holds, what could not be read.
     pub found: String,
+}
+
+/// Why no topic could be chosen.
+#[derive(Debug, thiserror::Error)]
+pub enum TopicError {
+    #[error("no {0} topic in the bag (its topics: {1})")]
+    NoImuTopic(&'static str, String),
+    #[error("no {ty} topic {asked:?} in the bag (its {ty} topics: {have})")]
+    NoSuchTopic {
+        ty: &'static str,
+        asked: String,
+        have: String,
+    },
+}
+
+/// A bag's topics, (name, message type) each once, in the order the bag declares them.
+#[derive(Debug, Default)]
+pub struct Topics(Vec<(String, String)>);
+
+impl Topics {
+    pub fn add(&mut self, name: &str, ty: &str) {
+        if !self.0.iter().any(|(n, t)| n == name && t == ty) {
+            self.0.push((name.to_string(), ty.to_string()));
+        }
+    }
+
+    /// The names of the topics of type `ty`, or every topic with its type; "none".
+    fn names(&self, ty: Option<&str>) -> String {
+        let v: Vec<String> = self
+            .0
+            .iter()
+            .filter(|(_, t)| ty.is_none_or(|ty| t == ty))
+            .map(|(n, t)| match ty {
+                Some(_) => n.clone(),
+                None => format!("{n} ({t})"),
+            })
+            .collect();
+        if v.is_empty() {
+            "none".into()
+        } else {
+            v.join(", ")
+        }
+    }
+
+    /// The topic of type `ty` to read: `asked` (an error naming the bag's topics of that type
+    /// when it has no such one), else the first of that type, if any.
+    fn pick(&self, ty: &'static str, asked: Option<&str>) -> Result<Option<String>, TopicError> {
+        match asked {
+            Some(a) if self.0.iter().any(|(n, t)| n == a && t == ty) => Ok(Some(a.to_string())),
+            Some(a) => Err(TopicError::NoSuchTopic {
+                ty,
+                asked: a.to_string(),
+                have: self.names(Some(ty)),
+            }),
+            None => Ok(self.0.iter().find(|(_, t)| t == ty).map(|(n, _)| n.clone())),
+        }
+    }
+
+    /// The Imu topic (`opts.topic`, else the first of `imu_ty`) and the Temperature topic
+    /// (`opts.temperature_topic`, else the first of `temp_ty`; `""`: none) to read.
+    pub fn choose(
+        &self,
+        imu_ty: &'static str,
+        temp_ty: &'static str,
+        opts: &McapOptions,
+    ) -> Result<(String, Option<String>), TopicError> {
+        let imu = self
+            .pick(imu_ty, opts.topic.as_deref())?
+            .ok_or_else(|| TopicError::NoImuTopic(imu_ty, self.names(None)))?;
+        let temp = match opts.temperature_topic.as_deref() {
+            Some("") => None,
+            t => self.pick(temp_ty, t)?,
+        };
+        Ok((imu, temp))
+    }
+
+    /// The topics of type `ty` other than `topic`.
+    pub fn others(&self, ty: &str, topic: &str) -> Vec<String> {
+        self.0
+            .iter()
+            .filter(|(n, t)| t == ty && n != topic)
+            .map(|(n, _)| n.clone())
+            .collect()
+    }
 }
 
 /// What a bag reader found, for [`Found::line`].

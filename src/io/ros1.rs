@@ -26,7 +26,9 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use super::bag::{BagRead, Found, imu_sample, join_temperature, ros_descriptor, stamp_or_log};
+use super::bag::{
+    BagRead, Found, TopicError, Topics, imu_sample, join_temperature, ros_descriptor, stamp_or_log,
+};
 use crate::frame::DecoderStats;
 use crate::frame::ros2::{COVARIANCE_NOT_AVAILABLE, McapOptions};
 use crate::text::count;
@@ -54,14 +56,8 @@ pub enum Ros1Error {
         "the bag has no index (its recording did not end cleanly: index_pos {index_pos} of {len} bytes); rebuild it with `rosbag reindex IN.bag` (ROS 1), then import the reindexed bag"
     )]
     Unindexed { index_pos: u64, len: u64 },
-    #[error("no sensor_msgs/Imu topic in the bag (its topics: {0})")]
-    NoImuTopic(String),
-    #[error("no {ty} topic {asked:?} in the bag (its {ty} topics: {have})")]
-    NoSuchTopic {
-        ty: &'static str,
-        asked: String,
-        have: String,
-    },
+    #[error(transparent)]
+    Topic(#[from] TopicError),
 }
 
 /// `index_pos` from the bag header record (the crate's own parse would take a 0 or a position
@@ -235,22 +231,13 @@ fn walk_chunks(bag: &RosBag, chunk_pos: &[u64], mut f: impl FnMut(MessageRecord<
     w
 }
 
-/// The connection ids of `topic` (or of the first topic of `ty` when `None`), with the topic.
-fn pick(
-    conns: &BTreeMap<u32, (String, String)>,
-    ty: &str,
-    topic: Option<&str>,
-) -> Option<(String, Vec<u32>)> {
-    let topic = match topic {
-        Some(t) => t.to_string(),
-        None => conns.values().find(|(_, t)| t == ty)?.0.clone(),
-    };
-    let ids: Vec<u32> = conns
+/// The connection ids of `topic` with type `ty`.
+fn ids(conns: &BTreeMap<u32, (String, String)>, ty: &str, topic: &str) -> Vec<u32> {
+    conns
         .iter()
-        .filter(|(_, (n, t))| *n == topic && t == ty)
+        .filter(|(_, (n, t))| n == topic && t == ty)
         .map(|(id, _)| *id)
-        .collect();
-    (!ids.is_empty()).then_some((topic, ids))
+        .collect()
 }
 
 /// The `sensor_msgs/Imu` messages of `opts.topic` (else the first Imu topic) in the bag at
@@ -279,48 +266,16 @@ pub fn read_bag(path: &Path, opts: &McapOptions) -> Result<BagRead, Ros1Error> {
     let bag = RosBag::new(path)?;
     let index = read_index(&bag);
     let conns = &index.conns;
-    let list = |ty: Option<&str>| {
-        let mut v: Vec<String> = conns
-            .values()
-            .filter(|(_, t)| ty.is_none_or(|ty| t == ty))
-            .map(|(n, t)| {
-                if ty.is_some() {
-                    n.clone()
-                } else {
-                    format!("{n} ({t})")
-                }
-            })
-            .collect();
-        v.dedup();
-        if v.is_empty() {
-            "none".into()
-        } else {
-            v.join(", ")
-        }
-    };
-    let (topic, imu_ids) = match pick(conns, IMU_TYPE, opts.topic.as_deref()) {
-        Some(x) => x,
-        None if opts.topic.is_some() => {
-            return Err(Ros1Error::NoSuchTopic {
-                ty: IMU_TYPE,
-                asked: opts.topic.clone().unwrap_or_default(),
-                have: list(Some(IMU_TYPE)),
-            });
-        }
-        None => return Err(Ros1Error::NoImuTopic(list(None))),
-    };
-    let temp =
-        match opts.temperature_topic.as_deref() {
-            Some("") => None,
-            None => pick(conns, TEMPERATURE_TYPE, None),
-            Some(t) => Some(pick(conns, TEMPERATURE_TYPE, Some(t)).ok_or_else(|| {
-                Ros1Error::NoSuchTopic {
-                    ty: TEMPERATURE_TYPE,
-                    asked: t.to_string(),
-                    have: list(Some(TEMPERATURE_TYPE)),
-                }
-            })?),
-        };
+    let mut topics = Topics::default();
+    for (n, t) in conns.values() {
+        topics.add(n, t);
+    }
+    let (topic, temp) = topics.choose(IMU_TYPE, TEMPERATURE_TYPE, opts)?;
+    let imu_ids = ids(conns, IMU_TYPE, &topic);
+    let temp = temp.map(|t| {
+        let i = ids(conns, TEMPERATURE_TYPE, &t);
+        (t, i)
+    });
     let header_time = opts.time != "log";
     let time_of = |secs: u32, nsecs: u32, record: u64| {
         stamp_or_log(header_time, secs.into(), nsecs.into(), record)
@@ -382,11 +337,7 @@ pub fn read_bag(path: &Path, opts: &McapOptions) -> Result<BagRead, Ros1Error> {
     }
     let found = Found {
         imu_type: IMU_TYPE,
-        other_imu: conns
-            .values()
-            .filter(|(n, t)| t == IMU_TYPE && *n != topic)
-            .map(|(n, _)| n.clone())
-            .collect(),
+        other_imu: topics.others(IMU_TYPE, &topic),
         topic,
         containers: count(walk.chunks, "chunk", "chunks"),
         temperature: temp.map(|(t, _)| (t, bad_temp)),

@@ -15,7 +15,9 @@ use std::path::{Path, PathBuf};
 
 use rusqlite::{Connection, OpenFlags, params};
 
-use super::bag::{BagRead, Found, imu_sample, join_temperature, ros_descriptor, stamp_or_log};
+use super::bag::{
+    BagRead, Found, TopicError, Topics, imu_sample, join_temperature, ros_descriptor, stamp_or_log,
+};
 use crate::frame::DecoderStats;
 use crate::frame::ros2::{McapOptions, decode_imu_fast, decode_temperature};
 use crate::text::count;
@@ -39,14 +41,8 @@ pub enum Db3Error {
         "{0}: an SQLite database, but not a rosbag2 bag (it has no `topics` and `messages` tables)"
     )]
     NotABag(PathBuf),
-    #[error("no sensor_msgs/msg/Imu topic in CDR in the bag (its topics: {0})")]
-    NoImuTopic(String),
-    #[error("no {ty} topic {asked:?} in the bag (its {ty} topics: {have})")]
-    NoSuchTopic {
-        ty: &'static str,
-        asked: String,
-        have: String,
-    },
+    #[error(transparent)]
+    Topic(#[from] TopicError),
 }
 
 /// Whether `path` is a `.db3` bag: an SQLite file, or a directory holding `.db3` files.
@@ -87,7 +83,7 @@ fn db3_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
 }
 
 /// One file's topics: (id, name, type), CDR only.
-fn topics(c: &Connection, path: &Path) -> Result<Vec<(i64, String, String)>, Db3Error> {
+fn file_topics(c: &Connection, path: &Path) -> Result<Vec<(i64, String, String)>, Db3Error> {
     let sql = |e| Db3Error::Sqlite(path.to_path_buf(), e);
     let tables: i64 = c
         .query_row(
@@ -136,56 +132,20 @@ pub fn read_db3(path: &Path, opts: &McapOptions) -> Result<BagRead, Db3Error> {
         return Err(Db3Error::Empty(path.to_path_buf()));
     }
     let mut dbs = Vec::new();
-    let mut all: Vec<(String, String)> = Vec::new();
+    let mut topics = Topics::default();
     for f in &files {
         let c = Connection::open_with_flags(
             f,
             OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
         )
         .map_err(|e| Db3Error::Sqlite(f.clone(), e))?;
-        let t = topics(&c, f)?;
+        let t = file_topics(&c, f)?;
         for (_, n, ty) in &t {
-            if !all.iter().any(|(a, b)| a == n && b == ty) {
-                all.push((n.clone(), ty.clone()));
-            }
+            topics.add(n, ty);
         }
         dbs.push((f.clone(), c, t));
     }
-    let names = |ty: Option<&str>| {
-        let v: Vec<String> = all
-            .iter()
-            .filter(|(_, t)| ty.is_none_or(|ty| t == ty))
-            .map(|(n, t)| {
-                if ty.is_some() {
-                    n.clone()
-                } else {
-                    format!("{n} ({t})")
-                }
-            })
-            .collect();
-        if v.is_empty() {
-            "none".into()
-        } else {
-            v.join(", ")
-        }
-    };
-    let pick = |ty: &'static str, asked: Option<&str>| -> Result<Option<String>, Db3Error> {
-        match asked {
-            Some(a) if all.iter().any(|(n, t)| n == a && t == ty) => Ok(Some(a.to_string())),
-            Some(a) => Err(Db3Error::NoSuchTopic {
-                ty,
-                asked: a.to_string(),
-                have: names(Some(ty)),
-            }),
-            None => Ok(all.iter().find(|(_, t)| t == ty).map(|(n, _)| n.clone())),
-        }
-    };
-    let topic =
-        pick(IMU_TYPE, opts.topic.as_deref())?.ok_or_else(|| Db3Error::NoImuTopic(names(None)))?;
-    let temp = match opts.temperature_topic.as_deref() {
-        Some("") => None,
-        t => pick(TEMPERATURE_TYPE, t)?,
-    };
+    let (topic, temp) = topics.choose(IMU_TYPE, TEMPERATURE_TYPE, opts)?;
     let header_time = opts.time != "log";
 
     let mut stats = DecoderStats::default();
@@ -281,11 +241,7 @@ pub fn read_db3(path: &Path, opts: &McapOptions) -> Result<BagRead, Db3Error> {
     let joined = join_temperature(&mut samples, temps, opts.temperature_max_age_s);
     let found = Found {
         imu_type: IMU_TYPE,
-        other_imu: all
-            .iter()
-            .filter(|(n, t)| t == IMU_TYPE && *n != topic)
-            .map(|(n, _)| n.clone())
-            .collect(),
+        other_imu: topics.others(IMU_TYPE, &topic),
         topic,
         containers: count(files.len() as u64, "file", "files"),
         temperature: temp.map(|t| (t, bad_temp)),

@@ -97,6 +97,30 @@ pub fn import(input: &std::path::Path, log: &std::path::Path) -> std::process::O
         .unwrap()
 }
 
+/// Run the built `imuprep` with `args`; its output, success or not.
+pub fn imuprep(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(bin())
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Asserts `text` holds every one of `parts` (the text shown when not).
+pub fn assert_says(text: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(text.contains(p), "{p:?} not in:\n{text}");
+    }
+}
+
+/// A bag's topic options: `topic` (`None`: the first Imu topic) and `time` ("header" or "log").
+pub fn bag_opts(topic: Option<&str>, time: &str) -> imuprep::frame::ros2::McapOptions {
+    imuprep::frame::ros2::McapOptions {
+        topic: topic.map(str::to_string),
+        time: time.into(),
+        ..Default::default()
+    }
+}
+
 /// Run the built `imuprep` with `args` from the crate root; its stdout and stderr, joined. Panics
 /// (with that output) when it fails.
 pub fn run_cli(args: &[&str]) -> String {
