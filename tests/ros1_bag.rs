@@ -2,7 +2,6 @@
 //! here wrote) reads from the same bags, with chunks uncompressed, bzip2 and LZ4
 //! (`tests/reference/gen_ros1_reference.py` writes the bags and `ros1_expected.csv`); and
 //! damaged bags said, never a panic.
-#![cfg(feature = "ros1")]
 
 mod common;
 

@@ -3,7 +3,6 @@
 //! (`tests/reference/gen_db3_reference.py` writes the messages of the MCAP reference bags again
 //! with rosbags' SQLite storage; `mcap_expected.csv` is rosbags' reading of them); damaged
 //! databases said, never a panic.
-#![cfg(feature = "ros2-sqlite")]
 
 mod common;
 
