@@ -585,3 +585,59 @@ fn a_recording_format_imuprep_does_not_read_is_named_with_the_way_in() {
         }
     }
 }
+
+#[test]
+fn a_bag_directory_imports_its_bag_file_or_says_what_it_holds() {
+    // A rosbag2 bag is a directory (metadata.yaml and its storage files); before, "Is a
+    // directory (os error 21)".
+    let root = tempfile::tempdir().unwrap();
+    let out = root.path().join("o.log");
+    let dir = |name: &str, files: &[(&str, &str)]| {
+        let d = root.path().join(name);
+        std::fs::create_dir(&d).unwrap();
+        std::fs::write(d.join("metadata.yaml"), "rosbag2_bagfile_information: {}\n").unwrap();
+        for (to, from) in files {
+            std::fs::copy(from, d.join(to)).unwrap();
+        }
+        d.to_str().unwrap().to_string()
+    };
+    let mcap = "tests/reference/mcap_bag.mcap";
+    let db3 = "tests/reference/db3_bag/db3_bag_0.db3";
+    let one = dir("one", &[("one_0.mcap", mcap)]);
+    let split = dir("split", &[("s_0.mcap", mcap), ("s_1.mcap", mcap)]);
+    let sqlite = dir("sqlite", &[("q_0.db3", db3)]);
+    let empty = dir("empty", &[]);
+    let import = |d: &str| run(&["import", d, "-o", out.to_str().unwrap()]);
+
+    let (code, err) = import(&one);
+    if cfg!(feature = "ros2") {
+        assert_eq!(code, 0, "{err}");
+        assert!(err.contains("imported 60 samples"), "{err}");
+    } else {
+        assert_ne!(code, 0);
+        assert!(
+            err.contains("a ROS 2 bag (MCAP), which this build does not read"),
+            "{err}"
+        );
+    }
+    let (code, err) = import(&sqlite);
+    if cfg!(feature = "ros2-sqlite") {
+        assert_eq!(code, 0, "{err}");
+        assert!(err.contains("ROS 2 bag (SQLite) input: 60"), "{err}");
+    } else {
+        assert_ne!(code, 0);
+        assert!(
+            err.contains("a directory") && err.contains("SQLite"),
+            "{err}"
+        );
+    }
+    let (code, err) = import(&split);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("a split bag of 2 .mcap files (s_0.mcap, s_1.mcap)"),
+        "{err}"
+    );
+    let (code, err) = import(&empty);
+    assert_ne!(code, 0);
+    assert!(err.contains("no .mcap or .db3 bag file in it"), "{err}");
+}

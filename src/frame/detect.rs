@@ -248,6 +248,11 @@ pub fn foreign_format(head: &[u8]) -> Option<&'static str> {
              mcap`) and import OUT/OUT.mcap (a build with `--features ros2`), or export its Imu \
              topic as CSV (`rostopic echo -b IN.bag -p /imu/data > imu.csv`) and import that"
         })
+    } else if !cfg!(feature = "ros2") && head.starts_with(&super::ros2::MAGIC) {
+        Some(
+            "a ROS 2 bag (MCAP), which this build does not read: rebuild with `cargo build \
+             --release --features ros2` and run the same command",
+        )
     } else if head.starts_with(b"SQLite ") {
         Some(if cfg!(feature = "ros2-sqlite") {
             "an SQLite database (a ROS 2 bag's .db3?), which the decoders do not stream: import \

@@ -90,6 +90,11 @@ pub fn import(
         let what = "an SQLite file that cannot be imported as a ROS 2 bag";
         return import_bag(input, output, o, what, "ROS 2 bag (SQLite)", bag);
     }
+    // A directory (a rosbag2 bag is one): its MCAP file; anything else is said.
+    if input.is_dir() {
+        let file = bag_dir_file(input)?;
+        return import(&file, output, proto, o);
+    }
     // A text table by its name (.csv, .csv.gz: read as one whatever its content, as always), or
     // by its content (any other name: text with a consistent delimiter; a binary file goes to
     // the protocol decoders, text that is no table is said to be so).
@@ -185,6 +190,49 @@ fn import_bag<E: std::fmt::Display>(
         Some(format!("{label} input: {}", bag.found)),
         Some(tf.to_string()),
     )
+}
+
+/// The file to import from a directory: a rosbag2 bag's one `.mcap` file. A directory of
+/// `.db3` files (read above in a `ros2-sqlite` build) is said as the SQLite bag it is, several
+/// `.mcap` files (a split bag) are named, and a directory with neither says so.
+fn bag_dir_file(dir: &Path) -> Result<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("{}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file())
+        .collect();
+    files.sort();
+    let with = |ext: &str| -> Vec<&PathBuf> {
+        files
+            .iter()
+            .filter(|p| p.extension().is_some_and(|e| e == ext))
+            .collect()
+    };
+    let (mcap, db3) = (with("mcap"), with("db3"));
+    let problem = |why: String| InputProblem(format!("{}: a directory: {why}", dir.display()));
+    match (mcap.as_slice(), db3.first()) {
+        ([one], _) => Ok(one.to_path_buf()),
+        ([], Some(db3)) => Err(problem(format!(
+            "{}: {}",
+            db3.display(),
+            crate::frame::detect::foreign_format(b"SQLite format 3\0").unwrap_or("")
+        ))
+        .into()),
+        ([], None) => Err(problem(
+            "no .mcap or .db3 bag file in it; name the file to import".into(),
+        )
+        .into()),
+        (several, _) => Err(problem(format!(
+            "a split bag of {} .mcap files ({}): import each file, or merge them first (`mcap merge`)",
+            several.len(),
+            several
+                .iter()
+                .map(|p| p.file_name().unwrap_or_default().to_string_lossy())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+        .into()),
+    }
 }
 
 /// The imported samples written to `output` as a native log, and the report of it.
