@@ -246,20 +246,12 @@ fn ids(conns: &BTreeMap<u32, (String, String)>, ty: &str, topic: &str) -> Vec<u3
 /// older than `temperature_max_age_s`.
 pub fn read_bag(path: &Path, opts: &McapOptions) -> Result<BagRead, Ros1Error> {
     let len = std::fs::metadata(path)?.len();
-    let mut head = vec![0u8; 4096];
-    let n = {
-        use std::io::Read;
-        let mut f = std::fs::File::open(path)?;
-        let mut n = 0;
-        while n < head.len() {
-            match f.read(&mut head[n..])? {
-                0 => break,
-                k => n += k,
-            }
-        }
-        n
-    };
-    let index_pos = index_pos(&head[..n])?;
+    let mut head = Vec::with_capacity(4096);
+    std::io::Read::read_to_end(
+        &mut std::io::Read::take(std::fs::File::open(path)?, 4096),
+        &mut head,
+    )?;
+    let index_pos = index_pos(&head)?;
     if index_pos == 0 || index_pos >= len {
         return Err(Ros1Error::Unindexed { index_pos, len });
     }

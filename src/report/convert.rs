@@ -179,7 +179,9 @@ fn import_bag<E: std::fmt::Display>(
     }
     let tf = crate::io::timing::rederive_sequence(&mut bag.samples);
     let mut d = bag.descriptor;
-    d.sample_rate_hz = tf.nominal_rate_hz;
+    if tf.nominal_rate_hz > 0.0 {
+        d.sample_rate_hz = tf.nominal_rate_hz;
+    }
     d.gyro_range_rad_s = o.gyro_range_rad_s;
     d.accel_range_m_s2 = o.accel_range_m_s2;
     written(
