@@ -1026,6 +1026,19 @@ fn one_table_per_sensor_imports_merged_with_accel_file() {
             && columns(&rep).contains("az=TotalAcceleration.csv:z"),
         "{rep}"
     );
+    // Each file's own time column is named, and the line of the one missing accel is the
+    // gyro file's (the samples are its rows).
+    assert!(
+        columns(&rep)
+            .contains("t=Gyroscope.csv:time (gyro rows), TotalAcceleration.csv:time (accel rows)"),
+        "{rep}"
+    );
+    assert!(
+        rep.empty_cells
+            .iter()
+            .all(|e| e.first_line == 2 && e.file.as_deref() == Some("Gyroscope.csv")),
+        "{rep}"
+    );
     // The CLI.
     let log = dir.path().join("phone.log");
     let out = common::run_cli(&[
@@ -1037,7 +1050,7 @@ fn one_table_per_sensor_imports_merged_with_accel_file() {
         log.to_str().unwrap(),
     ]);
     assert!(
-        out.contains("two streams in one table (16000 rows read"),
+        out.contains("two streams in two files (16000 rows read"),
         "{out}"
     );
     assert!(out.contains("TotalAcceleration.csv into"), "{out}");

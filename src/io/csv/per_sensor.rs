@@ -170,6 +170,7 @@ pub fn read_per_sensor_report(
         let theirs = a.lay.idx[k].map(|p| p + shift);
         *v = if k == 7 { v.or(theirs) } else { theirs };
     }
+    let lay_a_time = a.lay.idx[0].map(|p| p + shift);
     let lay = Layout {
         idx,
         gyro: g.lay.gyro.clone(),
@@ -224,6 +225,23 @@ pub fn read_per_sensor_report(
         ));
     }
     report.table = None;
+    // Said of the two files: each has its own time column, and the samples are the base
+    // file's rows, so the lines named are that file's.
+    let base = match report.streams.as_ref().map(|m| m.base) {
+        Some(Triad::Accel) => accel,
+        _ => gyro,
+    };
+    if let Some(m) = report.streams.as_mut() {
+        m.two_files = true;
+    }
+    for e in &mut report.empty_cells {
+        e.file = Some(file(base));
+    }
+    if let (Some(tg), Some(ta)) = (g.lay.idx[0], lay_a_time) {
+        for c in report.columns.iter_mut().filter(|c| c.key == "t") {
+            c.column = format!("{} (gyro rows), {} (accel rows)", header[tg], header[ta]);
+        }
+    }
     for (n, path) in wraps.into_iter().zip([gyro, accel]) {
         if n > 0 {
             report.notes.push(format!(

@@ -576,6 +576,7 @@ pub(super) fn missing_values(t: &Table, rows: &Rows) -> Result<Missing, CsvError
                 channel: crate::sample::CHANNEL_NAMES[c].to_string(),
                 cells: rows.empty[c] as u64,
                 first_line,
+                file: None,
             });
         }
     }

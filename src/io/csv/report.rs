@@ -12,6 +12,9 @@ pub struct EmptyCells {
     pub cells: u64,
     /// Line in the file (1 = the header) of the first.
     pub first_line: usize,
+    /// The file that line is in, where the import read two (`--accel-file`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
 }
 
 /// Which column an import read for one of t, gx..az, temp.
@@ -89,10 +92,13 @@ impl std::fmt::Display for ImportReport {
                 .iter()
                 .map(|e| {
                     format!(
-                        "{}: {} (first at line {})",
+                        "{}: {} (first at line {}{})",
                         e.channel,
                         crate::text::count(e.cells, "empty cell", "empty cells"),
-                        e.first_line
+                        e.first_line,
+                        e.file
+                            .as_ref()
+                            .map_or(String::new(), |f| format!(" of {f}"))
                     )
                 })
                 .collect();

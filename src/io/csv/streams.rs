@@ -76,6 +76,8 @@ pub struct StreamMerge {
     pub unpaired: u64,
     /// The interpolated stream's median interval, in the time column's unit.
     pub other_interval: f64,
+    /// Each triad from a file of its own (`import --accel-file`), not one table.
+    pub two_files: bool,
 }
 
 impl std::fmt::Display for StreamMerge {
@@ -84,7 +86,12 @@ impl std::fmt::Display for StreamMerge {
         let c = crate::text::count;
         write!(
             f,
-            "two streams in one table ({} read: {} with only the gyro, {} with only the accel, {} with both): merged onto the {b}'s time stamps, the {o} taken from its row at the same time stamp ({} samples) or interpolated linearly between its rows on each side ({})",
+            "two streams {} ({} read: {} with only the gyro, {} with only the accel, {} with both): merged onto the {b}'s time stamps, the {o} taken from its row at the same time stamp ({} samples) or interpolated linearly between its rows on each side ({})",
+            if self.two_files {
+                "in two files"
+            } else {
+                "in one table"
+            },
             c(self.rows_read, "row", "rows"),
             self.gyro_only,
             self.accel_only,
@@ -180,6 +187,7 @@ pub fn merge(
         interpolated: 0,
         unpaired: 0,
         other_interval: interval,
+        two_files: false,
     };
     let (mut mo, mut mt, mut ml) = (Vec::new(), Vec::new(), Vec::new());
     // `k`: the first of the other stream's rows after the row at hand, in file order.
