@@ -81,6 +81,7 @@ fn empty_cells_are_counted_with_their_first_line_and_the_rows_kept() {
             channel: c.to_string(),
             cells: if *c == "gy" { 2 } else { 1 },
             first_line: if *c == "gy" { GY_HOLE } else { ALL_HOLE } + 2,
+            file: None,
         })
         .collect();
     assert_eq!(rep.empty_cells, want, "{rep}");
