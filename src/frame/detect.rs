@@ -264,6 +264,17 @@ pub fn foreign_format(head: &[u8]) -> Option<&'static str> {
              convert it (`ros2 bag convert`, or `rosbags-convert --src BAG_DIR --dst OUT \
              --dst-storage mcap`) and import the .mcap (a build with `--features ros2`)"
         })
+    } else if head.starts_with(&[0x28, 0xB5, 0x2F, 0xFD]) {
+        Some(if cfg!(any(feature = "ros2", feature = "ros2-sqlite")) {
+            "a zstd-compressed file (rosbag2's file compression writes .mcap.zstd and .db3.zstd), \
+             which the decoders do not stream: import it (`imuprep import FILE_OR_BAG_DIR -o \
+             OUT.log`: inflated, then read as what it holds) and use OUT.log"
+        } else {
+            "a zstd-compressed file (rosbag2's file compression writes .mcap.zstd and .db3.zstd), \
+             which this build does not read: a build with `--features ros2` (MCAP) or \
+             `ros2-sqlite` (.db3) imports it (`imuprep import FILE_OR_BAG_DIR -o OUT.log`); or \
+             inflate it first (`zstd -d FILE`) and use what it holds"
+        })
     } else if head.starts_with(b"PK\x03\x04") {
         Some(
             "a zip archive (phone sensor apps export one): unpack it and import the table inside \

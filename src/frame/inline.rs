@@ -119,9 +119,17 @@ impl InlineEncoder {
             Protocol::Mcap => {
                 self.flush_frame(out);
                 let mut f = c.frame.to_vec();
-                // offsets: angular_velocity.x in the record, big endian, not patchable.
-                if c.offsets[3] == 0 {
-                    super::ros2::patch_imu(&mut f, c.offsets[0] as usize, c.offsets[2] == 0, s);
+                // offsets: angular_velocity.x in the record (in the inflated data when
+                // compressed), compressed, big endian, not patchable.
+                let (at, le) = (c.offsets[0] as usize, c.offsets[2] == 0);
+                if c.offsets[3] != 0 {
+                } else if c.offsets[1] == 0 {
+                    super::ros2::patch_imu(&mut f, at, le, s);
+                } else {
+                    #[cfg(feature = "ros2")]
+                    {
+                        f = super::mcap::patch_compressed(&f, at, le, s);
+                    }
                 }
                 self.mcap.message(&f, out);
             }

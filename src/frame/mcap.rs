@@ -11,9 +11,10 @@
 //!
 //! The records are framed here (so that a bad record is counted and the search restarts one
 //! byte after it, and each record's bytes are kept for pass-through); their bodies are parsed by
-//! the `mcap` crate. LZ4 chunks are inflated with `lz4_flex` in every `ros2` build; zstd
-//! chunks through the `mcap` crate when built with `ros2-compression`. The records inside a chunk come out one by one, as if the file
-//! had no chunks. A chunk whose CRC fails is dropped whole (counted): its messages cannot be
+//! the `mcap` crate. LZ4 and zstd chunks are inflated by pure-Rust crates ([`super::inflate`])
+//! in every `ros2` build. The records inside a chunk come out one by one, as if the file had no
+//! chunks. A message compressed on its own (rosbag2's `compression_mode: message`: the data is
+//! one zstd frame) is inflated, and the inline output compresses its cleaned form again. A chunk whose CRC fails is dropped whole (counted): its messages cannot be
 //! trusted. MCAP records outside chunks carry no checksum; as for ULog, an implausible record
 //! (reserved opcode, impossible length, a message on a channel never declared) is a fault.
 //!
@@ -27,11 +28,30 @@
 
 use super::Descriptor;
 use super::framing::{Fault, Framer, Stamper};
+use super::inflate;
 use super::protocol::{Carrier, Decoded, Protocol, ProtocolDecoder};
 use super::ros2;
 use crate::sample::Sample;
+use crate::text::count;
 use bytes::{Bytes, BytesMut};
 use std::collections::{HashMap, VecDeque};
+
+/// A message record whose data is one zstd frame, with `s` patched into the inflated CDR at
+/// `at` and the data compressed again (the record's length follows). A frame that no longer
+/// inflates (it did when decoded) is returned as it came.
+pub fn patch_compressed(rec: &[u8], at: usize, le: bool, s: &Sample) -> Vec<u8> {
+    let Ok(mut cdr) = inflate::zstd(&rec[9 + 22..], inflate::MAX_MESSAGE) else {
+        return rec.to_vec();
+    };
+    ros2::patch_imu(&mut cdr, at, le, s);
+    let z = inflate::zstd_compress(&cdr);
+    let mut f = Vec::with_capacity(9 + 22 + z.len());
+    f.push(rec[0]);
+    f.extend_from_slice(&((22 + z.len()) as u64).to_le_bytes());
+    f.extend_from_slice(&rec[9..9 + 22]);
+    f.extend_from_slice(&z);
+    f
+}
 
 /// Temperature readings kept for the join (a reading logged ahead of the Imu messages it
 /// belongs to must not hide the one before it).
@@ -86,6 +106,8 @@ enum Rec {
     Undecodable,
     /// A chunk whose CRC failed: dropped whole (counted).
     Corrupt,
+    /// A chunk in a compression read here that does not inflate: dropped whole (counted).
+    Damaged(String),
 }
 
 #[derive(Clone, Debug)]
@@ -115,6 +137,11 @@ pub struct McapDecoder {
     /// Records of the chunk being read (uncompressed), and the read position in them.
     chunk: Option<(Bytes, usize)>,
     chunks: u64,
+    /// Chunks inflated (LZ4 or zstd), and Imu messages compressed one by one (zstd).
+    inflated_chunks: u64,
+    compressed_msgs: u64,
+    /// Compressed chunks that did not inflate (dropped).
+    damaged_chunks: u64,
     unsupported: Vec<String>,
     bad_cdr: u64,
 }
@@ -138,6 +165,9 @@ impl McapDecoder {
             bad_temp: 0,
             chunk: None,
             chunks: 0,
+            inflated_chunks: 0,
+            compressed_msgs: 0,
+            damaged_chunks: 0,
             unsupported: Vec::new(),
             bad_cdr: 0,
         }
@@ -193,7 +223,7 @@ impl McapDecoder {
 
     /// A reading of the Temperature channel, kept in time order among the latest few.
     fn temperature(&mut self, rec: &[u8], log_time: u64) {
-        match ros2::decode_temperature(&rec[9 + 22..]) {
+        match ros2::decode_temperature(&inflate::message(&rec[9 + 22..])) {
             Ok((sec, nsec, c)) if c.is_finite() => {
                 let t = self.time_of(sec, nsec, log_time);
                 self.temp_msgs += 1;
@@ -218,8 +248,9 @@ impl McapDecoder {
 
     /// A sample from a message record of the selected channel.
     fn message(&mut self, rec: Bytes, log_time: u64) -> Decoded {
-        let data = &rec[9 + 22..];
-        let m = match ros2::decode_imu_fast(data) {
+        let cdr = inflate::message(&rec[9 + 22..]);
+        let compressed = matches!(cdr, std::borrow::Cow::Owned(_));
+        let m = match ros2::decode_imu_fast(&cdr) {
             Ok(x) => x,
             Err(_) => {
                 self.bad_cdr += 1;
@@ -242,17 +273,20 @@ impl McapDecoder {
             ..Descriptor::default()
         });
         self.f.stats.frames_ok += 1;
-        let at = 9 + 22 + g;
+        self.compressed_msgs += u64::from(compressed);
+        // Compressed: the offset is in the inflated data, which the inline output re-inflates.
+        let at = if compressed { g } else { 9 + 22 + g };
         let c = Carrier {
             frame: rec,
             frame2: None,
             between: None,
             slot: 0,
             slots: 1,
-            // offset of angular_velocity.x in the record; byte order; patchable.
+            // offset of angular_velocity.x in the record (in the inflated data when the data
+            // is compressed); compressed; byte order; not patchable.
             offsets: [
                 at.min(u16::MAX as usize) as u16,
-                0,
+                u16::from(compressed),
                 u16::from(!le),
                 u16::from(at > u16::MAX as usize - 200),
             ],
@@ -322,23 +356,29 @@ impl McapDecoder {
                     return Ok(Rec::Chunk(start..start + len));
                 }
                 let inflated = match header.compression.as_str() {
-                    "lz4" => lz4(&data, header.uncompressed_size),
-                    _ => decompress(rec),
+                    // A corrupt size must not allocate what it claims.
+                    _ if header.uncompressed_size > MAX_RECORD => Err(format!(
+                        "chunk claims {} bytes uncompressed",
+                        header.uncompressed_size
+                    )),
+                    "lz4" => inflate::lz4(&data, header.uncompressed_size),
+                    "zstd" => inflate::zstd_sized(&data, header.uncompressed_size),
+                    name => {
+                        // Not a compression MCAP defines: the chunk passes through whole.
+                        let name = name.to_string();
+                        if !self.unsupported.contains(&name) {
+                            tracing::warn!(
+                                "MCAP chunk compressed with {name:?}, which MCAP does not define (lz4, zstd): passed through"
+                            );
+                            self.unsupported.push(name);
+                        }
+                        return Ok(Rec::Undecodable);
+                    }
                 };
                 return Ok(match inflated {
                     Ok(v) if crc_ok(&v) => Rec::Inflated(v),
                     Ok(_) => Rec::Corrupt,
-                    Err(e) => {
-                        // No decompressor in this build: the chunk passes through whole.
-                        let name = header.compression.clone();
-                        if !self.unsupported.contains(&name) {
-                            tracing::warn!(
-                                "MCAP chunk compressed with {name:?}: {e} (build with --features ros2-compression)"
-                            );
-                            self.unsupported.push(name);
-                        }
-                        Rec::Undecodable
-                    }
+                    Err(e) => Rec::Damaged(e),
                 });
             }
             _ => {}
@@ -362,6 +402,7 @@ impl McapDecoder {
             }
             Rec::Inflated(v) => {
                 self.chunks += 1;
+                self.inflated_chunks += 1;
                 self.chunk = Some((Bytes::from(v), 0));
                 None
             }
@@ -371,6 +412,16 @@ impl McapDecoder {
             }
             Rec::Corrupt => {
                 self.f.stats.crc_errors += 1;
+                self.f.stats.garbage_bytes += rec.len() as u64;
+                None
+            }
+            Rec::Damaged(why) => {
+                // Its messages cannot be read, nor trusted if they could: dropped, as for a CRC.
+                if self.damaged_chunks == 0 {
+                    tracing::warn!("MCAP chunk does not inflate ({why}): dropped whole");
+                }
+                self.damaged_chunks += 1;
+                self.f.stats.bad_payload += 1;
                 self.f.stats.garbage_bytes += rec.len() as u64;
                 None
             }
@@ -490,60 +541,6 @@ fn crc32(b: &[u8]) -> u32 {
     crc32fast::hash(b)
 }
 
-/// The records of an LZ4-frame chunk (`lz4_flex`, pure Rust: every `ros2` build reads the
-/// chunks the `mcap+lz4:` sink and the LZ4 inline output write). At most `size` bytes (the
-/// chunk's declared uncompressed size, itself at most [`MAX_RECORD`]) are inflated, so a corrupt
-/// chunk cannot allocate without bound; fewer or more than `size` is an error.
-fn lz4(data: &[u8], size: u64) -> Result<Vec<u8>, String> {
-    use std::io::Read;
-    if size > MAX_RECORD {
-        return Err(format!("LZ4 chunk claims {size} bytes uncompressed"));
-    }
-    let mut out = Vec::with_capacity(size as usize);
-    lz4_flex::frame::FrameDecoder::new(data)
-        .take(size + 1)
-        .read_to_end(&mut out)
-        .map_err(|e| format!("LZ4 chunk: {e}"))?;
-    if out.len() as u64 != size {
-        return Err(format!(
-            "LZ4 chunk inflates to {} bytes, not {size}",
-            out.len()
-        ));
-    }
-    Ok(out)
-}
-
-/// The uncompressed records of a compressed chunk record, through the `mcap` crate's reader
-/// (zstd when built with `ros2-compression`).
-fn decompress(rec: &[u8]) -> Result<Vec<u8>, String> {
-    use ::mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
-    let mut r = LinearReader::new_with_options(
-        LinearReaderOptions::default()
-            .with_skip_start_magic(true)
-            .with_skip_end_magic(true)
-            .with_validate_chunk_crcs(false)
-            .with_record_length_limit(MAX_RECORD as usize),
-    );
-    let mut input = rec;
-    let mut out = Vec::new();
-    while let Some(ev) = r.next_event() {
-        match ev.map_err(|e| e.to_string())? {
-            LinearReadEvent::ReadRequest(need) => {
-                let k = need.min(input.len());
-                r.insert(k).copy_from_slice(&input[..k]);
-                r.notify_read(k);
-                input = &input[k..];
-            }
-            LinearReadEvent::Record { opcode, data } => {
-                out.push(opcode);
-                out.extend_from_slice(&(data.len() as u64).to_le_bytes());
-                out.extend_from_slice(data);
-            }
-        }
-    }
-    Ok(out)
-}
-
 impl ProtocolDecoder for McapDecoder {
     fn protocol(&self) -> Protocol {
         Protocol::Mcap
@@ -575,11 +572,24 @@ impl ProtocolDecoder for McapDecoder {
             ),
         };
         let mut s = format!(
-            "MCAP: {} channels, {} chunks; sensor_msgs/msg/Imu topics: {:?}; reading {}",
+            "MCAP: {} channels, {} chunks{}; sensor_msgs/msg/Imu topics: {:?}; reading {}{}",
             self.channels.len(),
             self.chunks,
+            if self.inflated_chunks > 0 {
+                format!(" ({} compressed)", self.inflated_chunks)
+            } else {
+                String::new()
+            },
             imu,
-            reading
+            reading,
+            if self.compressed_msgs > 0 {
+                format!(
+                    " ({} messages zstd-compressed one by one)",
+                    self.compressed_msgs
+                )
+            } else {
+                String::new()
+            }
         );
         if let Some(c) = self.temp_channel.and_then(|i| self.channels.get(&i)) {
             s += &format!(
@@ -596,9 +606,15 @@ impl ProtocolDecoder for McapDecoder {
         if self.bad_cdr > 0 {
             s += &format!("; {} Imu messages with bad CDR", self.bad_cdr);
         }
+        if self.damaged_chunks > 0 {
+            s += &format!(
+                "; {} that did not inflate, dropped",
+                count(self.damaged_chunks, "compressed chunk", "compressed chunks")
+            );
+        }
         if !self.unsupported.is_empty() {
             s += &format!(
-                "; chunks passed through undecoded (compression {:?}: build with --features ros2-compression)",
+                "; chunks passed through undecoded (compression {:?}, not one MCAP defines)",
                 self.unsupported
             );
         }

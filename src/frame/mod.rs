@@ -20,6 +20,8 @@ pub mod codec;
 pub mod detect;
 pub mod framing;
 pub mod health;
+#[cfg(any(feature = "ros2", feature = "ros2-sqlite"))]
+pub mod inflate;
 pub mod inline;
 pub mod mavlink;
 mod mavlink_crc;

@@ -151,6 +151,7 @@ pub fn read_db3(path: &Path, opts: &McapOptions) -> Result<BagRead, Db3Error> {
     let mut stats = DecoderStats::default();
     let mut samples = Vec::new();
     let mut temps = Vec::new();
+    let mut compressed = 0u64;
     let (mut bad_temp, mut other) = (0u64, 0u64);
     let mut warnings = Vec::new();
     for (f, c, t) in &dbs {
@@ -211,12 +212,15 @@ pub fn read_db3(path: &Path, opts: &McapOptions) -> Result<BagRead, Db3Error> {
             };
             let id: i64 = row.get(0).unwrap_or(-2);
             let log = row.get::<_, i64>(1).map_or(0, |v| v.max(0) as u64);
-            let data = row
+            let blob = row
                 .get_ref(2)
                 .ok()
                 .and_then(|v| v.as_blob().ok())
                 .unwrap_or(&[]);
+            // rosbag2's message compression: each blob one zstd frame.
+            let data = &*crate::frame::inflate::message(blob);
             if id == imu_id {
+                compressed += u64::from(crate::frame::inflate::is_zstd(blob));
                 match decode_imu_fast(data) {
                     Ok(m) => {
                         let t_ns =
@@ -243,7 +247,15 @@ pub fn read_db3(path: &Path, opts: &McapOptions) -> Result<BagRead, Db3Error> {
         imu_type: IMU_TYPE,
         other_imu: topics.others(IMU_TYPE, &topic),
         topic,
-        containers: count(files.len() as u64, "file", "files"),
+        containers: format!(
+            "{}{}",
+            count(files.len() as u64, "file", "files"),
+            if compressed > 0 {
+                format!(", {compressed} of its Imu messages zstd-compressed one by one")
+            } else {
+                String::new()
+            }
+        ),
         temperature: temp.map(|t| (t, bad_temp)),
         joined,
         other,

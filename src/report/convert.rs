@@ -69,6 +69,17 @@ pub fn import(
     if let Some(r) = o.time_from_index_hz {
         ensure!(r.is_finite() && r > 0.0, "--rate must be > 0 Hz");
     }
+    // A bag compressed whole (rosbag2's file compression): inflated, then read as what it is.
+    #[cfg(any(feature = "ros2", feature = "ros2-sqlite"))]
+    if let Some((_dir, inflated, said)) = inflate_whole(input)? {
+        let mut r = import(&inflated, output, proto, o)?;
+        r.input = input.to_path_buf();
+        r.decoded = Some(match r.decoded {
+            Some(d) => format!("{said}; {d}"),
+            None => said,
+        });
+        return Ok(r);
+    }
     // Bags read whole by their own readers (each behind its feature).
     #[cfg(feature = "ros1")]
     if crate::io::ros1::is_bag(input) {
@@ -192,6 +203,65 @@ fn import_bag<E: std::fmt::Display>(
         Some(format!("{label} input: {}", bag.found)),
         Some(tf.to_string()),
     )
+}
+
+/// rosbag2's file compression (`compression_mode: file`): `input` a file compressed whole with
+/// zstd (`bag_0.mcap.zstd`, `bag_0.db3.zstd`), or a bag directory holding such files. Each is
+/// inflated into a temporary directory under its name without `.zstd`; returned are that
+/// directory (removed when dropped), the path to import (the file, or the directory), and what
+/// was done, for the import's first line. `None`: nothing compressed so.
+#[cfg(any(feature = "ros2", feature = "ros2-sqlite"))]
+fn inflate_whole(input: &Path) -> Result<Option<(tempfile::TempDir, PathBuf, String)>> {
+    use crate::frame::inflate;
+    let compressed = |p: &Path| {
+        let mut head = [0u8; 4];
+        std::fs::File::open(p)
+            .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
+            .is_ok_and(|()| inflate::is_zstd(&head))
+    };
+    let files: Vec<PathBuf> = if input.is_dir() {
+        let mut v: Vec<PathBuf> = std::fs::read_dir(input)
+            .with_context(|| format!("{}", input.display()))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file() && compressed(p))
+            .collect();
+        v.sort();
+        v
+    } else if compressed(input) {
+        vec![input.to_path_buf()]
+    } else {
+        Vec::new()
+    };
+    if files.is_empty() {
+        return Ok(None);
+    }
+    let dir = tempfile::tempdir().context("a temporary directory to inflate the bag into")?;
+    let (mut zipped, mut bytes) = (0u64, 0u64);
+    let mut last = PathBuf::new();
+    for f in &files {
+        let data = std::fs::read(f).with_context(|| format!("{}", f.display()))?;
+        let name = f.file_name().unwrap_or_default().to_string_lossy();
+        let name = name.strip_suffix(".zstd").unwrap_or(&name).to_string();
+        last = dir.path().join(&name);
+        let mut out = std::io::BufWriter::new(
+            std::fs::File::create(&last).with_context(|| format!("{}", last.display()))?,
+        );
+        let n = inflate::zstd_into(&data, u64::MAX, &mut out)
+            .map_err(|e| InputProblem(format!("{}: {e}", f.display())))?;
+        std::io::Write::flush(&mut out).with_context(|| format!("{}", last.display()))?;
+        zipped += data.len() as u64;
+        bytes += n;
+    }
+    let said = format!(
+        "zstd-compressed whole (rosbag2 file compression): {} inflated, {zipped} → {bytes} bytes",
+        count(files.len() as u64, "file", "files")
+    );
+    let path = if input.is_dir() {
+        dir.path().to_path_buf()
+    } else {
+        last
+    };
+    Ok(Some((dir, path, said)))
 }
 
 /// The file to import from a directory: a rosbag2 bag's one `.mcap` file. A directory of
