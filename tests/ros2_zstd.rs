@@ -196,6 +196,42 @@ mod mcap {
         imports_as("zstd_message.mcap", "mcap_temp_bag.mcap");
     }
 
+    /// rosbag2 splits a long recording into files whose channel ids are their own: here the
+    /// second file's id 1, /imu/data in the first, is /chatter (gen_mcap_split.py). Read as
+    /// one stream (the files one after the other), the topic is kept by name.
+    #[test]
+    fn split_files_read_as_one_keep_the_topic_by_name_not_by_id() {
+        let mut both = include_bytes!("reference/mcap_split/mcap_split_0.mcap").to_vec();
+        both.extend_from_slice(include_bytes!("reference/mcap_split/mcap_split_1.mcap"));
+        let (want, _, _) = run(PLAIN, 4096);
+        for chunk in [1, 500, 1 << 20] {
+            let (got, st, found) = run(&both, chunk);
+            assert_eq!(samples_of(&got), samples_of(&want), "chunk {chunk}");
+            assert_eq!((st.bad_payload, st.garbage_bytes), (0, 0));
+            assert_says(&found, &["reading /imu/data"]);
+        }
+    }
+
+    #[test]
+    fn a_split_bag_directory_imports_as_one_recording_compressed_or_not() {
+        let said = imports_as("mcap_split", "mcap_bag.mcap");
+        assert_says(
+            &said,
+            &[
+                "2 files read as one (mcap_split_0.mcap, mcap_split_1.mcap); mcap input",
+                "1 gap (1 sample missing)",
+            ],
+        );
+        let said = imports_as("mcap_split_zstd", "mcap_bag.mcap");
+        assert_says(
+            &said,
+            &[
+                "zstd-compressed whole (rosbag2 file compression): 2 files inflated",
+                "2 files read as one (mcap_split_zstd_0.mcap, mcap_split_zstd_1.mcap)",
+            ],
+        );
+    }
+
     /// A compressed file cut short (a copy that stopped): an error naming it, nothing written.
     #[test]
     fn a_cut_compressed_file_is_an_error_that_names_it() {

@@ -345,37 +345,98 @@ pub struct DecodedFile {
 
 /// Decode a whole file's bytes (a native log's file header is skipped).
 pub fn decode_bytes(bytes: &[u8], c: &ProtocolConfig) -> DecodedFile {
-    let head = &bytes[..bytes.len().min(DETECT_BYTES)];
-    let protocol = c.resolve(head);
-    let body = if protocol == Protocol::Native && bytes.starts_with(&LOG_MAGIC) {
-        &bytes[LOG_HEADER_LEN.min(bytes.len())..]
-    } else {
-        bytes
-    };
-    let mut d = c.decoder(protocol);
-    let mut buf = BytesMut::from(body);
-    let mut samples = Vec::new();
-    let mut descriptor = None;
-    while let Some(item) = d.decode_item_eof(&mut buf) {
-        match item {
-            Decoded::Sample(s, _) => samples.push(s),
-            // The first descriptor, with the channels a later one declared present again
-            // (a channel that came late is part of the file: `Stamper::stamp`).
-            Decoded::Descriptor(x) => {
-                descriptor = Some(descriptor.map_or(x, |d: Descriptor| Descriptor {
-                    absent: d.absent & x.absent,
-                    ..d
-                }))
-            }
-            Decoded::Other(_) => {}
+    let mut d = Decoding::new(bytes, c);
+    d.feed(bytes, true);
+    d.finish()
+}
+
+/// Decode the files of one recording split in parts (rosbag2's `bag_0.mcap`, `bag_1.mcap`, …)
+/// in the order given, through one decoder, as one stream: the protocol is told by the first
+/// file; a file cut short ends at its own end (its tail counted and dropped) before the next
+/// begins.
+pub fn decode_files(
+    paths: &[std::path::PathBuf],
+    c: &ProtocolConfig,
+) -> std::io::Result<DecodedFile> {
+    let mut dec: Option<Decoding> = None;
+    for (i, p) in paths.iter().enumerate() {
+        let bytes = std::fs::read(p)
+            .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", p.display())))?;
+        dec.get_or_insert_with(|| Decoding::new(&bytes, c))
+            .feed(&bytes, i + 1 == paths.len());
+    }
+    let d = dec.ok_or_else(|| std::io::Error::other("no file to decode"))?;
+    Ok(d.finish())
+}
+
+/// One decoder over a file's bytes, or several files' in turn, gathering what it decodes.
+struct Decoding {
+    protocol: Protocol,
+    d: Box<dyn ProtocolDecoder>,
+    samples: Vec<Sample>,
+    descriptor: Option<Descriptor>,
+}
+
+impl Decoding {
+    /// The decoder for the protocol `first`'s head tells (or the configuration names).
+    fn new(first: &[u8], c: &ProtocolConfig) -> Self {
+        let protocol = c.resolve(&first[..first.len().min(DETECT_BYTES)]);
+        Decoding {
+            protocol,
+            d: c.decoder(protocol),
+            samples: Vec::new(),
+            descriptor: None,
         }
     }
-    DecodedFile {
-        protocol,
-        descriptor: descriptor.or(d.descriptor()),
-        samples,
-        stats: d.stats(),
-        found: d.found(),
+
+    /// Decode `bytes`; `last`: no more will come (what the decoder holds is given out).
+    fn feed(&mut self, bytes: &[u8], last: bool) {
+        let body = if self.protocol == Protocol::Native && bytes.starts_with(&LOG_MAGIC) {
+            &bytes[LOG_HEADER_LEN.min(bytes.len())..]
+        } else {
+            bytes
+        };
+        let mut buf = BytesMut::from(body);
+        loop {
+            let item = if last {
+                self.d.decode_item_eof(&mut buf)
+            } else {
+                self.d.decode_item(&mut buf)
+            };
+            match item {
+                Some(Decoded::Sample(s, _)) => self.samples.push(s),
+                // The first descriptor, with the channels a later one declared present again
+                // (a channel that came late is part of the file: `Stamper::stamp`).
+                Some(Decoded::Descriptor(x)) => {
+                    self.descriptor = Some(self.descriptor.map_or(x, |d: Descriptor| Descriptor {
+                        absent: d.absent & x.absent,
+                        ..d
+                    }))
+                }
+                Some(Decoded::Other(_)) => {}
+                // A part that ends inside a record: its tail is dropped (counted) here, not
+                // completed with the next part's bytes.
+                None if !last && !buf.is_empty() => {
+                    let before = buf.len();
+                    self.d.discard_tail(&mut buf);
+                    // Every decoder's discard_tail takes at least a byte; a guard, not a path.
+                    if buf.len() == before {
+                        break;
+                    }
+                }
+                None => break,
+            }
+        }
+    }
+
+    fn finish(self) -> DecodedFile {
+        DecodedFile {
+            protocol: self.protocol,
+            descriptor: self.descriptor.or(self.d.descriptor()),
+            samples: self.samples,
+            stats: self.d.stats(),
+            found: self.d.found(),
+        }
     }
 }
 

@@ -128,6 +128,9 @@ pub struct McapDecoder {
     schemas: HashMap<u16, String>,
     channels: HashMap<u16, Channel>,
     selected: Option<u16>,
+    /// The topics chosen (the Imu topic read, the Temperature topic joined), once chosen.
+    imu_topic: Option<String>,
+    temp_topic: Option<String>,
     /// The Temperature channel joined to the samples.
     temp_channel: Option<u16>,
     /// The latest temperature readings so far, oldest first: (time, °C).
@@ -159,6 +162,8 @@ impl McapDecoder {
             schemas: HashMap::new(),
             channels: HashMap::new(),
             selected: None,
+            imu_topic: None,
+            temp_topic: None,
             temp_channel: None,
             temp: VecDeque::new(),
             temp_msgs: 0,
@@ -187,22 +192,36 @@ impl McapDecoder {
     }
 
     fn add_channel(&mut self, id: u16, c: Channel) {
+        // The channels chosen are kept by topic: a second file appended (a split bag read as
+        // one) numbers its channels its own way, and an id chosen in the first file may name
+        // another topic in the next. A re-declared id leaves the choice until its topic's
+        // channel comes again.
+        let other_topic = self.channels.get(&id).is_some_and(|x| x.topic != c.topic);
+        if other_topic && self.temp_channel == Some(id) {
+            self.temp_channel = None;
+        }
+        if other_topic && self.selected == Some(id) {
+            self.selected = None;
+        }
         if self.temp_channel.is_none() && self.has_schema(&c, ros2::TEMPERATURE_SCHEMA) {
-            let wanted = match self.opts.temperature_topic.as_deref() {
-                Some(t) => t == c.topic,
-                None => true,
+            let wanted = match (&self.temp_topic, self.opts.temperature_topic.as_deref()) {
+                (Some(t), _) => *t == c.topic,
+                (None, Some(t)) => t == c.topic,
+                (None, None) => true,
             };
             if wanted {
                 self.temp_channel = Some(id);
+                self.temp_topic = Some(c.topic.clone());
             }
         }
         if self.selected.is_none() && self.is_imu(&c) {
-            let wanted = match &self.opts.topic {
-                Some(t) => *t == c.topic,
-                None => true,
+            let wanted = match (&self.imu_topic, &self.opts.topic) {
+                (Some(t), _) | (None, Some(t)) => *t == c.topic,
+                (None, None) => true,
             };
             if wanted {
                 self.selected = Some(id);
+                self.imu_topic = Some(c.topic.clone());
             }
         }
         self.channels.insert(id, c);

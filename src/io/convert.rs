@@ -18,7 +18,7 @@ use crate::frame::{Descriptor, Protocol, mavlink, ubx, ulog};
 use crate::io::timing::{TimeFaults, rederive_sequence};
 use crate::sample::Sample;
 use bytes::BytesMut;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// What `export --to` writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -55,21 +55,61 @@ pub fn read_any_whole(
     path: &Path,
     c: &ProtocolConfig,
 ) -> std::io::Result<(DecodedFile, Option<TimeFaults>)> {
-    let mut f = read_any(path, c)?;
+    whole(read_any(path, c)?)
+}
+
+/// [`read_any_whole`] for a recording split in files (rosbag2's `bag_0.mcap`, `bag_1.mcap`, …,
+/// in the order of [`split_files`]): one decoder through them all
+/// ([`crate::frame::detect::decode_files`]), time faults and rate over the whole.
+pub fn read_files_whole(
+    paths: &[PathBuf],
+    c: &ProtocolConfig,
+) -> std::io::Result<(DecodedFile, Option<TimeFaults>)> {
+    whole(crate::frame::detect::decode_files(paths, c)?)
+}
+
+/// The files of `dir` named `*.ext` in the order of their split index (the number that ends the
+/// name before `.ext`: `bag_2` before `bag_10`; names without one after, by name).
+pub fn split_files(dir: &Path, ext: &str) -> std::io::Result<Vec<PathBuf>> {
+    let mut f: Vec<PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == ext) && p.is_file())
+        .collect();
+    let index = |p: &PathBuf| {
+        let stem = p.file_stem().unwrap_or_default().to_string_lossy();
+        let digits = stem.len() - stem.trim_end_matches(|c: char| c.is_ascii_digit()).len();
+        let n = stem[stem.len() - digits..]
+            .parse::<u64>()
+            .unwrap_or(u64::MAX);
+        (n, p.clone())
+    };
+    f.sort_by_key(index);
+    Ok(f)
+}
+
+fn whole(mut f: DecodedFile) -> std::io::Result<(DecodedFile, Option<TimeFaults>)> {
     if f.protocol == Protocol::Native || f.samples.is_empty() {
         return Ok((f, None));
     }
-    let tf = rederive_sequence(&mut f.samples);
+    let d = f.descriptor.get_or_insert_with(Descriptor::default);
+    let tf = rederive_whole(&mut f.samples, d);
     f.stats.gaps = tf.gaps;
     f.stats.missing_frames = tf.missing;
     f.stats.duplicates = tf.duplicates;
     f.stats.time_backwards = tf.backwards;
     f.stats.seq_restarts = tf.restarts;
+    Ok((f, Some(tf)))
+}
+
+/// What every import of a whole file does with its samples: sequence numbers and gap flags
+/// derived from the stamps over the whole file ([`rederive_sequence`]), and the nominal rate
+/// they give set in `d` (kept as it was when they give none).
+pub fn rederive_whole(samples: &mut [Sample], d: &mut Descriptor) -> TimeFaults {
+    let tf = rederive_sequence(samples);
     if tf.nominal_rate_hz > 0.0 {
-        let d = f.descriptor.get_or_insert_with(Descriptor::default);
         d.sample_rate_hz = tf.nominal_rate_hz;
     }
-    Ok((f, Some(tf)))
+    tf
 }
 
 /// The samples as a byte stream in `to` (not CSV). Fails for `Mcap` in a build without ROS 2
@@ -125,4 +165,31 @@ pub fn encode_stream(
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn split_files_are_ordered_by_their_index() {
+        let dir = tempfile::tempdir().unwrap();
+        for n in [
+            "b_10.db3",
+            "b_2.db3",
+            "b_0.db3",
+            "metadata.yaml",
+            "b_1.db3",
+            "b.db3",
+            "b_1.mcap",
+        ] {
+            std::fs::write(dir.path().join(n), b"").unwrap();
+        }
+        let f: Vec<String> = split_files(dir.path(), "db3")
+            .unwrap()
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(f, ["b_0.db3", "b_1.db3", "b_2.db3", "b_10.db3", "b.db3"]);
+    }
 }

@@ -48,38 +48,13 @@ pub enum Db3Error {
 /// Whether `path` is a `.db3` bag: an SQLite file, or a directory holding `.db3` files.
 pub fn is_db3(path: &Path) -> bool {
     if path.is_dir() {
-        return db3_files(path).is_ok_and(|f| !f.is_empty());
+        return crate::io::convert::split_files(path, "db3").is_ok_and(|f| !f.is_empty());
     }
     use std::io::Read;
     let mut head = [0u8; 16];
     std::fs::File::open(path)
         .and_then(|mut f| f.read_exact(&mut head))
         .is_ok_and(|_| head == MAGIC)
-}
-
-/// The `.db3` files of a bag directory in the order of their split index (the number before
-/// `.db3`; names without one by name).
-fn db3_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
-    let mut f: Vec<PathBuf> = std::fs::read_dir(dir)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "db3") && p.is_file())
-        .collect();
-    let index = |p: &PathBuf| {
-        let stem = p.file_stem().map(|s| s.to_string_lossy().into_owned());
-        let digits: String = stem
-            .as_deref()
-            .unwrap_or("")
-            .chars()
-            .rev()
-            .take_while(char::is_ascii_digit)
-            .collect::<Vec<_>>()
-            .into_iter()
-            .rev()
-            .collect();
-        (digits.parse::<u64>().unwrap_or(u64::MAX), p.clone())
-    };
-    f.sort_by_key(index);
-    Ok(f)
 }
 
 /// One file's topics: (id, name, type), CDR only.
@@ -124,7 +99,7 @@ fn file_topics(c: &Connection, path: &Path) -> Result<Vec<(i64, String, String)>
 /// whole bag.
 pub fn read_db3(path: &Path, opts: &McapOptions) -> Result<BagRead, Db3Error> {
     let files = if path.is_dir() {
-        db3_files(path)?
+        crate::io::convert::split_files(path, "db3")?
     } else {
         vec![path.to_path_buf()]
     };
@@ -267,23 +242,4 @@ pub fn read_db3(path: &Path, opts: &McapOptions) -> Result<BagRead, Db3Error> {
         found: found.line(&stats),
         stats,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn split_files_are_ordered_by_their_index() {
-        let dir = tempfile::tempdir().unwrap();
-        for n in ["b_10.db3", "b_2.db3", "b_0.db3", "metadata.yaml", "b_1.db3"] {
-            std::fs::write(dir.path().join(n), b"").unwrap();
-        }
-        let f: Vec<String> = db3_files(dir.path())
-            .unwrap()
-            .iter()
-            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
-            .collect();
-        assert_eq!(f, ["b_0.db3", "b_1.db3", "b_2.db3", "b_10.db3"]);
-    }
 }

@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::{InputProblem, check_input};
 use crate::frame::detect::{ProtocolArgs, ProtocolConfig};
-use crate::io::convert::{ExportFormat, encode_stream, read_any, read_any_whole};
+use crate::io::convert::{ExportFormat, encode_stream, read_any, read_any_whole, read_files_whole};
 use crate::io::csv::{self as csvio, ImportOptions};
 use crate::io::sim_log::SimLogSummary;
 use crate::text::count;
@@ -101,10 +101,22 @@ pub fn import(
         let what = "an SQLite file that cannot be imported as a ROS 2 bag";
         return import_bag(input, output, o, what, "ROS 2 bag (SQLite)", bag);
     }
-    // A directory (a rosbag2 bag is one): its MCAP file; anything else is said.
+    // A directory (a rosbag2 bag is one): its MCAP file, or its files split as rosbag2 splits a
+    // long recording, read as one; anything else is said.
     if input.is_dir() {
-        let file = bag_dir_file(input)?;
-        return import(&file, output, proto, o);
+        let files = bag_dir_files(input)?;
+        if let [one] = files.as_slice() {
+            return import(one, output, proto, o);
+        }
+        let mut pc = ProtocolConfig::auto();
+        proto.apply(&mut pc);
+        let (d, samples, decoded, timing) = decoded(input, read_files_whole(&files, &pc)?, o)?;
+        let decoded = format!(
+            "{} files read as one ({}); {decoded}",
+            files.len(),
+            names(&files)
+        );
+        return written(input, None, output, (&d, &samples), Some(decoded), timing);
     }
     // A text table by its name (.csv, .csv.gz: read as one whatever its content, as always), or
     // by its content (any other name: text with a consistent delimiter; a binary file goes to
@@ -140,23 +152,53 @@ pub fn import(
         proto.apply(&mut pc);
         // The whole file is at hand: time faults and rate derived over all of it, as for a CSV
         // (`read_any_whole`), not as the streaming decoder learned them.
-        let (f, time) = read_any_whole(input, &pc)?;
-        check_input(input, f.samples.len() as u64, &f.stats)?;
-        let mut d = f.descriptor.unwrap_or_default();
-        d.gyro_range_rad_s = o.gyro_range_rad_s;
-        d.accel_range_m_s2 = o.accel_range_m_s2;
-        let timing = Some(match time {
-            Some(tf) => format!("{tf}{}", frame_faults(&f.stats)),
-            None => protocol_faults(&f.stats),
-        });
-        (
-            d,
-            f.samples,
-            Some(format!("{} input: {}", f.protocol, f.found)),
-            timing,
-        )
+        let (d, s, decoded, timing) = decoded(input, read_any_whole(input, &pc)?, o)?;
+        (d, s, Some(decoded), timing)
     };
     written(input, None, output, (&d, &samples), decoded, timing)
+}
+
+/// A protocol decoder's whole-file result as an import: checked for input that decodes to
+/// nothing, the ranges from the options set; the descriptor, the samples, the first line
+/// ("<protocol> input: <what was found>") and the time faults.
+type Imported = (
+    crate::frame::Descriptor,
+    Vec<crate::sample::Sample>,
+    String,
+    Option<String>,
+);
+
+fn decoded(
+    input: &Path,
+    (f, time): (
+        crate::frame::detect::DecodedFile,
+        Option<crate::io::timing::TimeFaults>,
+    ),
+    o: &ImportOptions,
+) -> Result<Imported> {
+    check_input(input, f.samples.len() as u64, &f.stats)?;
+    let mut d = f.descriptor.unwrap_or_default();
+    d.gyro_range_rad_s = o.gyro_range_rad_s;
+    d.accel_range_m_s2 = o.accel_range_m_s2;
+    let timing = Some(match time {
+        Some(tf) => format!("{tf}{}", frame_faults(&f.stats)),
+        None => protocol_faults(&f.stats),
+    });
+    Ok((
+        d,
+        f.samples,
+        format!("{} input: {}", f.protocol, f.found),
+        timing,
+    ))
+}
+
+/// The files' names, comma separated.
+fn names(files: &[PathBuf]) -> String {
+    files
+        .iter()
+        .map(|p| p.file_name().unwrap_or_default().to_string_lossy())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The protocol options as the flags set them (`--topic` for a bag).
@@ -188,11 +230,8 @@ fn import_bag<E: std::fmt::Display>(
         ))
         .into());
     }
-    let tf = crate::io::timing::rederive_sequence(&mut bag.samples);
     let mut d = bag.descriptor;
-    if tf.nominal_rate_hz > 0.0 {
-        d.sample_rate_hz = tf.nominal_rate_hz;
-    }
+    let tf = crate::io::convert::rederive_whole(&mut bag.samples, &mut d);
     d.gyro_range_rad_s = o.gyro_range_rad_s;
     d.accel_range_m_s2 = o.accel_range_m_s2;
     written(
@@ -264,46 +303,26 @@ fn inflate_whole(input: &Path) -> Result<Option<(tempfile::TempDir, PathBuf, Str
     Ok(Some((dir, path, said)))
 }
 
-/// The file to import from a directory: a rosbag2 bag's one `.mcap` file. A directory of
-/// `.db3` files (read above in a `ros2-sqlite` build) is said as the SQLite bag it is, several
-/// `.mcap` files (a split bag) are named, and a directory with neither says so.
-fn bag_dir_file(dir: &Path) -> Result<PathBuf> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| format!("{}", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_file())
-        .collect();
-    files.sort();
-    let with = |ext: &str| -> Vec<&PathBuf> {
-        files
-            .iter()
-            .filter(|p| p.extension().is_some_and(|e| e == ext))
-            .collect()
+/// The files to import from a directory: a rosbag2 bag's `.mcap` files, one or several (a
+/// split bag, in the order of their split index). A directory of `.db3` files (read above in a
+/// `ros2-sqlite` build) is said as the SQLite bag it is, and a directory with neither says so.
+fn bag_dir_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let listed = |ext| {
+        crate::io::convert::split_files(dir, ext).with_context(|| format!("{}", dir.display()))
     };
-    let (mcap, db3) = (with("mcap"), with("db3"));
+    let (mcap, db3) = (listed("mcap")?, listed("db3")?);
     let problem = |why: String| InputProblem(format!("{}: a directory: {why}", dir.display()));
-    match (mcap.as_slice(), db3.first()) {
-        ([one], _) => Ok(one.to_path_buf()),
-        ([], Some(db3)) => Err(problem(format!(
+    match (mcap.is_empty(), db3.first()) {
+        (false, _) => Ok(mcap),
+        (true, Some(db3)) => Err(problem(format!(
             "{}: {}",
             db3.display(),
             crate::frame::detect::foreign_format(b"SQLite format 3\0").unwrap_or("")
         ))
         .into()),
-        ([], None) => Err(problem(
-            "no .mcap or .db3 bag file in it; name the file to import".into(),
-        )
-        .into()),
-        (several, _) => Err(problem(format!(
-            "a split bag of {} .mcap files ({}): import each file, or merge them first (`mcap merge`)",
-            several.len(),
-            several
-                .iter()
-                .map(|p| p.file_name().unwrap_or_default().to_string_lossy())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))
-        .into()),
+        (true, None) => {
+            Err(problem("no .mcap or .db3 bag file in it; name the file to import".into()).into())
+        }
     }
 }
 
