@@ -66,7 +66,8 @@ pub enum SinkConfig {
         frame_id: String,
         #[serde(default = "default_mcap_health")]
         health_topic: String,
-        /// Chunk compression: "none" (default) or "lz4" (`--out mcap+lz4:PATH`).
+        /// Chunk compression: "none" (default), "lz4" (`--out mcap+lz4:PATH`) or "zstd"
+        /// (`--out mcap+zstd:PATH`).
         #[serde(default)]
         compression: McapCompression,
     },
@@ -117,6 +118,8 @@ pub enum McapCompression {
     None,
     /// LZ4-frame chunks (`lz4_flex`, no C build; rosbags, Foxglove and `ros2 bag` read them).
     Lz4,
+    /// zstd chunks (`ruzstd`, no C build; MCAP's usual compression, read by the same readers).
+    Zstd,
 }
 
 fn default_mcap_topic() -> String {

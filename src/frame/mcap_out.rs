@@ -54,6 +54,9 @@ pub enum ChunkCompression {
     /// LZ4 frame format (`lz4`).
     #[cfg(feature = "ros2")]
     Lz4,
+    /// One zstd frame (`zstd`; ruzstd's fastest level, about zstd's level 1).
+    #[cfg(feature = "ros2")]
+    Zstd,
 }
 
 impl ChunkCompression {
@@ -69,6 +72,8 @@ impl ChunkCompression {
                 e.write_all(records).expect("lz4 into memory");
                 (e.finish().expect("lz4 into memory").into(), "lz4")
             }
+            #[cfg(feature = "ros2")]
+            ChunkCompression::Zstd => (super::inflate::zstd_compress(records).into(), "zstd"),
         }
     }
 }

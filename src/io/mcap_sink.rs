@@ -1,10 +1,10 @@
 //! The MCAP sink (`--out mcap:PATH`, `[[sinks]] kind = "mcap"`): a ROS 2 bag file (profile
 //! `ros2`) with the cleaned samples as `sensor_msgs/msg/Imu` and a health topic, written with
 //! the `mcap` crate (chunked, indexed, uncompressed, CRCs on), readable by `ros2 bag`, rosbags,
-//! Foxglove. With `compression = "lz4"` (`--out mcap+lz4:PATH`) the chunks are LZ4 frames: the
-//! `mcap` crate writes compressed chunks only with its C-built features, so then the records
-//! are made here and written by imuprep's own indexed MCAP writer ([`McapStream`], the inline
-//! output's, `lz4_flex`): same schemas, channels, messages, chunk and message indexes,
+//! Foxglove. With `compression = "lz4"` or `"zstd"` (`--out mcap+lz4:PATH`, `mcap+zstd:PATH`)
+//! the chunks are LZ4 or zstd frames: the `mcap` crate writes compressed chunks only with its
+//! C-built features, so then the records are made here and written by imuprep's own indexed
+//! MCAP writer ([`McapStream`], the inline output's; `lz4_flex`, `ruzstd`): same schemas, channels, messages, chunk and message indexes,
 //! statistics and summary, in every `ros2` build.
 //!
 //! Imu messages: `header.stamp` = the sample's sensor time, `frame_id` as configured,

@@ -105,8 +105,9 @@ pub fn import(
     // long recording, read as one; anything else is said.
     if input.is_dir() {
         let files = bag_dir_files(input)?;
-        if let [one] = files.as_slice() {
-            return import(one, output, proto, o);
+        // One file, or a build that reads no MCAP (its first file then says so).
+        if files.len() == 1 || !cfg!(feature = "ros2") {
+            return import(&files[0], output, proto, o);
         }
         let mut pc = ProtocolConfig::auto();
         proto.apply(&mut pc);

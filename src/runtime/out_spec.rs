@@ -71,20 +71,20 @@ pub fn parse_out_spec(spec: &str) -> Result<Sink, String> {
             },
         }),
         "pty" => Ok(Sink::Inline { path: None }),
-        "mcap" | "mcap+lz4" if !rest.is_empty() => Ok(Sink::Mcap {
+        "mcap" | "mcap+lz4" | "mcap+zstd" if !rest.is_empty() => Ok(Sink::Mcap {
             path: rest.into(),
             topic: "/imu/clean".into(),
             frame_id: "imu_link".into(),
             health_topic: "/imuprep/health".into(),
-            compression: if kind == "mcap" {
-                McapCompression::None
-            } else {
-                McapCompression::Lz4
+            compression: match kind {
+                "mcap+lz4" => McapCompression::Lz4,
+                "mcap+zstd" => McapCompression::Zstd,
+                _ => McapCompression::None,
             },
         }),
         "zenoh" => parse_zenoh(rest),
         _ => Err(format!(
-            "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR, inline:PATH (the input's own protocol, to a serial device or file), pty: (the same on a new pseudo-terminal, its path printed), mcap:PATH (ROS 2 bag, sensor_msgs/msg/Imu; mcap+lz4:PATH with LZ4 chunks), zenoh:KEY[?format=jsonl&queue=N&wait=S&congestion=block] (a build with --features zenoh)"
+            "unknown output {spec:?}: use stdout[:csv|jsonl|native], file:PATH, csv:PATH, jsonl:PATH, tcp:ADDR, udp:ADDR, inline:PATH (the input's own protocol, to a serial device or file), pty: (the same on a new pseudo-terminal, its path printed), mcap:PATH (ROS 2 bag, sensor_msgs/msg/Imu; mcap+lz4:PATH or mcap+zstd:PATH with LZ4 or zstd chunks), zenoh:KEY[?format=jsonl&queue=N&wait=S&congestion=block] (a build with --features zenoh)"
         )),
     }
 }

@@ -7,8 +7,10 @@ and the two covariance diagonals; per /imuprep/health message its JSON.
     IMUPREP_BLESS=1 cargo test --release --features ros2 --test ros2_mcap
     python3 tests/reference/check_mcap_sink.py
     python3 tests/reference/check_mcap_sink.py mcap_sink_lz4_bag.mcap mcap_sink_lz4_rosbags.csv
+    python3 tests/reference/check_mcap_sink.py mcap_sink_zstd_bag.mcap mcap_sink_zstd_rosbags.csv
 
-The second reads the sink's LZ4-chunked bag (`compression = "lz4"`) the same way.
+The second and third read the sink's LZ4- and zstd-chunked bags (`compression = "lz4"`,
+`"zstd"`) the same way.
 """
 import csv, json, sys
 from pathlib import Path

@@ -443,6 +443,7 @@ pub async fn start_with(sink: &Sink, ctx: &SinkContext) -> std::io::Result<SinkH
                     compression: match compression {
                         crate::config::McapCompression::None => ChunkCompression::None,
                         crate::config::McapCompression::Lz4 => ChunkCompression::Lz4,
+                        crate::config::McapCompression::Zstd => ChunkCompression::Zstd,
                     },
                 };
                 let name = format!("mcap:{}", path.display());
