@@ -37,6 +37,29 @@ fn imports_as(compressed: &str, plain: &str) -> String {
     said
 }
 
+/// A compressed file that inflates to something that is no recording: what the import of the
+/// inflated copy says, naming the file given (not the temporary copy).
+#[test]
+fn what_the_inflated_file_holds_is_said_of_the_file_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let z = dir.path().join("notes.txt.zstd");
+    let text = b"a line of prose, not a table\nand another one here\n";
+    std::fs::write(&z, imuprep::frame::inflate::zstd_compress(text)).unwrap();
+    let log = dir.path().join("x.log");
+    let out = imuprep(&["import", z.to_str().unwrap(), "-o", log.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_says(
+        &err,
+        &[
+            &format!("{}: text, but not a table", z.display()),
+            "(inflated from zstd)",
+        ],
+    );
+    // Not the temporary copy's name (the file without `.zstd`).
+    assert!(!err.contains("notes.txt:"), "{err}");
+}
+
 #[cfg(feature = "ros2")]
 mod mcap {
     use super::*;

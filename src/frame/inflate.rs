@@ -150,8 +150,7 @@ fn frames_into(
 }
 
 /// `data` as one zstd frame (ruzstd's fastest level, about zstd's level 1): the inline output's
-/// form of a message the input carried compressed.
-#[cfg(feature = "ros2")]
+/// form of a message the input carried compressed, and the `mcap+zstd:` sink's chunks.
 pub fn zstd_compress(data: &[u8]) -> Vec<u8> {
     ruzstd::encoding::compress_to_vec(data, ruzstd::encoding::CompressionLevel::Fastest)
 }

@@ -71,8 +71,18 @@ pub fn import(
     }
     // A bag compressed whole (rosbag2's file compression): inflated, then read as what it is.
     #[cfg(any(feature = "ros2", feature = "ros2-sqlite"))]
-    if let Some((_dir, inflated, said)) = inflate_whole(input)? {
-        let mut r = import(&inflated, output, proto, o)?;
+    if let Some((dir, inflated, said)) = inflate_whole(input)? {
+        // What the inflated copy's import says names the input, not the temporary copy.
+        let mut r = import(&inflated, output, proto, o).map_err(|e| {
+            let named = input.display().to_string();
+            let text = format!("{e:#}")
+                .replace(&inflated.display().to_string(), &named)
+                .replace(&dir.path().display().to_string(), &named);
+            match e.downcast_ref::<InputProblem>() {
+                Some(_) => InputProblem(format!("{text} (inflated from zstd)")).into(),
+                None => anyhow::anyhow!("{text} (inflated from zstd)"),
+            }
+        })?;
         r.input = input.to_path_buf();
         r.decoded = Some(match r.decoded {
             Some(d) => format!("{said}; {d}"),
