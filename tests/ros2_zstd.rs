@@ -217,6 +217,15 @@ mod mcap {
         }
         imports_as("zstd_chunks.mcap", "mcap_bag.mcap");
         imports_as("zstd_message.mcap", "mcap_temp_bag.mcap");
+        // A directory holding a plain .mcap and some other compressed file: the .mcap is read,
+        // the other file left alone.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::copy(format!("{R}/mcap_bag.mcap"), dir.path().join("run.mcap")).unwrap();
+        let notes = imuprep::frame::inflate::zstd_compress(b"field notes");
+        std::fs::write(dir.path().join("notes.txt.zstd"), notes).unwrap();
+        let (said, got) = import_csv(dir.path().to_str().unwrap());
+        assert_eq!(got, import_csv(&format!("{R}/mcap_bag.mcap")).1);
+        assert!(!said.contains("inflated"), "{said}");
     }
 
     /// rosbag2 splits a long recording into files whose channel ids are their own: here the

@@ -256,7 +256,8 @@ fn import_bag<E: std::fmt::Display>(
 }
 
 /// rosbag2's file compression (`compression_mode: file`): `input` a file compressed whole with
-/// zstd (`bag_0.mcap.zstd`, `bag_0.db3.zstd`), or a bag directory holding such files. Each is
+/// zstd (`bag_0.mcap.zstd`, `bag_0.db3.zstd`; any name: it is told by its content), or a bag
+/// directory holding such files (told by their names, `*.mcap.zstd`, `*.db3.zstd`). Each is
 /// inflated into a temporary directory under its name without `.zstd`; returned are that
 /// directory (removed when dropped), the path to import (the file, or the directory), and what
 /// was done, for the import's first line. `None`: nothing compressed so.
@@ -269,11 +270,17 @@ fn inflate_whole(input: &Path) -> Result<Option<(tempfile::TempDir, PathBuf, Str
             .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
             .is_ok_and(|()| inflate::is_zstd(&head))
     };
+    // In a directory only a bag's storage files (another compressed file there is not the
+    // bag's, and the directory's own `.mcap` is read as ever).
+    let storage = |p: &Path| {
+        let name = p.file_name().unwrap_or_default().to_string_lossy();
+        name.ends_with(".mcap.zstd") || name.ends_with(".db3.zstd")
+    };
     let files: Vec<PathBuf> = if input.is_dir() {
         let mut v: Vec<PathBuf> = std::fs::read_dir(input)
             .with_context(|| format!("{}", input.display()))?
             .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.is_file() && compressed(p))
+            .filter(|p| p.is_file() && storage(p) && compressed(p))
             .collect();
         v.sort();
         v
