@@ -7,7 +7,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{assert_says, bag_opts, imuprep};
+use common::{assert_says, bag_opts, import_ok, imuprep};
 
 use imuprep::frame::ros2::McapOptions;
 use imuprep::io::bag::TopicError;
@@ -113,14 +113,7 @@ fn import_writes_a_log_with_the_gap_flagged_and_replay_runs_it() {
     let dir = std::env::temp_dir().join(format!("imuprep_ros1_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let log = dir.join("bag.log");
-    let out = imuprep(&[
-        "import",
-        "tests/reference/ros1_bag_bz2.bag",
-        "-o",
-        log.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
+    let err = import_ok("tests/reference/ros1_bag_bz2.bag", &log);
     assert_says(
         &err,
         &[

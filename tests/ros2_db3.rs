@@ -8,7 +8,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{assert_says, bag_opts, imuprep};
+use common::{assert_says, bag_opts, import_ok, imuprep};
 
 use imuprep::frame::ros2::McapOptions;
 use imuprep::io::bag::TopicError;
@@ -114,9 +114,7 @@ fn import_and_replay_from_the_command_line() {
     let dir = tempfile::tempdir().unwrap();
     let log = dir.path().join("bag.log");
     let run = imuprep;
-    let out = run(&["import", BAG_DIR, "-o", log.to_str().unwrap()]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
+    let err = import_ok(BAG_DIR, &log);
     assert_says(
         &err,
         &[

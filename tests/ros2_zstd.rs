@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{assert_says, imuprep};
+use common::{assert_says, import_ok, imuprep};
 
 const R: &str = "tests/reference";
 
@@ -16,13 +16,7 @@ const R: &str = "tests/reference";
 fn import_csv(input: &str) -> (String, String) {
     let dir = tempfile::tempdir().unwrap();
     let (log, csv) = (dir.path().join("x.log"), dir.path().join("x.csv"));
-    let out = imuprep(&["import", input, "-o", log.to_str().unwrap()]);
-    let said = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(out.status.success(), "import {input}:\n{said}");
+    let said = import_ok(input, &log);
     let ex = imuprep(&["export", log.to_str().unwrap(), "-o", csv.to_str().unwrap()]);
     assert!(ex.status.success());
     (said, std::fs::read_to_string(csv).unwrap())
@@ -102,15 +96,7 @@ mod mcap {
             let (got, st, found) = run(CHUNKS, chunk);
             assert_eq!(samples_of(&got), samples_of(&want), "chunk {chunk}");
             assert_eq!(other_messages(&got), other_messages(&want), "chunk {chunk}");
-            assert_eq!(
-                (
-                    st.crc_errors,
-                    st.bad_payload,
-                    st.unknown_type,
-                    st.garbage_bytes
-                ),
-                (0, 0, 0, 0)
-            );
+            assert_eq!(common::faults(&st), [0; 4]);
             assert_says(&found, &["1 chunks (1 compressed)", "reading /imu/data"]);
         }
     }

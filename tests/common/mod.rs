@@ -112,6 +112,29 @@ pub fn assert_says(text: &str, parts: &[&str]) {
     }
 }
 
+/// `imuprep import INPUT -o LOG`, asserted to succeed; what it said (stdout, then stderr).
+pub fn import_ok(input: &str, log: &std::path::Path) -> String {
+    let out = imuprep(&["import", input, "-o", log.to_str().unwrap()]);
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success(), "import {input}:\n{said}");
+    said
+}
+
+/// The decoder counters a clean input leaves at zero: CRC errors, bad payloads, unknown types,
+/// garbage bytes.
+pub fn faults(st: &imuprep::frame::DecoderStats) -> [u64; 4] {
+    [
+        st.crc_errors,
+        st.bad_payload,
+        st.unknown_type,
+        st.garbage_bytes,
+    ]
+}
+
 /// A bag's topic options: `topic` (`None`: the first Imu topic) and `time` ("header" or "log").
 pub fn bag_opts(topic: Option<&str>, time: &str) -> imuprep::frame::ros2::McapOptions {
     imuprep::frame::ros2::McapOptions {
