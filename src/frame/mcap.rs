@@ -14,7 +14,8 @@
 //! the `mcap` crate. LZ4 and zstd chunks are inflated by pure-Rust crates ([`super::inflate`])
 //! in every `ros2` build. The records inside a chunk come out one by one, as if the file had no
 //! chunks. A message compressed on its own (rosbag2's `compression_mode: message`: the data is
-//! one zstd frame) is inflated, and the inline output compresses its cleaned form again. A chunk whose CRC fails is dropped whole (counted): its messages cannot be
+//! one zstd frame) is inflated, and the inline output compresses its cleaned form again. A chunk
+//! whose CRC fails, or that does not inflate, is dropped whole (counted): its messages cannot be
 //! trusted. MCAP records outside chunks carry no checksum; as for ULog, an implausible record
 //! (reserved opcode, impossible length, a message on a channel never declared) is a fault.
 //!
@@ -35,23 +36,6 @@ use crate::sample::Sample;
 use crate::text::count;
 use bytes::{Bytes, BytesMut};
 use std::collections::{HashMap, VecDeque};
-
-/// A message record whose data is one zstd frame, with `s` patched into the inflated CDR at
-/// `at` and the data compressed again (the record's length follows). A frame that no longer
-/// inflates (it did when decoded) is returned as it came.
-pub fn patch_compressed(rec: &[u8], at: usize, le: bool, s: &Sample) -> Vec<u8> {
-    let Ok(mut cdr) = inflate::zstd(&rec[9 + 22..], inflate::MAX_MESSAGE) else {
-        return rec.to_vec();
-    };
-    ros2::patch_imu(&mut cdr, at, le, s);
-    let z = inflate::zstd_compress(&cdr);
-    let mut f = Vec::with_capacity(9 + 22 + z.len());
-    f.push(rec[0]);
-    f.extend_from_slice(&((22 + z.len()) as u64).to_le_bytes());
-    f.extend_from_slice(&rec[9..9 + 22]);
-    f.extend_from_slice(&z);
-    f
-}
 
 /// Temperature readings kept for the join (a reading logged ahead of the Imu messages it
 /// belongs to must not hide the one before it).
@@ -552,6 +536,23 @@ impl McapDecoder {
             }
         }
     }
+}
+
+/// A message record whose data is one zstd frame, with `s` patched into the inflated CDR at
+/// `at` and the data compressed again (the record's length follows). A frame that no longer
+/// inflates (it did when decoded) is returned as it came.
+pub fn patch_compressed(rec: &[u8], at: usize, le: bool, s: &Sample) -> Vec<u8> {
+    let Ok(mut cdr) = inflate::zstd(&rec[9 + 22..], inflate::MAX_MESSAGE) else {
+        return rec.to_vec();
+    };
+    ros2::patch_imu(&mut cdr, at, le, s);
+    let z = inflate::zstd_compress(&cdr);
+    let mut f = Vec::with_capacity(9 + 22 + z.len());
+    f.push(rec[0]);
+    f.extend_from_slice(&((22 + z.len()) as u64).to_le_bytes());
+    f.extend_from_slice(&rec[9..9 + 22]);
+    f.extend_from_slice(&z);
+    f
 }
 
 /// CRC-32 (ISO-HDLC, as zlib) used by MCAP: `crc32fast` (carry-less multiply where the CPU
