@@ -243,6 +243,10 @@ mod tests {
         Pipeline::new(vec![Box::new(ge), Box::new(b)])
     }
 
+    /// Gross-error warm-up samples at 100 Hz: the 2000-sample window, then `identify_defer_s`
+    /// = 0.5 s (50 samples) while the worker identifies the model.
+    const WARMUP: u64 = 2050;
+
     #[test]
     fn health_follows_the_stages_from_warm_up_to_engaged() {
         let mut rng = Rng::new(16);
@@ -271,7 +275,7 @@ mod tests {
         for c in &g.channels {
             assert_eq!(c.state, GateState::Active);
             assert!(c.model_order.is_some() && !c.model_given && c.sigma.is_some());
-            assert_eq!(c.counters.warmup, 2000);
+            assert_eq!(c.counters.warmup, WARMUP);
         }
         for c in &b.channels[..3] {
             assert_eq!(c.state, BiasChannelState::Estimating);
@@ -298,7 +302,10 @@ mod tests {
         // The summary line: the non-zero counters, stage by stage, channel by channel.
         let line = h.nonzero_counters();
         assert!(line.starts_with("gross_error."), "{line}");
-        assert!(line.contains("gross_error.gx.warmup=2000"), "{line}");
+        assert!(
+            line.contains(&format!("gross_error.gx.warmup={WARMUP}")),
+            "{line}"
+        );
         assert!(line.contains("bias.samples=3000 "), "{line}");
         assert!(line.contains("bias.warmup_fits=3"), "{line}");
         assert!(!line.contains("=0 ") && !line.ends_with("=0"), "{line}");
@@ -313,7 +320,7 @@ mod tests {
         // JSON: channels keyed by name, counters flattened beside the state.
         let v = serde_json::to_value(&h).unwrap();
         assert_eq!(v["gross_error"]["channels"]["az"]["state"], "active");
-        assert_eq!(v["gross_error"]["channels"]["az"]["warmup"], 2000);
+        assert_eq!(v["gross_error"]["channels"]["az"]["warmup"], WARMUP);
         assert_eq!(v["bias"]["channels"]["gx"]["state"], "estimating");
         assert_eq!(v["bias"]["warmup_fits"], 3);
     }

@@ -112,6 +112,44 @@ pub struct Detection {
     pub corrected: Vec<f64>,
 }
 
+/// Buffers for [`hampel_at`] (a window's values and deviations), allocated once.
+#[derive(Debug, Clone, Default)]
+pub struct HampelScratch {
+    win: Vec<f64>,
+    dev: Vec<f64>,
+}
+
+impl HampelScratch {
+    pub fn new(half_width: usize) -> Self {
+        HampelScratch {
+            win: Vec::with_capacity(2 * half_width + 1),
+            dev: Vec::with_capacity(2 * half_width + 1),
+        }
+    }
+}
+
+/// The Hampel filter's verdict on `x[i]` alone (the window cut at the ends of `x`): the window
+/// median if `x[i]` lies more than `k` MAD σ from it, else `None`. No allocation once `scratch`
+/// holds a window.
+pub fn hampel_at(
+    x: &[f64],
+    i: usize,
+    half_width: usize,
+    k: f64,
+    scratch: &mut HampelScratch,
+) -> Option<f64> {
+    let lo = i.saturating_sub(half_width);
+    let hi = (i + half_width + 1).min(x.len());
+    let HampelScratch { win, dev } = scratch;
+    win.clear();
+    win.extend_from_slice(&x[lo..hi]);
+    let m = median(win);
+    dev.clear();
+    dev.extend(x[lo..hi].iter().map(|v| (v - m).abs()));
+    let s = MAD_TO_SIGMA * median(dev);
+    (s > 0.0 && (x[i] - m).abs() > k * s).then_some(m)
+}
+
 /// Hampel filter with half-width `half_width` and threshold `k` (MAD-scaled); flagged samples are
 /// replaced by their window median (module docs).
 pub fn hampel(x: &[f64], half_width: usize, k: f64) -> Result<Detection, NumError> {
@@ -122,18 +160,9 @@ pub fn hampel(x: &[f64], half_width: usize, k: f64) -> Result<Detection, NumErro
     let n = x.len();
     let mut mask = vec![false; n];
     let mut corrected = x.to_vec();
-    let mut win = Vec::with_capacity(2 * half_width + 1);
-    let mut dev = Vec::with_capacity(2 * half_width + 1);
+    let mut scratch = HampelScratch::new(half_width);
     for i in 0..n {
-        let lo = i.saturating_sub(half_width);
-        let hi = (i + half_width + 1).min(n);
-        win.clear();
-        win.extend_from_slice(&x[lo..hi]);
-        let m = median(&mut win);
-        dev.clear();
-        dev.extend(x[lo..hi].iter().map(|v| (v - m).abs()));
-        let s = MAD_TO_SIGMA * median(&mut dev);
-        if s > 0.0 && (x[i] - m).abs() > k * s {
+        if let Some(m) = hampel_at(x, i, half_width, k, &mut scratch) {
             mask[i] = true;
             corrected[i] = m;
         }

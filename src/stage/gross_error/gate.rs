@@ -39,18 +39,24 @@
 //!
 //! **No model.** A channel without a fitted model collects `warmup_samples` finite samples (or
 //! fewer: see [`WarmupLimits`]), cleans them with a Hampel filter, and identifies its ARIMA model
-//! once (the only allocation after construction); a failed identification falls back to white
-//! noise about the median.
+//! once; a failed identification falls back to white noise about the median. By default the
+//! window goes to the stage's worker thread and the warm-up goes on for `identify_defer_s` of
+//! the channel's own time, when the channel takes the model over ([`super::identify`]). Its
+//! buffers (the window's copy for the worker included) are allocated at construction: on the
+//! sample path the close allocates only the job's handle and name.
 
 // `!(v > 0.0)` is used on purpose: unlike `v <= 0.0` it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::identify::{
+    HAMPEL_HALF_WIDTH, HAMPEL_K, Identified, Identifier, Missing, Pending, white_model,
+};
 use super::settings::{GrossErrorSettings, MAX_MEDIAN_WINDOW, Replacement};
 use crate::model::arima::{
-    ArimaChannelModel, ArimaError, ArimaPredictor, MAX_D, MAX_P, identify, psi_weights,
+    ArimaChannelModel, ArimaError, ArimaPredictor, MAX_D, MAX_P, psi_weights,
 };
 use crate::stats::grid::grid_step;
-use crate::stats::robust::{hampel, median_small, upper_median_and_mad_sigma};
+use crate::stats::robust::{HampelScratch, hampel_at, median_small, upper_median_and_mad_sigma};
 use crate::stats::special::{normal_cdf, normal_pdf};
 
 /// Huber clip of the scale trackers, in units of the current scale.
@@ -63,42 +69,6 @@ const PSI_N: usize = 32;
 const GAUSS_TAIL3: f64 = 0.002_699_796;
 /// Tail adaptation: no widening until the tracked share beyond 3σ is this many times Gaussian.
 const TAIL_DEAD_ZONE: f64 = 2.0;
-
-/// When a channel's warm-up ends: at `samples` kept samples, or once they span `max_span_ns`
-/// of their own time (a low-rate sensor identifies within a bounded time), but never on fewer
-/// than `min_samples`.
-///
-/// The time is the sum of the intervals between successive kept samples, except an interval
-/// that ends in a gap (a sample flagged [`flags::GAP`](crate::sample::flags::GAP) since the last
-/// kept one): no samples came in it, so it is no warm-up time. The gap is the source's own
-/// judgement, the one the stage bridges or resets on: from a sequence jump on the wire, and on
-/// imported recordings from the time stamps (`io::timing`: beyond 1.5 nominal intervals, or 10
-/// mean intervals for bursty host stamps). A gap rule of a few *median* intervals, learned here,
-/// would fail on bursty stamps: the MPU6050 log's median interval is 2.0 ms against a mean of
-/// 10.1 ms (pauses of 150–300 ms between bursts), so nearly all its time would fall in "gaps".
-/// Stale repeats never reach the gate, and their time counts in the next interval; time stamps
-/// that do not advance count no time, and the count of samples decides.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct WarmupLimits {
-    pub samples: usize,
-    pub max_span_ns: u64,
-    /// The identification's own minimum (`IdentifySettings::min_len`: 120 with the default
-    /// orders): its long AR needs n/10 ≥ 2 max(p, q) (20 (p_max + q_max + 1)), its ACF/PACF and
-    /// Ljung–Box 2 × 20 lags + 2, and the Hampel filter before it (half-width 10) 21 samples;
-    /// the ADF's Schwert lag at 120 samples is 13, well inside. Fewer, and `identify` refuses
-    /// the series (a white-noise fallback, no model at all).
-    pub min_samples: usize,
-}
-
-impl WarmupLimits {
-    pub fn new(s: &GrossErrorSettings) -> Self {
-        WarmupLimits {
-            samples: s.warmup_samples,
-            max_span_ns: (s.warmup_max_s * 1e9).round() as u64,
-            min_samples: s.identify.min_len().min(s.warmup_samples),
-        }
-    }
-}
 
 /// Constants of the gate derived once from the settings.
 #[derive(Debug, Clone, Copy)]
@@ -243,6 +213,15 @@ pub struct ChannelGate {
     warm_span_ns: u64,
     warm_last_t: Option<u64>,
     warm_gap: bool,
+    /// The window closed at this many kept samples and this warm-up time, and its model is
+    /// being identified off the sample path.
+    deferred: Option<(Pending, usize, u64)>,
+    /// The samples kept since the window closed, Hampel-cleaned as they get their context.
+    tail: Vec<f64>,
+    hampel_scratch: HampelScratch,
+    /// The buffer the closed window is copied into for the worker (its pages touched at
+    /// construction).
+    job_buf: Vec<f64>,
     pub model: Option<ArimaChannelModel>,
     /// The step of the grid the warm-up's values lie on (the channel's LSB), 0 when they lie on
     /// none (or the model came from a file): see [`grid_step`](crate::stats::grid::grid_step) and [`ChannelGate::resolution`].
@@ -339,14 +318,13 @@ impl ChannelGate {
             warm_span_ns: 0,
             warm_last_t: None,
             warm_gap: false,
+            deferred: None,
+            tail: Vec::new(),
+            hampel_scratch: HampelScratch::default(),
+            job_buf: Vec::new(),
             resolution: 0.0,
             model: None,
         }
-    }
-
-    /// Reserve the warm-up buffer (construction time).
-    pub fn reserve_warmup(&mut self, n: usize) {
-        self.warm.reserve_exact(n);
     }
 
     /// Tracked innovation σ (None unless active).
@@ -357,150 +335,6 @@ impl ChannelGate {
     /// Tracked jump σ_Δ (None unless active).
     pub fn jump_sigma(&self) -> Option<f64> {
         (self.mode == Mode::Active).then(|| self.jump2.sqrt())
-    }
-
-    /// Switch to `model`; with `warm` (warm-up samples, oldest first) the predictor is run
-    /// through them to set its history and the initial scales robustly.
-    pub fn activate(
-        &mut self,
-        p: &GateParams,
-        model: ArimaChannelModel,
-        warm: Option<&[f64]>,
-    ) -> Result<(), ArimaError> {
-        let mut pred = ArimaPredictor::new(&model, p.level_alpha, p.trend_beta)?;
-        let mut psi = [0.0; PSI_N];
-        psi_weights(&model, &mut psi);
-        let mut acc = 0.0;
-        for (r, ps) in self.r2.iter_mut().zip(&psi) {
-            acc += ps * ps;
-            *r = acc;
-        }
-        match warm {
-            Some(w) if w.len() > RAW_KEEP + 1 => {
-                let seed: Vec<f64> = w[..RAW_KEEP].iter().rev().copied().collect();
-                pred.reseed(&seed);
-                let mut innov = Vec::with_capacity(w.len());
-                let mut jumps = Vec::with_capacity(w.len());
-                let mut level = w[RAW_KEEP - 1];
-                let mut slope = 0.0;
-                for &v in &w[RAW_KEEP..] {
-                    let e = v - pred.predict();
-                    jumps.push(v - level - slope);
-                    innov.push(e);
-                    pred.update(v, e);
-                    (level, slope) = holt_step(level, slope, v, p.jump_level_alpha, p.slope_alpha);
-                }
-                // Initial scales from the most recent part of the window (conditions may have
-                // changed during the warm-up).
-                let recent = (p.scale_window.round() as usize).max(50).min(innov.len());
-                let (_, s_e) = upper_median_and_mad_sigma(&innov[innov.len() - recent..]);
-                let (_, s_d) = upper_median_and_mad_sigma(&jumps[jumps.len() - recent..]);
-                self.sig2 = (s_e * s_e).max(self.min_var);
-                self.jump2 = (s_d * s_d).max(self.min_var);
-                self.x_acc = level;
-                self.slope = slope;
-                self.needs_seed = false;
-            }
-            _ => {
-                self.sig2 = (model.sigma * model.sigma).max(self.min_var);
-                self.jump2 = model_increment_var(&model).max(self.min_var);
-                self.needs_seed = true;
-            }
-        }
-        self.pred = Some(pred);
-        self.model = Some(model);
-        self.mode = Mode::Active;
-        self.run = 0;
-        self.h = 1;
-        self.warm = Vec::new();
-        Ok(())
-    }
-
-    /// The channel's quantisation step: the warm-up's [`grid_step`], and during the warm-up that
-    /// of the samples so far (from `GRID_MIN_SAMPLES` on; before, 0). Called only when an event
-    /// is judged.
-    pub fn resolution(&self) -> f64 {
-        if self.mode == Mode::WarmingUp {
-            if self.warm.len() >= GRID_MIN_SAMPLES {
-                grid_step(&self.warm)
-            } else {
-                0.0
-            }
-        } else {
-            self.resolution
-        }
-    }
-
-    /// Warm-up time counted so far, s (see [`WarmupLimits`]).
-    pub fn warmup_span_s(&self) -> f64 {
-        self.warm_span_ns as f64 * 1e-9
-    }
-
-    /// One warm-up sample at time `t_ns` (`gap`: flagged [`flags::GAP`](crate::sample::flags::GAP);
-    /// finite, plausible, unsaturated values are kept); at `p.warmup.samples` kept samples, or
-    /// once they span `p.warmup.max_span_ns` with at least `p.warmup.min_samples` of them, the
-    /// channel identifies its model and activates. Returns true when it activated.
-    pub fn warm_push(
-        &mut self,
-        p: &GateParams,
-        v: Option<f64>,
-        t_ns: u64,
-        gap: bool,
-        id: &crate::model::arima::IdentifySettings,
-        name: &str,
-    ) -> bool {
-        self.counters.warmup += 1;
-        self.warm_gap |= gap;
-        if let Some(v) = v {
-            self.warm.push(v); // within the reserved capacity: no allocation
-            if let Some(last) = self.warm_last_t
-                && !self.warm_gap
-            {
-                self.warm_span_ns += t_ns.saturating_sub(last);
-            }
-            self.warm_last_t = Some(t_ns);
-            self.warm_gap = false;
-        }
-        let w = &p.warmup;
-        let n = self.warm.len();
-        if n < w.samples && (n < w.min_samples || self.warm_span_ns < w.max_span_ns) {
-            return false;
-        }
-        let raw = std::mem::take(&mut self.warm);
-        self.resolution = grid_step(&raw);
-        // Hampel (half-width 10, k = 4): strips spikes and runs ≤ 10 before identification.
-        let cleaned = hampel(&raw, 10, 4.0)
-            .map(|r| r.corrected)
-            .unwrap_or_else(|_| raw.clone());
-        let white = |cleaned: &[f64], min_var: f64| {
-            let (med, sd) = upper_median_and_mad_sigma(cleaned);
-            ArimaChannelModel {
-                channel: name.to_string(),
-                p: 0,
-                d: 0,
-                q: 0,
-                constant: med,
-                ar: vec![],
-                ma: vec![],
-                sigma: sd.max(min_var.sqrt()),
-                diagnostics: None,
-            }
-        };
-        let model = match identify(&cleaned, id) {
-            Ok(m) => m.to_channel_model(name),
-            Err(_) => {
-                self.counters.fallback_models += 1;
-                white(&cleaned, self.min_var)
-            }
-        };
-        if self.activate(p, model, Some(&cleaned)).is_err() {
-            // Cannot happen with validated settings; fall back regardless.
-            self.counters.fallback_models += 1;
-            let fallback = white(&cleaned, self.min_var);
-            // A white-noise model with a positive σ always validates.
-            let _ = self.activate(p, fallback, Some(&cleaned));
-        }
-        true
     }
 
     /// Advance through `m` missing samples with the model's own predictions (a bridged gap).
@@ -696,6 +530,9 @@ impl ChannelGate {
         Outcome::Candidate { pred: r }
     }
 }
+
+mod warmup;
+pub use warmup::{Seed, WarmupLimits};
 
 #[cfg(test)]
 mod tests;

@@ -12,8 +12,8 @@ use crate::sample::{CHANNEL_NAMES, N_CHANNELS};
 pub enum GateState {
     /// Switched off by `enabled`: values pass untouched.
     Disabled,
-    /// Collecting `warmup_samples` (or `warmup_max_s` of them) to identify its model; a robust
-    /// jump test guards meanwhile.
+    /// Collecting `warmup_samples` (or `warmup_max_s` of them) to identify its model, then
+    /// `identify_defer_s` more while a worker identifies it; a robust jump test guards meanwhile.
     WarmingUp,
     /// Gating on its ARIMA model.
     Active,

@@ -46,6 +46,7 @@ pub mod confirm;
 pub mod gate;
 pub mod guard;
 pub mod health;
+pub mod identify;
 pub mod settings;
 mod verdict;
 
@@ -201,6 +202,8 @@ pub struct GrossErrorStage {
     last_t: Option<u64>,
     /// Scratch for the level test (allocated once).
     level_buf: Box<[f64; RING]>,
+    /// Identification of the channels that warm up.
+    identifier: identify::Identifier,
 }
 
 impl GrossErrorStage {
@@ -225,7 +228,7 @@ impl GrossErrorStage {
             if gate.mode != Mode::Disabled {
                 match models.and_then(|m| m.channel(name)) {
                     Some(m) => gate.activate(&p, m.clone(), None)?,
-                    None => gate.reserve_warmup(settings.warmup_samples),
+                    None => gate.reserve_warmup(&p.warmup),
                 }
             }
             ch.push(Channel {
@@ -238,6 +241,10 @@ impl GrossErrorStage {
                 gross_rate: 0.0,
             });
         }
+        // A worker identifies the models of channels that warm up, unless told to do it inline.
+        let warms = ch.iter().any(|c: &Channel| c.gate.mode == Mode::WarmingUp);
+        let identifier =
+            identify::Identifier::new(settings.identify, warms && p.warmup.defer_max > 0);
         Ok(GrossErrorStage {
             held: VecDeque::with_capacity(4 * settings.lookahead_samples + 8),
             s: settings,
@@ -259,6 +266,7 @@ impl GrossErrorStage {
             intervals: 0,
             last_t: None,
             level_buf: Box::new([0.0; RING]),
+            identifier,
         })
     }
 
@@ -498,7 +506,7 @@ impl GrossErrorStage {
             usable.then_some(v),
             s.t_ns,
             s.has(flags::GAP),
-            &self.s.identify,
+            &self.identifier,
             CHANNEL_NAMES[c],
         );
         if candidate {

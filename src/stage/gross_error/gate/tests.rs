@@ -33,24 +33,121 @@ fn huber_consistency_factor_is_the_clipped_second_moment() {
     assert!((huber_beta(2.5) - 0.9775599834528068).abs() < 1e-12);
 }
 
-/// The index of the sample on which a default channel fed seeded white noise every
-/// `period_ns` activates (`gap`: before sample i the clock jumps by that many ns more and
-/// the sample is flagged GAP), and the gate after it.
+/// The index of the sample on which a default channel that identifies inline, fed seeded
+/// white noise every `period_ns`, activates (`gap`: before sample i the clock jumps by that many
+/// ns more and the sample is flagged GAP), and the gate after it.
 fn activation(period_ns: u64, gap: Option<(usize, u64)>) -> (usize, ChannelGate) {
-    let s = GrossErrorSettings::default();
-    let p = GateParams::new(&s);
+    let s = GrossErrorSettings {
+        identify_defer_s: 0.0,
+        ..GrossErrorSettings::default()
+    };
+    let (i, g) = activation_with(&s, period_ns, gap, s.warmup_samples);
+    (i.expect("never activated"), g)
+}
+
+/// As [`activation`] with settings `s` and `n` samples (`None`: not activated within them).
+fn activation_with(
+    s: &GrossErrorSettings,
+    period_ns: u64,
+    gap: Option<(usize, u64)>,
+    n: usize,
+) -> (Option<usize>, ChannelGate) {
+    let p = GateParams::new(s);
+    let id = Identifier::new(s.identify, p.warmup.defer_max > 0);
     let mut g = ChannelGate::new(true, 1e-4);
-    g.reserve_warmup(s.warmup_samples);
-    let x = crate::rng::normal_vec(s.warmup_samples, 7);
+    g.reserve_warmup(&p.warmup);
+    let x = crate::rng::normal_vec(n, 7);
     let mut t = 0;
     for (i, &v) in x.iter().enumerate() {
         let jump = gap.filter(|&(at, _)| at == i).map(|(_, ns)| ns);
         t += period_ns + jump.unwrap_or(0);
-        if g.warm_push(&p, Some(0.01 * v), t, jump.is_some(), &s.identify, "gz") {
-            return (i, g);
+        if g.warm_push(&p, Some(0.01 * v), t, jump.is_some(), &id, "gz") {
+            return (Some(i), g);
         }
     }
-    panic!("never activated");
+    (None, g)
+}
+
+#[test]
+fn a_deferred_identification_activates_on_the_sample_the_data_fix_with_the_inline_model() {
+    let s = GrossErrorSettings::default();
+    assert_eq!(s.identify_defer_s, 0.5);
+    // 100 Hz: the window closes on sample 1999 (as inline), and the channel takes the model
+    // 0.5 s of its own time later: on sample 2049, the 50th interval after the close.
+    let (i, g) = activation_with(&s, 10_000_000, None, 3000);
+    assert_eq!(i, Some(2049));
+    let (_, inline) = activation(10_000_000, None);
+    assert_eq!(
+        g.model, inline.model,
+        "the same window gives the same model"
+    );
+    assert_eq!(g.resolution(), inline.resolution());
+    assert_eq!(g.counters.warmup, 2050);
+    // The predictor went on through the 50 samples since: a rerun (the worker's timing is
+    // the only thing that can differ) ends in the same state, to the bit.
+    let (_, again) = activation_with(&s, 10_000_000, None, 3000);
+    assert_eq!(g.pred, again.pred);
+    assert_eq!(
+        (g.sig2, g.jump2, g.x_acc, g.slope),
+        (again.sig2, again.jump2, again.x_acc, again.slope)
+    );
+    // Time stamps that stop advancing after the close end the deferral after `warmup_samples`
+    // more samples (here: all on one stamp, 2 Hz before it; the window closes on sample 119).
+    let mut frozen = GrossErrorSettings {
+        warmup_samples: 200,
+        ..s
+    };
+    frozen.identify_defer_s = 0.5;
+    let p = GateParams::new(&frozen);
+    assert_eq!((p.warmup.defer_max, p.warmup.capacity()), (200, 400));
+    let id = Identifier::new(frozen.identify, true);
+    let mut g = ChannelGate::new(true, 1e-4);
+    g.reserve_warmup(&p.warmup);
+    let x = crate::rng::normal_vec(1000, 7);
+    let at = x.iter().enumerate().position(|(i, &v)| {
+        let t = (i.min(119) as u64 + 1) * 500_000_000;
+        g.warm_push(&p, Some(0.01 * v), t, false, &id, "gz")
+    });
+    assert_eq!(at, Some(119 + 200));
+}
+
+#[test]
+fn a_gate_cloned_during_the_deferral_takes_the_same_model() {
+    let s = GrossErrorSettings::default();
+    let p = GateParams::new(&s);
+    let id = Identifier::new(s.identify, true);
+    let mut g = ChannelGate::new(true, 1e-4);
+    g.reserve_warmup(&p.warmup);
+    let x = crate::rng::normal_vec(2100, 7);
+    for (i, &v) in x[..2010].iter().enumerate() {
+        assert!(!g.warm_push(
+            &p,
+            Some(0.01 * v),
+            (i as u64 + 1) * 10_000_000,
+            false,
+            &id,
+            "gz"
+        ));
+    }
+    // The two share the worker's result: the first to activate takes it, the other
+    // identifies the same window again itself.
+    let mut h = g.clone();
+    let run = |g: &mut ChannelGate| {
+        (2010..2100).find(|&i| {
+            g.warm_push(
+                &p,
+                Some(0.01 * x[i]),
+                (i as u64 + 1) * 10_000_000,
+                false,
+                &id,
+                "gz",
+            )
+        })
+    };
+    assert_eq!(run(&mut g), Some(2049));
+    assert_eq!(run(&mut h), Some(2049));
+    assert_eq!(g.model, h.model);
+    assert_eq!(g.pred, h.pred);
 }
 
 #[test]

@@ -1,0 +1,260 @@
+//! A warm-up window's model, identified on the sample path or off it.
+//!
+//! Identification (Hampel cleaning, ADF, the AIC grid of CSS fits) takes about 10–15 ms a
+//! channel on 2000 samples; six channels closing their windows on one sample made that call
+//! take 57–111 ms (82 ms in `cargo bench --bench latency`): far longer than a 1-kHz sensor's sample
+//! interval, and than a tokio worker should be blocked. So by default (`identify_defer_s`) the
+//! stage has a worker thread: when a window closes it is copied to the worker and the warm-up
+//! goes on. The worker identifies the model and runs its predictor through the window
+//! ([`Seed`]); the channel takes it over at a sample fixed by the data (the deferral's span of
+//! its own time stamps), waiting for the worker if it has not finished by then, and carries it
+//! through the samples since, Hampel-cleaned one by one as they came. The output therefore
+//! depends only on the input, never on the machine's speed.
+
+use std::panic::AssertUnwindSafe;
+use std::sync::mpsc::{Sender, channel};
+use std::sync::{Arc, Condvar, Mutex, PoisonError};
+
+use super::gate::{GateParams, Seed};
+use crate::model::arima::{ArimaChannelModel, IdentifySettings, identify};
+use crate::stats::grid::grid_step;
+use crate::stats::robust::{hampel, upper_median_and_mad_sigma};
+
+/// Half-width and bar of the Hampel filter run over the warm-up before identification: it
+/// strips spikes and runs of up to 10 samples.
+pub const HAMPEL_HALF_WIDTH: usize = 10;
+pub const HAMPEL_K: f64 = 4.0;
+
+/// What identifying one warm-up window gave.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Identified {
+    pub model: ArimaChannelModel,
+    /// The predictor run through the Hampel-cleaned window (`None`: too short to seed from).
+    pub seed: Option<Seed>,
+    /// The window's quantisation step ([`grid_step`]).
+    pub resolution: f64,
+    /// Models that fell back to white noise: the identification failed, or (cannot happen with
+    /// validated settings) its model would not run.
+    pub fallbacks: u64,
+}
+
+impl Identified {
+    /// The white-noise fallback on `raw` (for an identification that panicked).
+    pub fn white(raw: &[f64], p: &GateParams, name: &str, min_var: f64) -> Identified {
+        let model = white_model(raw, name, min_var);
+        Identified {
+            seed: Seed::new(p, &model, raw).ok().flatten(),
+            model,
+            resolution: grid_step(raw),
+            fallbacks: 1,
+        }
+    }
+}
+
+/// White noise about the median of `cleaned`, σ its MAD σ (at least `min_var`'s root).
+pub fn white_model(cleaned: &[f64], name: &str, min_var: f64) -> ArimaChannelModel {
+    let (med, sd) = upper_median_and_mad_sigma(cleaned);
+    ArimaChannelModel {
+        channel: name.to_string(),
+        p: 0,
+        d: 0,
+        q: 0,
+        constant: med,
+        ar: vec![],
+        ma: vec![],
+        sigma: sd.max(min_var.sqrt()),
+        diagnostics: None,
+    }
+}
+
+/// Identify channel `name`'s model from its raw warm-up window and seed it (a failed
+/// identification falls back to [`white_model`]).
+pub fn identify_window(
+    raw: &[f64],
+    id: &IdentifySettings,
+    p: &GateParams,
+    name: &str,
+    min_var: f64,
+) -> Identified {
+    let cleaned = hampel(raw, HAMPEL_HALF_WIDTH, HAMPEL_K)
+        .map(|r| r.corrected)
+        .unwrap_or_else(|_| raw.to_vec());
+    let mut fallbacks = 0;
+    let mut model = identify(&cleaned, id)
+        .map(|m| m.to_channel_model(name))
+        .unwrap_or_else(|_| {
+            fallbacks += 1;
+            white_model(&cleaned, name, min_var)
+        });
+    let seed = Seed::new(p, &model, &cleaned).unwrap_or_else(|_| {
+        fallbacks += 1;
+        model = white_model(&cleaned, name, min_var);
+        // A white-noise model with a positive σ always runs.
+        Seed::new(p, &model, &cleaned).ok().flatten()
+    });
+    Identified {
+        model,
+        seed,
+        resolution: grid_step(raw),
+        fallbacks,
+    }
+}
+
+enum State {
+    Running,
+    Done(Box<Identified>),
+    /// Taken by a clone of the gate that shares it.
+    Taken,
+    /// The identification panicked.
+    Failed,
+}
+
+/// Why [`Pending::wait`] has no result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Missing {
+    /// Another clone of the gate took it: identify again (the same result).
+    Taken,
+    /// The identification panicked: do not run it again.
+    Failed,
+}
+
+struct Slot {
+    state: Mutex<State>,
+    done: Condvar,
+}
+
+struct Job {
+    raw: Vec<f64>,
+    id: IdentifySettings,
+    p: GateParams,
+    name: String,
+    min_var: f64,
+    slot: Arc<Slot>,
+}
+
+/// A stage's identification: its settings, and its worker thread where windows are
+/// identified one at a time (six at once would take every core from the pipeline's thread).
+#[derive(Debug, Clone)]
+pub struct Identifier {
+    pub settings: IdentifySettings,
+    jobs: Option<Sender<Job>>,
+}
+
+impl Identifier {
+    /// With `worker`, start the worker thread (it ends when the last clone of this is dropped);
+    /// where no thread can be started, or without `worker`, windows are identified inline.
+    pub fn new(settings: IdentifySettings, worker: bool) -> Self {
+        let jobs = worker.then(spawn_worker).flatten();
+        Identifier { settings, jobs }
+    }
+
+    /// [`identify_window`] with these settings, here and now.
+    pub fn window(&self, raw: &[f64], p: &GateParams, name: &str, min_var: f64) -> Identified {
+        identify_window(raw, &self.settings, p, name, min_var)
+    }
+
+    /// Hand `raw` to the worker; `None` without one (the caller then identifies inline: the
+    /// same result, only on the sample path).
+    pub fn start(
+        &self,
+        raw: Vec<f64>,
+        p: &GateParams,
+        name: &str,
+        min_var: f64,
+    ) -> Option<Pending> {
+        let slot = Arc::new(Slot {
+            state: Mutex::new(State::Running),
+            done: Condvar::new(),
+        });
+        let job = Job {
+            raw,
+            id: self.settings,
+            p: *p,
+            name: name.to_string(),
+            min_var,
+            slot: slot.clone(),
+        };
+        self.jobs.as_ref()?.send(job).ok()?;
+        Some(Pending(slot))
+    }
+}
+
+fn spawn_worker() -> Option<Sender<Job>> {
+    let (tx, rx) = channel::<Job>();
+    let spawned = std::thread::Builder::new()
+        .name("imuprep-identify".into())
+        .spawn(move || {
+            background();
+            for job in rx {
+                let r = std::panic::catch_unwind(AssertUnwindSafe(|| {
+                    identify_window(&job.raw, &job.id, &job.p, &job.name, job.min_var)
+                }));
+                let mut g = job
+                    .slot
+                    .state
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner);
+                *g = r.map_or(State::Failed, |r| State::Done(Box::new(r)));
+                job.slot.done.notify_all();
+            }
+        });
+    match spawned {
+        Ok(_) => Some(tx),
+        Err(e) => {
+            tracing::warn!(error = %e, "no identification thread: models are identified inline");
+            None
+        }
+    }
+}
+
+/// Make the calling thread a background one: on Linux SCHED_IDLE, which runs only on a core
+/// no ordinary thread wants, so the worker never delays the pipeline's thread. It cannot
+/// starve the pipeline either: at the deferral's end the pipeline waits for it, and the core
+/// it frees is the worker's. Elsewhere: ordinary priority.
+fn background() {
+    #[cfg(target_os = "linux")]
+    {
+        let param = libc::sched_param { sched_priority: 0 };
+        // SAFETY: sched_setscheduler with pid 0 changes only the calling thread's policy; the
+        // parameter is a valid, initialised struct that outlives the call.
+        let rc = unsafe { libc::sched_setscheduler(0, libc::SCHED_IDLE, &param) };
+        if rc != 0 {
+            tracing::debug!("identification worker: SCHED_IDLE refused, ordinary priority");
+        }
+    }
+}
+
+/// A window handed to the worker. Clones share it (a cloned gate takes the same model).
+#[derive(Clone)]
+pub struct Pending(Arc<Slot>);
+
+impl std::fmt::Debug for Pending {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let state = match *self.0.state.lock().unwrap_or_else(PoisonError::into_inner) {
+            State::Running => "running",
+            State::Done(_) => "done",
+            State::Taken => "taken",
+            State::Failed => "failed",
+        };
+        write!(f, "Pending({state})")
+    }
+}
+
+impl Pending {
+    /// The result, waiting for the worker if it has not finished; moved out, not copied (no
+    /// allocation on the sample path).
+    pub fn wait(&self) -> Result<Identified, Missing> {
+        let mut g = self.0.state.lock().unwrap_or_else(PoisonError::into_inner);
+        while let State::Running = *g {
+            g = self.0.done.wait(g).unwrap_or_else(PoisonError::into_inner);
+        }
+        match std::mem::replace(&mut *g, State::Taken) {
+            State::Done(r) => Ok(*r),
+            State::Failed => {
+                *g = State::Failed;
+                Err(Missing::Failed)
+            }
+            _ => Err(Missing::Taken),
+        }
+    }
+}
