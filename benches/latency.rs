@@ -10,7 +10,9 @@
 //! `cargo bench --bench latency` prints, per variant, the median, 99.9th percentile and
 //! maximum time of one call over 3 runs (the median of the runs, and every run's maximum), and
 //! how many calls took over 100 µs and over 1 ms in each run. Wall clock of the pushing
-//! thread: a busy machine shows in the tail, which is why each variant runs three times.
+//! thread: a busy machine shows in the tail, which is why each variant runs three times. On
+//! Linux a last line gives the default's two warm-up calls unpaced in the thread's CPU time:
+//! the work itself, without the machine's waits.
 
 use imuprep::config::{Config, DEFAULT_TOML};
 use imuprep::sample::Sample;
@@ -40,6 +42,8 @@ struct Times {
     max_ns: u64,
     over_100us: usize,
     over_1ms: usize,
+    /// Which calls took over 1 ms (their index).
+    slow: Vec<usize>,
 }
 
 /// Call `f(i)` once per millisecond for `n` calls; the time of each call.
@@ -57,6 +61,7 @@ fn paced(n: usize, mut f: impl FnMut(usize)) -> Times {
     }
     let over = |ns: u64| t.iter().filter(|&&x| x > ns).count();
     let (over_100us, over_1ms) = (over(100_000), over(1_000_000));
+    let slow = (0..t.len()).filter(|&i| t[i] > 1_000_000).collect();
     t.sort_unstable();
     let q = |f: f64| t[((t.len() - 1) as f64 * f).round() as usize];
     Times {
@@ -65,10 +70,11 @@ fn paced(n: usize, mut f: impl FnMut(usize)) -> Times {
         max_ns: t[t.len() - 1],
         over_100us,
         over_1ms,
+        slow,
     }
 }
 
-fn pipeline_run(defer_s: f64, input: &[Sample]) -> Times {
+fn pipeline(defer_s: f64) -> imuprep::stage::Pipeline {
     let mut table: toml::Table = DEFAULT_TOML.parse().expect("default config");
     table["gross_error"]["settings"]
         .as_table_mut()
@@ -77,12 +83,49 @@ fn pipeline_run(defer_s: f64, input: &[Sample]) -> Times {
     let mut cfg =
         Config::from_toml_str(&table.to_string(), std::path::Path::new(".")).expect("config");
     cfg.stages.set_sample_rate(1000.0).expect("rate");
-    let mut p = cfg.stages.build().expect("pipeline");
+    cfg.stages.build().expect("pipeline")
+}
+
+fn pipeline_run(defer_s: f64, input: &[Sample]) -> Times {
+    let mut p = pipeline(defer_s);
     let mut out = Vec::with_capacity(64);
     paced(input.len(), |i| {
         out.clear();
         p.push(input[i], &mut out);
     })
+}
+
+/// The default pipeline unpaced, timed in the pushing thread's CPU time (which leaves out any
+/// wait for the worker and any time the thread was not running): the cost of the calls that
+/// close the warm-up windows (1999) and take the models over (2499), and the largest other call.
+#[cfg(target_os = "linux")]
+fn unpaced_cpu(input: &[Sample]) -> (u64, u64, u64) {
+    fn cpu_ns() -> u64 {
+        let mut ts = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: a valid timespec that outlives the call; the clock id is a constant.
+        unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+        ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+    }
+    let mut p = pipeline(0.5);
+    let mut out = Vec::with_capacity(64);
+    let mut t = Vec::with_capacity(input.len());
+    for s in input {
+        out.clear();
+        let c0 = cpu_ns();
+        p.push(*s, &mut out);
+        t.push(cpu_ns() - c0);
+    }
+    let other = t
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i != 1999 && *i != 2499)
+        .map(|(_, v)| *v)
+        .max()
+        .unwrap_or(0);
+    (t[1999], t[2499], other)
 }
 
 fn control_run() -> Times {
@@ -107,13 +150,14 @@ fn print(name: &str, runs: &[Times]) {
     };
     let each = |f: fn(&Times) -> String| runs.iter().map(f).collect::<Vec<_>>().join("/");
     println!(
-        "{name}: call median {} ns, p99.9 {:.1} µs, max {:.2} ms (runs: {}); calls > 100 µs: {}, > 1 ms: {}",
+        "{name}: call median {} ns, p99.9 {:.1} µs, max {:.2} ms (runs: {}); calls > 100 µs: {}, > 1 ms: {} (at {})",
         med(|t| t.median_ns),
         med(|t| t.p999_ns) as f64 / 1e3,
         med(|t| t.max_ns) as f64 / 1e6,
         each(|t| format!("{:.2}", t.max_ns as f64 / 1e6)),
         each(|t| t.over_100us.to_string()),
         each(|t| t.over_1ms.to_string()),
+        each(|t| format!("{:?}", t.slow)),
     );
 }
 
@@ -131,4 +175,20 @@ fn main() {
         "control (no pipeline; six 16-KB copies on calls 1999 and 2499)",
         &runs,
     );
+    #[cfg(target_os = "linux")]
+    {
+        let r: Vec<(u64, u64, u64)> = (0..RUNS).map(|_| unpaced_cpu(&input)).collect();
+        let each = |f: fn(&(u64, u64, u64)) -> u64| {
+            r.iter()
+                .map(|x| format!("{:.3}", f(x) as f64 / 1e6))
+                .collect::<Vec<_>>()
+                .join("/")
+        };
+        println!(
+            "default unpaced, thread CPU time (runs): close {} ms, take-over {} ms, largest other call {} ms",
+            each(|x| x.0),
+            each(|x| x.1),
+            each(|x| x.2),
+        );
+    }
 }

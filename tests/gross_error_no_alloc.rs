@@ -71,8 +71,10 @@ fn run(replacement: Replacement, lookahead_samples: usize) {
         smp.set_channels(&v);
         smp
     };
-    // Warm-up (identification allocates here, once per channel).
-    for _ in 0..700 {
+    // Warm-up (identification allocates here, once per channel): the 600-sample window, then
+    // `identify_defer_s` = 0.5 s (100 samples at 200 Hz) and up to 5 samples of stagger before
+    // the last channel takes its model over; 800 leaves a margin.
+    for _ in 0..800 {
         st.process(make(&mut rng, seq, 1.0));
         seq += 1;
     }

@@ -243,8 +243,9 @@ mod tests {
         Pipeline::new(vec![Box::new(ge), Box::new(b)])
     }
 
-    /// Gross-error warm-up samples at 100 Hz: the 2000-sample window, then `identify_defer_s`
-    /// = 0.5 s (50 samples) while the worker identifies the model.
+    /// Gross-error warm-up samples of gx at 100 Hz: the 2000-sample window, then
+    /// `identify_defer_s` = 0.5 s (50 samples) while the worker identifies the model; channel
+    /// c takes its model over c samples later still (one take-over per call).
     const WARMUP: u64 = 2050;
 
     #[test]
@@ -272,10 +273,10 @@ mod tests {
         assert_eq!(out.len(), 3000);
         let h = p.health();
         let (g, b) = (h.gross_error.unwrap(), h.bias.unwrap());
-        for c in &g.channels {
+        for (i, c) in g.channels.iter().enumerate() {
             assert_eq!(c.state, GateState::Active);
             assert!(c.model_order.is_some() && !c.model_given && c.sigma.is_some());
-            assert_eq!(c.counters.warmup, WARMUP);
+            assert_eq!(c.counters.warmup, WARMUP + i as u64);
         }
         for c in &b.channels[..3] {
             assert_eq!(c.state, BiasChannelState::Estimating);
@@ -320,7 +321,7 @@ mod tests {
         // JSON: channels keyed by name, counters flattened beside the state.
         let v = serde_json::to_value(&h).unwrap();
         assert_eq!(v["gross_error"]["channels"]["az"]["state"], "active");
-        assert_eq!(v["gross_error"]["channels"]["az"]["warmup"], WARMUP);
+        assert_eq!(v["gross_error"]["channels"]["az"]["warmup"], WARMUP + 5);
         assert_eq!(v["bias"]["channels"]["gx"]["state"], "estimating");
         assert_eq!(v["bias"]["warmup_fits"], 3);
     }

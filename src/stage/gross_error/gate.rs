@@ -213,9 +213,11 @@ pub struct ChannelGate {
     warm_span_ns: u64,
     warm_last_t: Option<u64>,
     warm_gap: bool,
-    /// The window closed at this many kept samples and this warm-up time, and its model is
-    /// being identified off the sample path.
-    deferred: Option<(Pending, usize, u64)>,
+    /// The window's model, being identified off the sample path.
+    deferred: Option<Deferred>,
+    /// Samples a deferred take-over waits after the deferral's end (the stage gives each channel
+    /// its index, so six channels do not take their models over in one call).
+    stagger: usize,
     /// The samples kept since the window closed, Hampel-cleaned as they get their context.
     tail: Vec<f64>,
     hampel_scratch: HampelScratch,
@@ -319,6 +321,7 @@ impl ChannelGate {
             warm_last_t: None,
             warm_gap: false,
             deferred: None,
+            stagger: 0,
             tail: Vec::new(),
             hampel_scratch: HampelScratch::default(),
             job_buf: Vec::new(),
@@ -532,7 +535,8 @@ impl ChannelGate {
 }
 
 mod warmup;
-pub use warmup::{Seed, WarmupLimits};
+use warmup::Deferred;
+pub use warmup::{MAX_STAGGER, Seed, WarmupLimits};
 
 #[cfg(test)]
 mod tests;

@@ -2,7 +2,7 @@
 //!
 //! Identification (Hampel cleaning, ADF, the AIC grid of CSS fits) takes about 10–15 ms a
 //! channel on 2000 samples; six channels closing their windows on one sample made that call
-//! take 57–111 ms (82 ms in `cargo bench --bench latency`): far longer than a 1-kHz sensor's sample
+//! take 57–111 ms (86 ms in `cargo bench --bench latency`): far longer than a 1-kHz sensor's sample
 //! interval, and than a tokio worker should be blocked. So by default (`identify_defer_s`) the
 //! stage has a worker thread: when a window closes it is copied to the worker and the warm-up
 //! goes on. The worker identifies the model and runs its predictor through the window
@@ -184,7 +184,7 @@ fn spawn_worker() -> Option<Sender<Job>> {
     let spawned = std::thread::Builder::new()
         .name("imuprep-identify".into())
         .spawn(move || {
-            background();
+            batch();
             for job in rx {
                 let r = std::panic::catch_unwind(AssertUnwindSafe(|| {
                     identify_window(&job.raw, &job.id, &job.p, &job.name, job.min_var)
@@ -207,19 +207,20 @@ fn spawn_worker() -> Option<Sender<Job>> {
     }
 }
 
-/// Make the calling thread a background one: on Linux SCHED_IDLE, which runs only on a core
-/// no ordinary thread wants, so the worker never delays the pipeline's thread. It cannot
-/// starve the pipeline either: at the deferral's end the pipeline waits for it, and the core
-/// it frees is the worker's. Elsewhere: ordinary priority.
-fn background() {
+/// Mark the calling thread as batch work: on Linux SCHED_BATCH, a CPU-bound thread that is
+/// disfavoured on waking, so it does not preempt the pipeline's thread, yet keeps its fair share
+/// of a busy machine. Not SCHED_IDLE: a thread of that class cannot be raised again without
+/// privilege, and while the pipeline waits for it (the deferral's end) a machine busy with other
+/// work would give it almost nothing, stalling the pipeline behind it. Elsewhere: ordinary.
+fn batch() {
     #[cfg(target_os = "linux")]
     {
         let param = libc::sched_param { sched_priority: 0 };
         // SAFETY: sched_setscheduler with pid 0 changes only the calling thread's policy; the
         // parameter is a valid, initialised struct that outlives the call.
-        let rc = unsafe { libc::sched_setscheduler(0, libc::SCHED_IDLE, &param) };
+        let rc = unsafe { libc::sched_setscheduler(0, libc::SCHED_BATCH, &param) };
         if rc != 0 {
-            tracing::debug!("identification worker: SCHED_IDLE refused, ordinary priority");
+            tracing::debug!("identification worker: SCHED_BATCH refused, ordinary policy");
         }
     }
 }

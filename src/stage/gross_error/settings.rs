@@ -81,9 +81,9 @@ pub struct GrossErrorSettings {
     pub warmup_max_s: f64,
     /// The model is identified off the sample path, on a worker thread, while the warm-up goes
     /// on for this long after its window closed (s of the channel's own time stamps, counted as
-    /// the warm-up's; at most `warmup_samples` more samples; default 0.5). It activates at that
-    /// sample whatever the worker's speed (a slower worker is waited for), so the output does
-    /// not depend on the machine. 0 = identify on the sample that closes the window (one call
+    /// the warm-up's; at most `warmup_samples` more samples; default 0.5), channel c c samples
+    /// later (one take-over per call). It activates at that sample whatever the worker's speed
+    /// (a slower worker is waited for), so the output does not depend on the machine. 0 = identify on the sample that closes the window (one call
     /// then takes the whole identification: about 80 ms for six channels, `cargo bench --bench
     /// latency`).
     pub identify_defer_s: f64,

@@ -91,6 +91,29 @@ fn a_deferred_identification_activates_on_the_sample_the_data_fix_with_the_inlin
         (g.sig2, g.jump2, g.x_acc, g.slope),
         (again.sig2, again.jump2, again.x_acc, again.slope)
     );
+    // A channel staggered by 3 (the stage gives each its index) takes the same model 3
+    // samples later.
+    let (i3, g3) = {
+        let p = GateParams::new(&s);
+        let id = Identifier::new(s.identify, true);
+        let mut g = ChannelGate::new(true, 1e-4);
+        g.set_stagger(3);
+        g.reserve_warmup(&p.warmup);
+        let x = crate::rng::normal_vec(3000, 7);
+        let i = x.iter().enumerate().position(|(i, &v)| {
+            g.warm_push(
+                &p,
+                Some(0.01 * v),
+                (i as u64 + 1) * 10_000_000,
+                false,
+                &id,
+                "gz",
+            )
+        });
+        (i, g)
+    };
+    assert_eq!(i3, Some(2052));
+    assert_eq!(g3.model, inline.model);
     // Time stamps that stop advancing after the close end the deferral after `warmup_samples`
     // more samples (here: all on one stamp, 2 Hz before it; the window closes on sample 119).
     let mut frozen = GrossErrorSettings {
@@ -99,7 +122,10 @@ fn a_deferred_identification_activates_on_the_sample_the_data_fix_with_the_inlin
     };
     frozen.identify_defer_s = 0.5;
     let p = GateParams::new(&frozen);
-    assert_eq!((p.warmup.defer_max, p.warmup.capacity()), (200, 400));
+    assert_eq!(
+        (p.warmup.defer_max, p.warmup.capacity()),
+        (200, 200 + 200 + MAX_STAGGER)
+    );
     let id = Identifier::new(frozen.identify, true);
     let mut g = ChannelGate::new(true, 1e-4);
     g.reserve_warmup(&p.warmup);

@@ -3,6 +3,9 @@
 
 use super::*;
 
+/// The largest [`ChannelGate::set_stagger`] the buffers have room for (one per channel).
+pub const MAX_STAGGER: usize = crate::sample::N_CHANNELS;
+
 /// When a channel's warm-up ends: at `samples` kept samples, or once they span `max_span_ns`
 /// of their own time (a low-rate sensor identifies within a bounded time), but never on fewer
 /// than `min_samples`.
@@ -51,13 +54,32 @@ impl WarmupLimits {
 
     /// Warm-up samples kept at most: the window and the deferral's.
     pub fn capacity(&self) -> usize {
-        self.samples + self.defer_max
+        self.samples + self.deferral_capacity()
     }
+
+    /// Samples kept at most after the window closed (0 without a deferral).
+    pub fn deferral_capacity(&self) -> usize {
+        if self.defer_max > 0 {
+            self.defer_max + MAX_STAGGER
+        } else {
+            0
+        }
+    }
+}
+
+/// A window handed to the worker: its result, where the window closed (kept samples, warm-up
+/// time), and the samples since the deferral's end.
+#[derive(Debug, Clone)]
+pub(super) struct Deferred {
+    pending: Pending,
+    closed_n: usize,
+    closed_ns: u64,
+    due: usize,
 }
 
 /// A model's predictor and jump reference run through a warm-up series, with the innovations
 /// and jumps they met: the state a channel activates in. Computed off the sample path for a
-/// deferred identification ([`super::identify`]), then carried through the samples since.
+/// deferred identification ([`super::super::identify`]), then carried through the samples since.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Seed {
     pred: ArimaPredictor,
@@ -86,8 +108,8 @@ impl Seed {
             level: warm[RAW_KEEP - 1],
             slope: 0.0,
             // Room for the samples a deferred activation carries it through.
-            innov: Vec::with_capacity(warm.len() + p.warmup.defer_max),
-            jumps: Vec::with_capacity(warm.len() + p.warmup.defer_max),
+            innov: Vec::with_capacity(warm.len() + p.warmup.deferral_capacity()),
+            jumps: Vec::with_capacity(warm.len() + p.warmup.deferral_capacity()),
         };
         sd.extend(p, &warm[RAW_KEEP..]);
         Ok(Some(sd))
@@ -107,10 +129,16 @@ impl Seed {
 }
 
 impl ChannelGate {
+    /// Take a deferred model over `k` samples after the deferral's end (construction time; at
+    /// most [`MAX_STAGGER`]).
+    pub fn set_stagger(&mut self, k: usize) {
+        self.stagger = k.min(MAX_STAGGER);
+    }
+
     /// Reserve the warm-up buffers (construction time) for `limits`.
     pub fn reserve_warmup(&mut self, limits: &WarmupLimits) {
         self.warm.reserve_exact(limits.capacity());
-        self.tail.reserve_exact(limits.defer_max);
+        self.tail.reserve_exact(limits.deferral_capacity());
         self.hampel_scratch = HampelScratch::new(HAMPEL_HALF_WIDTH);
         if limits.defer_max > 0 {
             let mut job = vec![f64::NAN; limits.samples];
@@ -232,20 +260,24 @@ impl ChannelGate {
         }
         let w = &p.warmup;
         let n = self.warm.len();
-        if let Some((pending, closed_n, closed_ns)) = self.deferred.take() {
+        if let Some(mut d) = self.deferred.take() {
+            let closed_n = d.closed_n;
             // Each sample since the window closed is cleaned once it has its context.
             if v.is_some() && n > closed_n + HAMPEL_HALF_WIDTH {
                 self.clean_tail(n - 1 - HAMPEL_HALF_WIDTH);
             }
-            if n - closed_n < w.defer_max && self.warm_span_ns - closed_ns < w.defer_ns {
-                self.deferred = Some((pending, closed_n, closed_ns));
+            if n - closed_n >= w.defer_max || self.warm_span_ns - d.closed_ns >= w.defer_ns {
+                d.due += 1;
+            }
+            if d.due <= self.stagger {
+                self.deferred = Some(d);
                 return false;
             }
             for j in closed_n + self.tail.len()..n {
                 self.clean_tail(j);
             }
             let window = &self.warm[..closed_n];
-            let mut r = match pending.wait() {
+            let mut r = match d.pending.wait() {
                 Ok(r) => r,
                 Err(Missing::Taken) => id.window(window, p, name, self.min_var),
                 Err(Missing::Failed) => Identified::white(window, p, name, self.min_var),
@@ -265,7 +297,12 @@ impl ChannelGate {
             let mut job = std::mem::take(&mut self.job_buf);
             job.extend_from_slice(&self.warm);
             if let Some(pending) = id.start(job, p, name, self.min_var) {
-                self.deferred = Some((pending, n, self.warm_span_ns));
+                self.deferred = Some(Deferred {
+                    pending,
+                    closed_n: n,
+                    closed_ns: self.warm_span_ns,
+                    due: 0,
+                });
                 return false;
             }
         }
