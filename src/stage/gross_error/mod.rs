@@ -230,7 +230,7 @@ impl GrossErrorStage {
             gate.set_stagger(c);
             if gate.mode != Mode::Disabled {
                 match models.and_then(|m| m.channel(name)) {
-                    Some(m) => gate.activate(&p, m.clone(), None)?,
+                    Some(m) => gate.activate(&p, m.clone())?,
                     None => gate.reserve_warmup(&p.warmup),
                 }
             }

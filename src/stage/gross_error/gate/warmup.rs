@@ -148,19 +148,10 @@ impl ChannelGate {
         }
     }
 
-    /// Switch to `model`; with `warm` (warm-up samples, oldest first) the predictor is run
-    /// through them to set its history and the initial scales robustly.
-    pub fn activate(
-        &mut self,
-        p: &GateParams,
-        model: ArimaChannelModel,
-        warm: Option<&[f64]>,
-    ) -> Result<(), ArimaError> {
-        let seed = match warm {
-            Some(w) => Seed::new(p, &model, w)?,
-            None => None,
-        };
-        self.activate_seeded(p, model, seed)
+    /// Switch to a given `model` (a model file's): the predictor seeds itself on the first
+    /// samples, the scales start from the model's own.
+    pub fn activate(&mut self, p: &GateParams, model: ArimaChannelModel) -> Result<(), ArimaError> {
+        self.activate_seeded(p, model, None)
     }
 
     /// Switch to `model`, with the predictor and scales from `seed` where there is one.
