@@ -226,7 +226,7 @@ impl GrossErrorStage {
             };
             let mut gate = ChannelGate::new(settings.enabled[c], min_sigma);
             // Channel c takes a deferred model over c samples after the deferral's end: one
-            // take-over per call (0.3–0.9 ms of CPU for six at once, `cargo bench --bench latency`).
+            // take-over per call (0.3–1.2 ms of CPU for six at once, `cargo bench --bench latency`).
             gate.set_stagger(c);
             if gate.mode != Mode::Disabled {
                 match models.and_then(|m| m.channel(name)) {
