@@ -3,7 +3,7 @@
 //! sample; / 6 = per channel. Run: `cargo bench --bench bias`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use imuprep::model::bias_model::{ArOf, BiasModelFile, ChannelBiasModel, Effect};
+use imuprep::model::bias_model::{ArOf, BiasModelFile, ChannelBiasModel, Effect, TemperatureTerm};
 use imuprep::rng::Rng;
 use imuprep::sample::Sample;
 use imuprep::stage::bias::BiasStage;
@@ -44,12 +44,12 @@ fn model(phi: &[f64], effects: bool) -> BiasModelFile {
             return vec![];
         }
         let mut v = vec![
-            Effect::Temperature {
+            Effect::Temperature(TemperatureTerm {
                 t0_c: 25.0,
                 c1_per_c: 1e-4,
                 c2_per_c2: 1e-6,
                 lag_s: 20.0,
-            },
+            }),
             Effect::VibrationLine {
                 freq_hz: 17.3,
                 amplitude: 0.01,

@@ -4,7 +4,7 @@
 #[path = "bias_common/mod.rs"]
 mod common;
 use common::*;
-use imuprep::model::bias_model::{BiasModelFile, Effect};
+use imuprep::model::bias_model::{BiasModelFile, Effect, TemperatureTerm};
 use imuprep::rng::Rng;
 use imuprep::sample::flags;
 use imuprep::stage::bias::BiasStage;
@@ -39,12 +39,12 @@ fn temperature_compensation_reduces_the_error_on_a_ramp() {
             temp,
         )
     };
-    let with = run_with(vec![Effect::Temperature {
+    let with = run_with(vec![Effect::Temperature(TemperatureTerm {
         t0_c: t0,
         c1_per_c: c1,
         c2_per_c2: c2,
         lag_s: lag,
-    }]);
+    })]);
     let without = run_with(vec![]);
     let (e_with, base) = with.rms_pair(2, 8.0);
     let (e_without, _) = without.rms_pair(2, 8.0);

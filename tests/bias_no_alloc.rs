@@ -5,7 +5,7 @@
 #[path = "bias_common/mod.rs"]
 mod common;
 use common::*;
-use imuprep::model::bias_model::Effect;
+use imuprep::model::bias_model::{Effect, TemperatureTerm};
 use imuprep::rng::Rng;
 use imuprep::stage::bias::BiasStage;
 use imuprep::stage::bias::settings::{BiasSettings, WarmupSettings};
@@ -62,12 +62,12 @@ fn samples(n: usize) -> Vec<imuprep::sample::Sample> {
 fn process_never_allocates_after_construction_except_at_the_warm_up_fit() {
     let all = |gyro: bool| {
         let mut v = vec![
-            Effect::Temperature {
+            Effect::Temperature(TemperatureTerm {
                 t0_c: 25.0,
                 c1_per_c: 1e-4,
                 c2_per_c2: 1e-6,
                 lag_s: 20.0,
-            },
+            }),
             Effect::VibrationLine {
                 freq_hz: 17.3,
                 amplitude: 0.01,

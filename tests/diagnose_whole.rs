@@ -9,7 +9,7 @@
 
 mod common;
 
-use imuprep::model::bias_model::{BiasModelFile, Effect};
+use imuprep::model::bias_model::{BiasModelFile, Effect, TemperatureTerm};
 use std::path::Path;
 
 /// Simulate the static bench for `duration_s` with `sets`, gross errors off, into `log`.
@@ -239,12 +239,12 @@ fn a_temperature_ramp_that_starts_late_is_found() {
         let t = effects(&m, ch)
             .iter()
             .find_map(|e| match *e {
-                Effect::Temperature {
+                Effect::Temperature(TemperatureTerm {
                     t0_c,
                     c1_per_c,
                     c2_per_c2,
                     ..
-                } => Some((t0_c, c1_per_c, c2_per_c2)),
+                }) => Some((t0_c, c1_per_c, c2_per_c2)),
                 _ => None,
             })
             .unwrap_or_else(|| panic!("{ch}: no temperature effect\n{text}"));
@@ -342,7 +342,7 @@ fn clean_logs_get_no_effects_over_50_seeds() {
     assert!(
         found
             .iter()
-            .all(|(_, _, e)| e.iter().all(|e| matches!(e, Effect::Temperature { .. }))),
+            .all(|(_, _, e)| e.iter().all(|e| matches!(e, Effect::Temperature(_)))),
         "non-temperature effects on clean logs: {found:#?}"
     );
     assert!(
@@ -410,7 +410,7 @@ fn clean_longer_logs_temperature_terms() {
     // these records do not show — docs/results-diagnose-real.md); no step since steps are
     // span-checked too (before: one, 33 gz, a wander excursion); 20 min — no temperature term (1
     // before: 19 az), one random walk (1 ax), no step. The bounds guard against more.
-    let is_temp = |e: &Effect| matches!(e, Effect::Temperature { .. });
+    let is_temp = |e: &Effect| matches!(e, Effect::Temperature(_));
     let is_step = |e: &Effect| matches!(e, Effect::Step { .. });
     let ten = clean_effects(600.0, 1..=50);
     eprintln!("10 min: {ten:#?}");

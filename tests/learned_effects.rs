@@ -105,7 +105,7 @@ struct Scores {
 fn is_bias_term(e: &Effect) -> bool {
     matches!(
         e,
-        Effect::Temperature { .. } | Effect::GSensitivity { .. } | Effect::VibrationLine { .. }
+        Effect::Temperature(_) | Effect::GSensitivity { .. } | Effect::VibrationLine { .. }
     )
 }
 
@@ -201,7 +201,7 @@ fn learned_effects_lower_the_online_error_on_a_different_recording() {
     let has_temp = GYROS.map(|n| {
         effects_of(n)
             .iter()
-            .any(|e| matches!(e, Effect::Temperature { .. }))
+            .any(|e| matches!(e, Effect::Temperature(_)))
     });
     let has_bias_term = GYROS.map(|n| effects_of(n).iter().any(is_bias_term));
     for name in GYROS {
@@ -219,7 +219,7 @@ fn learned_effects_lower_the_online_error_on_a_different_recording() {
     let temp_only = evaluate_drive(
         d,
         "temperature_only",
-        &filtered(&learned, |e| matches!(e, Effect::Temperature { .. })),
+        &filtered(&learned, |e| matches!(e, Effect::Temperature(_))),
     );
 
     eprintln!(

@@ -95,22 +95,48 @@ pub struct ChannelBiasModel {
     pub effects: Vec<Effect>,
 }
 
+/// `b += c1 (T_l - t0) + c2 (T_l - t0)^2`, where `T_l` is the sensor temperature (°C) passed
+/// through a first-order lag `dT_l/dt = (T - T_l) / lag_s` (`lag_s = 0`: no lag). Written in a
+/// model file as `kind = "temperature"` with these four keys.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TemperatureTerm {
+    /// Reference temperature, °C.
+    pub t0_c: f64,
+    /// Linear coefficient, unit/°C.
+    pub c1_per_c: f64,
+    /// Quadratic coefficient, unit/°C².
+    pub c2_per_c2: f64,
+    /// Thermal lag time constant, s (≥ 0).
+    pub lag_s: f64,
+}
+
+impl TemperatureTerm {
+    /// Every problem with the term, each under `key` (`….effects[j]`).
+    fn check(&self, errors: &mut Vec<String>, key: &str) {
+        finite(errors, &format!("{key}.t0_c"), self.t0_c);
+        finite(errors, &format!("{key}.c1_per_c"), self.c1_per_c);
+        finite(errors, &format!("{key}.c2_per_c2"), self.c2_per_c2);
+        non_negative(errors, &format!("{key}.lag_s"), self.lag_s);
+    }
+}
+
+impl std::fmt::Display for TemperatureTerm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "temperature c1 = {:.4e}/°C, c2 = {:.4e}/°C² about T0 = {:.2} °C, lag {:.1} s",
+            self.c1_per_c, self.c2_per_c2, self.t0_c, self.lag_s
+        )
+    }
+}
+
 /// An effect on a channel's bias. Online semantics are those of [`crate::stage::bias`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Effect {
-    /// `b += c1 (T_l - t0) + c2 (T_l - t0)^2`, where `T_l` is the sensor temperature (°C) passed
-    /// through a first-order lag `dT_l/dt = (T - T_l) / lag_s` (`lag_s = 0`: no lag).
-    Temperature {
-        /// Reference temperature, °C.
-        t0_c: f64,
-        /// Linear coefficient, unit/°C.
-        c1_per_c: f64,
-        /// Quadratic coefficient, unit/°C².
-        c2_per_c2: f64,
-        /// Thermal lag time constant, s (≥ 0).
-        lag_s: f64,
-    },
+    /// A temperature term ([`TemperatureTerm`]).
+    Temperature(TemperatureTerm),
     /// `b += amplitude sin(2 pi freq_hz t + phase_rad)`, t = sensor time `t_ns·1e-9`, s.
     /// Online the amplitude and phase only seed a tracker (the phase of a live line drifts).
     VibrationLine {
@@ -388,17 +414,9 @@ impl ChannelBiasModel {
         for (j, e) in self.effects.iter().enumerate() {
             let ek = format!("{key}.effects[{j}]");
             match *e {
-                Effect::Temperature {
-                    t0_c,
-                    c1_per_c,
-                    c2_per_c2,
-                    lag_s,
-                } => {
+                Effect::Temperature(term) => {
                     n_temperature += 1;
-                    finite(errors, &format!("{ek}.t0_c"), t0_c);
-                    finite(errors, &format!("{ek}.c1_per_c"), c1_per_c);
-                    finite(errors, &format!("{ek}.c2_per_c2"), c2_per_c2);
-                    non_negative(errors, &format!("{ek}.lag_s"), lag_s);
+                    term.check(errors, &ek);
                 }
                 Effect::VibrationLine {
                     freq_hz,

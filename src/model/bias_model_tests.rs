@@ -133,12 +133,12 @@ fn example() -> BiasModelFile {
                 white_noise_var: 3.0e-6,
                 ar_of: ArOf::Signal,
                 effects: vec![
-                    Effect::Temperature {
+                    Effect::Temperature(TemperatureTerm {
                         t0_c: 25.0,
                         c1_per_c: 1e-4,
                         c2_per_c2: -2e-6,
                         lag_s: 30.0,
-                    },
+                    }),
                     Effect::VibrationLine {
                         freq_hz: 23.37,
                         amplitude: 0.01,
@@ -192,14 +192,26 @@ const ONE_CHANNEL: &str = r#"
 #[test]
 fn hand_written_toml_with_inline_effects_parses() {
     let effects = r#"effects = [ { kind = "vibration_line", freq_hz = 12.3, amplitude = 0.02, phase_rad = 0.0 },
-                                 { kind = "rate_random_walk", q_per_s = 1e-12 } ]"#;
+                                 { kind = "rate_random_walk", q_per_s = 1e-12 },
+                                 { kind = "temperature", t0_c = 25.0, c1_per_c = 1e-4, c2_per_c2 = 0.0, lag_s = 30.0 } ]"#;
     let m = BiasModelFile::from_toml_str(&format!("{ONE_CHANNEL}{effects}")).unwrap();
     assert_eq!(
         m.channels[0].ar_of,
         ArOf::Signal,
         "ar_of defaults to signal"
     );
-    assert_eq!(m.channels[0].effects.len(), 2);
+    assert_eq!(m.channels[0].effects.len(), 3);
+    // The temperature term keeps its flat keys beside `kind` (the file format of every earlier
+    // model file), though it is its own type in the code.
+    assert_eq!(
+        m.channels[0].effects[2],
+        Effect::Temperature(TemperatureTerm {
+            t0_c: 25.0,
+            c1_per_c: 1e-4,
+            c2_per_c2: 0.0,
+            lag_s: 30.0,
+        })
+    );
 }
 
 #[test]
@@ -210,6 +222,7 @@ fn unknown_fields_are_rejected() {
     for extra in [
         r#"colour = "blue""#,
         r#"effects = [ { kind = "step", t_s = 1.0, size = 0.1, extra = 2 } ]"#,
+        r#"effects = [ { kind = "temperature", t0_c = 25.0, c1_per_c = 1e-4, c2_per_c2 = 0.0, lag_s = 30.0, extra = 2 } ]"#,
     ] {
         assert!(
             matches!(

@@ -256,17 +256,9 @@ pub struct Prepared {
 /// [`Prepared`] for a stretch; each channel asked for
 /// but left out is said on `progress` with why.
 pub fn prepare(st: &Stretch, progress: &mut dyn Write) -> Result<Prepared> {
-    let Stretch {
-        log,
-        samples,
-        rate,
-        from_s,
-        channels,
-        out_dir,
-        ..
-    } = *st;
+    let samples = st.samples;
     ensure!(!samples.is_empty(), "the chosen stretch is empty");
-    let (chans, left_out) = present_channels(log, samples, &parse_channels(channels)?)?;
+    let (chans, left_out) = present_channels(st.log, samples, &parse_channels(st.channels)?)?;
     for (name, why) in &left_out {
         writeln!(progress, "{name}: skipped: {why}")?;
     }
@@ -281,12 +273,14 @@ pub fn prepare(st: &Stretch, progress: &mut dyn Write) -> Result<Prepared> {
         })
         .collect();
     let temp: Option<Vec<f64>> = samples.iter().map(|s| s.temp_c).collect();
-    let plots = out_dir.join("plots");
+    let plots = st.out_dir.join("plots");
     std::fs::create_dir_all(&plots).with_context(|| format!("creating {}", plots.display()))?;
     let source = format!(
-        "{} [{from_s} s .. +{:.1} s at {rate} Hz]",
-        log.display(),
-        samples.len() as f64 / rate
+        "{} [{} s .. +{:.1} s at {} Hz]",
+        st.log.display(),
+        st.from_s,
+        samples.len() as f64 / st.rate,
+        st.rate
     );
     Ok(Prepared {
         chans,

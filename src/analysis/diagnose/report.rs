@@ -50,16 +50,7 @@ pub fn effect_text(e: &Effect) -> String {
                 "vibration line f = {freq_hz:.5} Hz, A = {amplitude:.4e}, phase = {phase_rad:.3} rad"
             )
         }
-        Effect::Temperature {
-            t0_c,
-            c1_per_c,
-            c2_per_c2,
-            lag_s,
-        } => {
-            format!(
-                "temperature c1 = {c1_per_c:.4e}/°C, c2 = {c2_per_c2:.4e}/°C² about T0 = {t0_c:.2} °C, lag {lag_s:.1} s"
-            )
-        }
+        Effect::Temperature(term) => term.to_string(),
         Effect::Step { t_s, size } => format!("bias step at t = {t_s:.2} s, size {size:.4e}"),
         Effect::GSensitivity { coeffs_per_m_s2: k } => {
             format!(

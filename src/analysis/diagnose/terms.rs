@@ -8,7 +8,7 @@ use crate::analysis::AnalysisError;
 use crate::analysis::exogenous::{Exogenous, lagged_polynomial_scan};
 use crate::analysis::joint_model::{JointFit, LevelSpec, fit as joint_fit, fit_orders, mse};
 use crate::analysis::spectrum::refine_line;
-use crate::model::bias_model::Effect;
+use crate::model::bias_model::{Effect, TemperatureTerm};
 use std::f64::consts::PI;
 use std::ops::Range;
 
@@ -173,12 +173,12 @@ pub(super) fn effects_of(terms: &[Term], f: &JointFit, rate_hz: f64) -> Vec<Effe
                     phase_rad: b.atan2(a),
                 });
             }
-            Term::Temperature { lag, t0_c } => out.push(Effect::Temperature {
+            Term::Temperature { lag, t0_c } => out.push(Effect::Temperature(TemperatureTerm {
                 t0_c: *t0_c,
                 c1_per_c: f.beta[j],
                 c2_per_c2: f.beta[j + 1],
                 lag_s: *lag as f64 / rate_hz,
-            }),
+            })),
             Term::Step { index } => out.push(Effect::Step {
                 t_s: *index as f64 / rate_hz,
                 size: f.beta[j],

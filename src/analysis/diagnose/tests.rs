@@ -9,7 +9,7 @@
 
 use super::*;
 use crate::analysis::synth_test::{SynthLog, SynthSpec, generate};
-use crate::model::bias_model::Effect;
+use crate::model::bias_model::{Effect, TemperatureTerm};
 
 fn run_on(log: &SynthLog, y: &[f64]) -> ChannelDiagnosis {
     let f = &log.specific_force;
@@ -67,7 +67,7 @@ fn families(d: &ChannelDiagnosis) -> Vec<&str> {
         .iter()
         .map(|e| match e {
             Effect::VibrationLine { .. } => "vibration_line",
-            Effect::Temperature { .. } => "temperature",
+            Effect::Temperature(_) => "temperature",
             Effect::Step { .. } => "bias_step",
             Effect::GSensitivity { .. } => "g_sensitivity",
             Effect::RateRandomWalk { .. } => "rate_random_walk",
@@ -111,12 +111,12 @@ fn temperature_bias_on_a_warm_up_is_found_with_its_coefficients() {
     // `temperature_coefficient_spread_over_seeds`.) ±5 % is > 4 sd here.
     let mut s = SynthSpec::clean(202);
     s.temperature = Some((30.0, 0.2, 0.02, 15.0));
-    let Effect::Temperature {
+    let Effect::Temperature(TemperatureTerm {
         t0_c,
         c1_per_c,
         c2_per_c2,
         lag_s,
-    } = only_effect(&s, "temperature")
+    }) = only_effect(&s, "temperature")
     else {
         panic!()
     };
@@ -303,15 +303,15 @@ fn temperature_coefficient_spread_over_seeds() {
         s.temperature = Some((30.0, 0.2, 0.02, 15.0));
         let log = generate(&s);
         let d = run_on(&log, &log.y);
-        let Some(Effect::Temperature {
+        let Some(Effect::Temperature(TemperatureTerm {
             t0_c,
             c1_per_c,
             c2_per_c2,
             lag_s,
-        }) = d
+        })) = d
             .effects
             .iter()
-            .find(|e| matches!(e, Effect::Temperature { .. }))
+            .find(|e| matches!(e, Effect::Temperature(_)))
             .cloned()
         else {
             panic!(

@@ -36,7 +36,7 @@ use super::slow::{SlowCtx, SlowTerm, lagged, select};
 use super::wander::{WanderKind, WanderParams, classify, innovations};
 use crate::analysis::AnalysisError;
 use crate::analysis::quantisation::{Quantisation, quantisation};
-use crate::model::bias_model::Effect;
+use crate::model::bias_model::{Effect, TemperatureTerm};
 use crate::model::{ArFit, burg, burg_orders};
 use crate::stats::check_series;
 use crate::stats::robust::upper_median;
@@ -525,12 +525,12 @@ pub fn diagnose_whole(
                 t_s: at[ti] as f64 / fs,
                 size: b[0],
             },
-            SlowTerm::Temperature { lag_s, t0_c } => Effect::Temperature {
+            SlowTerm::Temperature { lag_s, t0_c } => Effect::Temperature(TemperatureTerm {
                 t0_c: *t0_c,
                 c1_per_c: b[0],
                 c2_per_c2: b[1],
                 lag_s: *lag_s,
-            },
+            }),
             SlowTerm::GSensitivity => Effect::GSensitivity {
                 coeffs_per_m_s2: [b[0], b[1], b[2]],
             },

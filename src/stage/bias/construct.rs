@@ -100,15 +100,8 @@ impl BiasStage {
                     let mut n_lines = 0;
                     for e in &m.effects {
                         match *e {
-                            Effect::Temperature {
-                                t0_c,
-                                c1_per_c,
-                                c2_per_c2,
-                                lag_s,
-                            } => {
-                                state.temp = Some(TemperatureComp::new(
-                                    t0_c, c1_per_c, c2_per_c2, lag_s, fs,
-                                ));
+                            Effect::Temperature(term) => {
+                                state.temp = Some(TemperatureComp::new(&term, fs));
                             }
                             Effect::VibrationLine {
                                 freq_hz,

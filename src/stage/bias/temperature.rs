@@ -5,6 +5,8 @@
 //! form over k samples of period dt is `T_l <- T + (T_l - T) exp(-k dt / tau)`. The bias term is
 //! the polynomial `c1 (T_l - T0) + c2 (T_l - T0)^2` learned by `diagnose` (issue 6).
 
+use crate::model::bias_model::TemperatureTerm;
+
 /// Lagged temperature polynomial of one channel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TemperatureComp {
@@ -17,17 +19,17 @@ pub struct TemperatureComp {
 }
 
 impl TemperatureComp {
-    /// Compensation `c1 (T_l - t0) + c2 (T_l - t0)^2` with lag `lag_s` at `sample_rate_hz`.
-    pub fn new(t0_c: f64, c1_per_c: f64, c2_per_c2: f64, lag_s: f64, sample_rate_hz: f64) -> Self {
-        let decay_per_step = if lag_s > 0.0 {
-            (-1.0 / (lag_s * sample_rate_hz)).exp()
+    /// The compensation of `term` at `sample_rate_hz`.
+    pub fn new(term: &TemperatureTerm, sample_rate_hz: f64) -> Self {
+        let decay_per_step = if term.lag_s > 0.0 {
+            (-1.0 / (term.lag_s * sample_rate_hz)).exp()
         } else {
             0.0
         };
         TemperatureComp {
-            t0_c,
-            c1_per_c,
-            c2_per_c2,
+            t0_c: term.t0_c,
+            c1_per_c: term.c1_per_c,
+            c2_per_c2: term.c2_per_c2,
             decay_per_step,
             lagged_c: None,
         }
@@ -66,12 +68,21 @@ impl TemperatureComp {
 mod tests {
     use super::*;
 
+    fn term(t0_c: f64, c1_per_c: f64, c2_per_c2: f64, lag_s: f64) -> TemperatureTerm {
+        TemperatureTerm {
+            t0_c,
+            c1_per_c,
+            c2_per_c2,
+            lag_s,
+        }
+    }
+
     #[test]
     fn lag_follows_the_first_order_step_response() {
         // Step 20 -> 30 °C at t = 0 (after one reading at 20): T_l(t) = 30 - 10 exp(-t/tau)
         // exactly at the sample instants (the discretisation is exact for a held input).
         let (fs, tau) = (100.0, 5.0);
-        let mut tc = TemperatureComp::new(25.0, 0.1, 0.01, tau, fs);
+        let mut tc = TemperatureComp::new(&term(25.0, 0.1, 0.01, tau), fs);
         tc.update(Some(20.0), 1);
         for k in 1..=2000 {
             let term = tc.update(Some(30.0), 1).unwrap();
@@ -92,7 +103,7 @@ mod tests {
 
     #[test]
     fn missing_temperature_holds_the_lagged_value() {
-        let mut tc = TemperatureComp::new(25.0, 1.0, 0.0, 0.0, 100.0);
+        let mut tc = TemperatureComp::new(&term(25.0, 1.0, 0.0, 0.0), 100.0);
         assert_eq!(tc.update(None, 1), None, "no reading yet: no compensation");
         assert_eq!(tc.update(Some(27.0), 1), Some(2.0));
         assert_eq!(tc.update(None, 1), Some(2.0));
