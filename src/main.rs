@@ -137,7 +137,7 @@ enum Cmd {
     /// the AR bias model per channel (bias stage; Burg, Yule-Walker, covariance or linear FOS)
     /// → DIR/bias.toml.
     Fit {
-        /// Recorded log to fit on.
+        /// Recorded log to fit on (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with no flags, what it found said on stderr).
         log: PathBuf,
         /// Directory for the model files (created if needed).
         #[arg(long, default_value = "models")]
@@ -191,7 +191,7 @@ enum Cmd {
     /// more than its noise; one report, plots, and one bias model (DIR/bias.toml) that the
     /// daemon's [bias] model can load.
     Diagnose {
-        /// Recorded log.
+        /// Recorded log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with no flags, what it found said on stderr).
         log: PathBuf,
         /// Channels (gx gy gz ax ay az); repeatable; default all.
         #[arg(long = "channel")]
@@ -222,7 +222,7 @@ enum Cmd {
     /// directions. Writes DIR/report.txt, DIR/report.json and, when something is kept,
     /// DIR/calibration.toml ([bias.settings.accel], [bias.settings.gyro], usable as --config).
     Calibrate {
-        /// Recorded log.
+        /// Recorded log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with no flags, what it found said on stderr).
         log: PathBuf,
         /// Analyse only from this time, s from the start of the log...
         #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
@@ -244,7 +244,7 @@ enum Cmd {
     /// Compare methods on the same data. `--detectors --scenario S.toml`: gross-error detectors
     /// against the simulator's truth. `LOG --channel C`: the bias models of the FOS paper.
     Compare {
-        /// Recorded log (bias-model comparison).
+        /// Recorded log for the bias-model comparison (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with no flags, what it found said on stderr).
         log: Option<PathBuf>,
         /// Compare gross-error detectors (needs --scenario: truth comes from the simulator).
         #[arg(long)]
@@ -299,7 +299,7 @@ enum Cmd {
     /// IEEE-952 terms fitted to it, a plot, and exports (Kalibr imu.yaml, GNSS_IMU config lines,
     /// bias model TOML) in OUT_DIR.
     Allan {
-        /// Static recording (replay log); the samples are taken as equally spaced at its rate.
+        /// Static recording (replay log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with no flags, what it found said on stderr)); the samples are taken as equally spaced at its rate.
         log: PathBuf,
         /// Channels (gx gy gz in rad/s, ax ay az in m/s^2); repeatable; default all.
         #[arg(long = "channel")]

@@ -96,39 +96,112 @@ fn csv_with_only_a_header_fails_import() {
     assert!(err.contains("no data rows"), "{err}");
 }
 
-/// A CSV or a protocol recording given to a command that reads only native logs (`fit`,
-/// `allan`, `diagnose`, `calibrate`, `compare`): the error names the way in that this command
-/// has — `imuprep import` — not only `--protocol`, which these commands do not take.
+/// A CSV or a protocol recording given to an analysis command (`fit`, `allan`, `diagnose`,
+/// `calibrate`, `compare`) is read as `imuprep import` reads it, with no flags: the command's
+/// results are those on the log `import` writes, to the byte, and stderr says what was done
+/// and the way to keep it as a log. Once these commands refused such a file and named
+/// `import` as the way in.
 #[test]
-fn analysis_commands_refusing_a_csv_or_a_recording_name_import_as_the_way_in() {
+fn analysis_commands_read_a_csv_or_a_recording_as_import_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let scn = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.toml");
+    let sim = p("sim.log");
+    let steps: [&[&str]; 5] = [
+        &[
+            "simulate",
+            scn,
+            "--set",
+            "motion.duration_s=300",
+            "-o",
+            &sim,
+        ],
+        &["export", &sim, "-o", &p("sim.csv")],
+        &["export", &sim, "--to", "ulog", "-o", &p("sim.ulg")],
+        &["import", &p("sim.csv"), "-o", &p("csv.log")],
+        &["import", &p("sim.ulg"), "-o", &p("ulg.log")],
+    ];
+    for args in steps {
+        let (code, err) = run(args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+    }
+    for (direct, imported) in [("sim.csv", "csv.log"), ("sim.ulg", "ulg.log")] {
+        let fit = |input: &str| {
+            let out = p(&format!("fit-{input}"));
+            let (code, err) = run(&["fit", &p(input), "--train-s", "250", "--out-dir", &out]);
+            assert_eq!(code, 0, "fit {input}: {err}");
+            let read = |f: &str| std::fs::read_to_string(format!("{out}/{f}")).unwrap();
+            (read("arima.toml"), read("bias.toml"), err)
+        };
+        let (arima, bias, err) = fit(direct);
+        assert!(
+            err.contains("not an imuprep log: read as `imuprep import` reads it"),
+            "{direct}: {err}"
+        );
+        assert!(err.contains("-o OUT.log` keeps it as a log"), "{err}");
+        let (arima_log, bias_log, _) = fit(imported);
+        assert_eq!(arima, arima_log, "{direct}: arima.toml");
+        assert_eq!(bias, bias_log, "{direct}: bias.toml");
+        assert!(
+            bias.contains("[[channels]]"),
+            "a bias model was fitted: {bias}"
+        );
+    }
+    // Every analysis command takes the CSV (the data is a short bench: each command's own
+    // verdict on it, as on its log — compare's is "record too short" — but no refusal of the
+    // file).
+    for cmd in ["allan", "diagnose", "calibrate", "compare"] {
+        let out = p(&format!("{cmd}-out"));
+        let csv = p("sim.csv");
+        let args: Vec<&str> = match cmd {
+            "compare" => vec![cmd, &csv],
+            _ => vec![cmd, &csv, "--out-dir", &out],
+        };
+        let (_, err) = run(&args);
+        assert!(err.contains("not an imuprep log: read as"), "{cmd}: {err}");
+        assert!(!err.contains("wrong magic"), "{cmd}: {err}");
+        assert!(!err.contains("panicked"), "{cmd}: {err}");
+    }
+}
+
+/// What cannot be read as a recording is still said: a one-row CSV has no sample rate, text
+/// that is no table is an input problem (exit 3), and a log from a newer imuprep is refused as
+/// that, not taken for another format.
+#[test]
+fn analysis_commands_say_what_they_cannot_read() {
     let dir = tempfile::tempdir().unwrap();
     let csv = write(
         &dir.path().join("imu.csv"),
         b"t,gx,gy,gz,ax,ay,az,temp\n0,0,0,0,0,0,9.8,20\n",
     );
-    let mav = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/reference/mavlink_stream.bin"
+    let text = write(
+        &dir.path().join("notes.txt"),
+        b"hello world\nthis is prose\n",
     );
+    let mut newer = b"IMUPLOG\0".to_vec();
+    newer.extend_from_slice(&[99, 0, 0, 0]);
+    newer.extend_from_slice(&[0; 64]);
+    let newer = write(&dir.path().join("newer.log"), &newer);
     let out = dir.path().join("out");
     let out = out.to_str().unwrap();
     for cmd in ["fit", "allan", "diagnose", "calibrate"] {
         let (code, err) = run(&[cmd, &csv, "--out-dir", out]);
         assert_eq!(code, 1, "{cmd}: {err}");
-        assert!(err.contains("starts with text (a CSV?)"), "{cmd}: {err}");
-        assert!(err.contains("imuprep import"), "{cmd}: {err}");
-        let (code, err) = run(&[cmd, mav, "--out-dir", out]);
-        assert_eq!(code, 1, "{cmd}: {err}");
         assert!(
-            err.contains("looks like a mavlink recording"),
+            err.contains("1 sample imported, but its time stamps give no sample rate"),
             "{cmd}: {err}"
         );
-        assert!(err.contains("imuprep import"), "{cmd}: {err}");
+        let (code, err) = run(&[cmd, &text, "--out-dir", out]);
+        assert_eq!(code, 3, "{cmd}: {err}");
+        assert!(
+            err.contains("text, but not a table of numbers"),
+            "{cmd}: {err}"
+        );
+        let (code, err) = run(&[cmd, &newer, "--out-dir", out]);
+        assert_eq!(code, 1, "{cmd}: {err}");
+        assert!(err.contains("unsupported log version 99"), "{cmd}: {err}");
         assert!(!err.contains("panicked"), "{cmd}: {err}");
     }
-    let (code, err) = run(&["compare", &csv]);
-    assert_eq!(code, 1, "{err}");
-    assert!(err.contains("imuprep import"), "{err}");
 }
 
 /// `simulate -o` into a place that cannot be written: one error line naming the file, with

@@ -250,6 +250,18 @@ pub enum LogHeaderError {
     Foreign(&'static str),
 }
 
+impl LogHeaderError {
+    /// The file is some other recording (or no recording at all), not a damaged or newer log.
+    pub fn not_a_log(&self) -> bool {
+        matches!(
+            self,
+            LogHeaderError::BadMagic(_)
+                | LogHeaderError::LooksLike(..)
+                | LogHeaderError::Foreign(_)
+        )
+    }
+}
+
 /// ", it starts with text (a CSV?)" when the first bytes are printable ASCII, else nothing.
 fn starts_with_text(m: &[u8; 8]) -> &'static str {
     if m.iter()

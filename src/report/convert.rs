@@ -66,6 +66,48 @@ pub fn import(
     proto: &ProtocolArgs,
     o: &ImportOptions,
 ) -> Result<ImportReport> {
+    load(input, proto, o)?.write(output)
+}
+
+/// A recording read as `import` reads it, held in memory: the samples and what was found.
+#[derive(Debug)]
+pub struct Loaded {
+    pub input: PathBuf,
+    pub accel_input: Option<PathBuf>,
+    /// `"<protocol> input: <what was found>"` when the input went through a protocol decoder.
+    pub decoded: Option<String>,
+    /// What the import found in the time stamps (and, for a table, its units and columns).
+    pub timing: Option<String>,
+    pub descriptor: crate::frame::Descriptor,
+    pub samples: Vec<crate::sample::Sample>,
+}
+
+impl Loaded {
+    /// The samples written to `output` as a native log, and the report of it.
+    pub fn write(self, output: &Path) -> Result<ImportReport> {
+        csvio::write_log(output, &self.descriptor, &self.samples)?;
+        Ok(self.report(output))
+    }
+
+    /// The report of an import into `output` (an empty path: none written).
+    pub fn report(&self, output: &Path) -> ImportReport {
+        ImportReport {
+            input: self.input.clone(),
+            accel_input: self.accel_input.clone(),
+            output: output.to_path_buf(),
+            decoded: self.decoded.clone(),
+            timing: self.timing.clone(),
+            samples: self.samples.len(),
+            // The span of the stamps: first to last would be negative across a restart.
+            duration_s: span_s(&self.samples),
+            sample_rate_hz: self.descriptor.sample_rate_hz,
+        }
+    }
+}
+
+/// Read `input` as [`import`] does (a text table as `o` says, else any protocol the decoders
+/// read, a bag or a bag directory), without writing it.
+pub fn load(input: &Path, proto: &ProtocolArgs, o: &ImportOptions) -> Result<Loaded> {
     if let Some(r) = o.time_from_index_hz {
         ensure!(r.is_finite() && r > 0.0, "--rate must be > 0 Hz");
     }
@@ -73,7 +115,7 @@ pub fn import(
     #[cfg(any(feature = "ros2", feature = "ros2-sqlite"))]
     if let Some((dir, inflated, said)) = inflate_whole(input)? {
         // What the inflated copy's import says names the input, not the temporary copy.
-        let mut r = import(&inflated, output, proto, o).map_err(|e| {
+        let mut r = load(&inflated, proto, o).map_err(|e| {
             let named = input.display().to_string();
             let text = format!("{e:#}")
                 .replace(&inflated.display().to_string(), &named)
@@ -97,7 +139,6 @@ pub fn import(
         let bag = crate::io::ros1::read_bag(input, &pc.mcap);
         return import_bag(
             input,
-            output,
             o,
             "a ROS 1 bag that cannot be imported",
             "ROS 1 bag",
@@ -109,7 +150,7 @@ pub fn import(
         let pc = protocol_config(proto);
         let bag = crate::io::ros2_db3::read_db3(input, &pc.mcap);
         let what = "an SQLite file that cannot be imported as a ROS 2 bag";
-        return import_bag(input, output, o, what, "ROS 2 bag (SQLite)", bag);
+        return import_bag(input, o, what, "ROS 2 bag (SQLite)", bag);
     }
     // A directory (a rosbag2 bag is one): its MCAP file, or its files split as rosbag2 splits a
     // long recording, read as one; anything else is said.
@@ -117,7 +158,7 @@ pub fn import(
         let files = bag_dir_files(input)?;
         // One file, or a build that reads no MCAP (its first file then says so).
         if files.len() == 1 || !cfg!(feature = "ros2") {
-            return import(&files[0], output, proto, o);
+            return load(&files[0], proto, o);
         }
         let mut pc = ProtocolConfig::auto();
         proto.apply(&mut pc);
@@ -127,7 +168,7 @@ pub fn import(
             files.len(),
             names(&files)
         );
-        return written(input, None, output, (&d, &samples), Some(decoded), timing);
+        return Ok(loaded(input, None, (d, samples), Some(decoded), timing));
     }
     // A text table by its name (.csv, .csv.gz: read as one whatever its content, as always), or
     // by its content (any other name: text with a consistent delimiter; a binary file goes to
@@ -166,7 +207,7 @@ pub fn import(
         let (d, s, decoded, timing) = decoded(input, read_any_whole(input, &pc)?, o)?;
         (d, s, Some(decoded), timing)
     };
-    written(input, None, output, (&d, &samples), decoded, timing)
+    Ok(loaded(input, None, (d, samples), decoded, timing))
 }
 
 /// A protocol decoder's whole-file result as an import: checked for input that decodes to
@@ -226,12 +267,11 @@ fn protocol_config(proto: &ProtocolArgs) -> ProtocolConfig {
 #[cfg(any(feature = "ros1", feature = "ros2-sqlite"))]
 fn import_bag<E: std::fmt::Display>(
     input: &Path,
-    output: &Path,
     o: &ImportOptions,
     what: &str,
     label: &str,
     bag: std::result::Result<crate::io::bag::BagRead, E>,
-) -> Result<ImportReport> {
+) -> Result<Loaded> {
     let mut bag = bag.map_err(|e| InputProblem(format!("{}: {what}: {e}", input.display())))?;
     if bag.samples.is_empty() {
         return Err(InputProblem(format!(
@@ -245,14 +285,13 @@ fn import_bag<E: std::fmt::Display>(
     let tf = crate::io::convert::rederive_whole(&mut bag.samples, &mut d);
     d.gyro_range_rad_s = o.gyro_range_rad_s;
     d.accel_range_m_s2 = o.accel_range_m_s2;
-    written(
+    Ok(loaded(
         input,
         None,
-        output,
-        (&d, &bag.samples),
+        (d, bag.samples),
         Some(format!("{label} input: {}", bag.found)),
         Some(tf.to_string()),
-    )
+    ))
 }
 
 /// rosbag2's file compression (`compression_mode: file`): `input` a file compressed whole with
@@ -344,27 +383,22 @@ fn bag_dir_files(dir: &Path) -> Result<Vec<PathBuf>> {
     }
 }
 
-/// The imported samples written to `output` as a native log, and the report of it.
-fn written(
+/// The imported samples and what was said of them.
+fn loaded(
     input: &Path,
     accel_input: Option<&Path>,
-    output: &Path,
-    (d, samples): (&crate::frame::Descriptor, &[crate::sample::Sample]),
+    (descriptor, samples): (crate::frame::Descriptor, Vec<crate::sample::Sample>),
     decoded: Option<String>,
     timing: Option<String>,
-) -> Result<ImportReport> {
-    csvio::write_log(output, d, samples)?;
-    Ok(ImportReport {
+) -> Loaded {
+    Loaded {
         input: input.to_path_buf(),
         accel_input: accel_input.map(Path::to_path_buf),
-        output: output.to_path_buf(),
         decoded,
         timing,
-        samples: samples.len(),
-        // The span of the stamps: first to last would be negative across a restart.
-        duration_s: span_s(samples),
-        sample_rate_hz: d.sample_rate_hz,
-    })
+        descriptor,
+        samples,
+    }
 }
 
 /// Latest minus earliest time stamp, s.
@@ -388,14 +422,7 @@ pub fn import_per_sensor(
     o: &ImportOptions,
 ) -> Result<ImportReport> {
     let (d, s, report) = csvio::read_per_sensor_report(gyro, accel, o)?;
-    written(
-        gyro,
-        Some(accel),
-        output,
-        (&d, &s),
-        None,
-        Some(report.to_string()),
-    )
+    loaded(gyro, Some(accel), (d, s), None, Some(report.to_string())).write(output)
 }
 
 /// A native log's sequence and frame faults, said at import as a CSV's time faults are (they

@@ -71,7 +71,17 @@ pub fn load_span_to(log: &Path, skip_s: f64, span_s: Option<f64>) -> Result<(f64
         log.display(),
         span_s.map(|s| format!(" for {s} s")).unwrap_or_default()
     );
-    let (desc, samples, _) = crate::io::csv::read_log_span(log, skip_s, span_s)?;
+    let (desc, samples) = if log.is_dir() {
+        imported_span(log, skip_s, span_s)?
+    } else {
+        match crate::io::csv::read_log_span(log, skip_s, span_s) {
+            Ok((desc, samples, _)) => (desc, samples),
+            Err(crate::io::log::LogError::Header { err, .. }) if err.not_a_log() => {
+                imported_span(log, skip_s, span_s)?
+            }
+            Err(e) => return Err(e.into()),
+        }
+    };
     let rate = desc.map(|d| d.sample_rate_hz).unwrap_or(0.0);
     ensure!(
         rate > 0.0,
@@ -87,6 +97,49 @@ pub fn load_span_to(log: &Path, skip_s: f64, span_s: Option<f64>) -> Result<(f64
         span_s.map(|s| format!(" for {s} s")).unwrap_or_default()
     );
     Ok((rate, samples))
+}
+
+/// A recording that is not an imuprep log (a CSV, a sensor protocol's file, a bag) read as
+/// `imuprep import` reads it with no flags, and what the import found said on the log (units,
+/// rate, time faults, each as `import` says them); then the span, counted in samples at the
+/// found rate as for a log. The import is encoded as a log in memory and decoded again, so
+/// every command sees the samples the log `imuprep import` writes would give it, to the bit
+/// (the log holds single-precision values and the decoder's flags).
+fn imported_span(
+    path: &Path,
+    skip_s: f64,
+    span_s: Option<f64>,
+) -> Result<(Option<crate::frame::Descriptor>, Vec<Sample>)> {
+    let defaults = crate::io::csv::ImportOptions::default();
+    let loaded = convert::load(path, &Default::default(), &defaults)?;
+    let r = loaded.report(Path::new(""));
+    tracing::info!(
+        "{}: not an imuprep log: read as `imuprep import` reads it, with no flags (`imuprep import {} -o OUT.log` keeps it as a log and takes flags for its units and columns)",
+        path.display(),
+        path.display()
+    );
+    for line in r.decoded.iter().chain(&r.timing).flat_map(|t| t.lines()) {
+        tracing::info!("import: {line}");
+    }
+    let mut bytes = bytes::BytesMut::new();
+    crate::io::log::encode_log(&loaded.descriptor, &loaded.samples, &mut bytes);
+    drop(loaded);
+    let (desc, mut samples, _) = crate::io::log::decode_log(&bytes)
+        .with_context(|| format!("{}: the import as a log", path.display()))?;
+    let rate = desc.map_or(0.0, |d| d.sample_rate_hz);
+    ensure!(
+        rate > 0.0,
+        "{}: {} imported, but its time stamps give no sample rate (`imuprep import` with --rate sets one)",
+        path.display(),
+        crate::text::count(samples.len() as u64, "sample", "samples")
+    );
+    let to_samples = |t: f64| (t * rate).round().max(0.0) as usize;
+    let skip = to_samples(skip_s).min(samples.len());
+    samples.drain(..skip);
+    if let Some(span) = span_s {
+        samples.truncate(to_samples(span));
+    }
+    Ok((desc, samples))
 }
 
 /// Channel names (gx gy gz ax ay az) → indices; none given = all six.
