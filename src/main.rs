@@ -432,9 +432,11 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             summary_json,
             proto,
         } => {
-            let mut cfg = report::daemon::replay_config(load_config(&config)?, log, speed, &proto)?;
-            report::daemon::add_outs(&mut cfg, &out)?;
-            daemon(cfg, summary_json)
+            let mut replay =
+                report::daemon::replay_config(load_config(&config)?, log, speed, &proto)?;
+            report::daemon::add_outs(&mut replay.cfg, &out)?;
+            // `replay.imported` (a CSV's or bag's log) lives until the run has ended.
+            daemon(replay.cfg, summary_json)
         }
         Cmd::Import {
             input,

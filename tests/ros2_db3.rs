@@ -123,17 +123,29 @@ fn import_and_replay_from_the_command_line() {
             "1 gap (1 sample missing)",
         ],
     );
-    let out = run(&["replay", log.to_str().unwrap()]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    // The bag on replay, its directory or its file: imported into a temporary log and that
+    // replayed, the output the replay of the log `import` wrote.
+    let replayed = |input: &str, name: &str| {
+        let csv = dir.path().join(name);
+        let out = run(&["replay", input, "--out", &format!("csv:{}", csv.display())]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{input}: {err}");
+        std::fs::read(csv).unwrap()
+    };
+    let of_log = replayed(log.to_str().unwrap(), "log.csv");
+    assert_eq!(
+        of_log.iter().filter(|b| **b == b'\n').count(),
+        61,
+        "a header, 60 samples"
     );
-    // The bag itself on replay: said, with the way (import first).
-    let out = run(&["replay", BAG_FILE]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success());
-    assert!(err.contains("import it first"), "{err}");
+    assert!(
+        replayed(BAG_DIR, "dir.csv") == of_log,
+        "replay of the bag directory"
+    );
+    assert!(
+        replayed(BAG_FILE, "file.csv") == of_log,
+        "replay of the bag file"
+    );
     // An SQLite file that is no bag, and a topic not in the bag: errors naming why.
     let not_bag = Path::new("tests/reference/db3_not_a_bag.db3");
     let out = run(&[

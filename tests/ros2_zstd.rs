@@ -263,13 +263,19 @@ mod mcap {
         let err = String::from_utf8_lossy(&out.stderr);
         assert_says(&err, &["cut.mcap.zstd: zstd"]);
         assert!(!Path::new(&log).exists());
-        // `replay` does not stream a compressed file: it says to import it.
+        // `replay` imports a compressed file (no decoder streams one): the same error, and
+        // the whole file replays.
         let r = imuprep(&["replay", cut.to_str().unwrap()]);
         assert!(!r.status.success());
         assert_says(
             &String::from_utf8_lossy(&r.stderr),
-            &["a zstd-compressed file", "imuprep import"],
+            &["cut.mcap.zstd: zstd"],
         );
+        let whole = format!("{R}/zstd_file_bag/zstd_file_bag.mcap.zstd");
+        let r = imuprep(&["replay", &whole]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(r.status.success(), "{err}");
+        assert_says(&err, &["zstd-compressed whole (rosbag2 file compression)"]);
     }
 }
 

@@ -153,19 +153,84 @@ fn nan_values_are_flagged_and_passed_on() {
 #[test]
 fn replay_refuses_a_file_that_is_not_a_log() {
     let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join("x.log");
-    std::fs::write(&p, b"this is not an imuprep log").unwrap();
-    let out = Command::new(common::bin())
-        .arg("replay")
-        .arg(&p)
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let replay = |name: &str, bytes: &[u8]| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        let out = Command::new(common::bin())
+            .arg("replay")
+            .arg(&p)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        (out.status.code(), err)
+    };
+    // Binary that no decoder knows: the magic is wrong, and the flag that detects a sensor
+    // protocol is named.
+    let (code, err) = replay("x.log", &[0xFE; 64]);
+    assert_eq!(code, Some(1), "{err}");
     assert!(err.contains("wrong magic"), "{err}");
     assert!(
         err.contains("--protocol auto"),
         "the way out is named: {err}"
+    );
+    // Text goes to `import`, which reads a table (below) and says why other text is none.
+    let (code, err) = replay("y.log", b"this is not an imuprep log");
+    assert_eq!(code, Some(3), "an input problem: {err}");
+    assert!(err.contains("text, but not a table of numbers"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+/// A CSV given to `replay` is imported with no flags into a temporary log and that log replayed:
+/// the cleaned output is the replay of the log `import` writes, byte for byte.
+#[test]
+fn replay_of_a_csv_is_the_replay_of_its_import() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let scn = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.toml");
+    let run = |args: &[&str]| {
+        let out = Command::new(common::bin()).args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{args:?}: {err}");
+        err
+    };
+    run(&[
+        "simulate",
+        scn,
+        "--set",
+        "motion.duration_s=60",
+        "-o",
+        &p("s.log"),
+    ]);
+    run(&["export", &p("s.log"), "-o", &p("s.csv")]);
+    run(&["import", &p("s.csv"), "-o", &p("i.log")]);
+    let err = run(&[
+        "replay",
+        &p("s.csv"),
+        "--out",
+        &format!("csv:{}", p("a.csv")),
+    ]);
+    assert!(
+        err.contains("not an imuprep log: read as `imuprep import` reads it"),
+        "{err}"
+    );
+    run(&[
+        "replay",
+        &p("i.log"),
+        "--out",
+        &format!("csv:{}", p("b.csv")),
+    ]);
+    let (a, b) = (
+        std::fs::read(p("a.csv")).unwrap(),
+        std::fs::read(p("b.csv")).unwrap(),
+    );
+    assert!(
+        a.len() > 6000 * 40,
+        "the whole minute was replayed: {} bytes",
+        a.len()
+    );
+    assert!(
+        a == b,
+        "replay of the CSV differs from replay of its import"
     );
 }
 

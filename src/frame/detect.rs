@@ -298,6 +298,16 @@ pub fn foreign_format(head: &[u8]) -> Option<&'static str> {
     }
 }
 
+/// A recording `import` reads in this build but no streaming decoder does (a ROS 1 bag, a
+/// ROS 2 bag in SQLite, a zstd-compressed bag file), told by its first bytes (as
+/// [`foreign_format`] names them).
+pub fn import_only(head: &[u8]) -> bool {
+    (cfg!(feature = "ros1") && head.starts_with(b"#ROSBAG V2.0"))
+        || (cfg!(feature = "ros2-sqlite") && head.starts_with(b"SQLite "))
+        || (cfg!(any(feature = "ros2", feature = "ros2-sqlite"))
+            && head.starts_with(&[0x28, 0xB5, 0x2F, 0xFD]))
+}
+
 /// The first bytes of `path` told as a [`foreign_format`] (nothing when it cannot be read).
 pub fn foreign_file(path: &std::path::Path) -> Option<&'static str> {
     use std::io::Read;

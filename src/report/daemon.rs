@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, anyhow, ensure};
 
 use crate::config::{Config, SourceConfig};
-use crate::frame::detect::ProtocolArgs;
+use crate::frame::detect::{ProtocolArgs, ProtocolChoice};
 use crate::runtime::Health;
 
 /// `--out SPEC` flags → extra sinks of `cfg`; every bad spec is reported at once.
@@ -22,24 +22,69 @@ pub fn add_outs(cfg: &mut Config, outs: &[String]) -> Result<()> {
     Ok(())
 }
 
+/// A replay's config, and the temporary directory holding the log `import` made of its input
+/// when the input was imported (removed when this is dropped: keep it until the run ends).
+pub struct Replay {
+    pub cfg: Config,
+    pub imported: Option<tempfile::TempDir>,
+}
+
 /// `cfg` turned into a replay of `log` at `speed` (0 = as fast as possible), with the protocol
-/// flags applied and the log's declared rate given to the stages.
+/// flags applied and the log's declared rate given to the stages. A recording no streaming
+/// decoder reads but `import` does (a CSV or other text table, a bag directory, a ROS 1 or
+/// SQLite bag in a build that imports them) is imported with no flags into a temporary log,
+/// what the import found said on stderr, and that log replayed; with `--protocol` naming a
+/// sensor protocol the file is that protocol's, as ever.
 pub fn replay_config(
     mut cfg: Config,
     log: PathBuf,
     speed: f64,
     proto: &ProtocolArgs,
-) -> Result<Config> {
+) -> Result<Replay> {
     proto.apply(&mut cfg.protocol);
     let errs = cfg.protocol.validate();
     ensure!(errs.is_empty(), "{errs:?}");
     ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
+    let (log, imported) = if through_import(&log, cfg.protocol.protocol) {
+        let dir = tempfile::tempdir()?;
+        let path = dir.path().join("imported.log");
+        let loaded = super::convert::load(&log, proto, &Default::default())?;
+        super::say_imported(&log, &loaded.write(&path)?);
+        (path, Some(dir))
+    } else {
+        (log, None)
+    };
     // The log declares its rate: the stages use it rather than the config's nominal one.
     if let Ok(Some(d)) = crate::io::csv::read_descriptor(&log) {
         cfg.stages.set_sample_rate(d.sample_rate_hz)?;
     }
     cfg.source = SourceConfig::Replay { path: log, speed };
-    Ok(cfg)
+    Ok(Replay { cfg, imported })
+}
+
+/// Whether `replay` reads `log` through `import`: not a native log (nor a named sensor
+/// protocol's file), and text, a directory, or a bag only `import` reads.
+fn through_import(log: &Path, choice: ProtocolChoice) -> bool {
+    if !matches!(choice, ProtocolChoice::Native | ProtocolChoice::Auto) {
+        return false;
+    }
+    if log.is_dir() {
+        return true;
+    }
+    let mut head = [0u8; 16];
+    let n = std::fs::File::open(log)
+        .and_then(|mut f| std::io::Read::read(&mut f, &mut head))
+        .unwrap_or(0);
+    if head[..n].starts_with(&crate::frame::LOG_MAGIC) {
+        return false;
+    }
+    // Text that is no table goes to `import` too: it says why it is none.
+    crate::frame::detect::import_only(&head[..n])
+        || super::convert::is_csv_name(log)
+        || !matches!(
+            crate::io::csv::sniff_file(log),
+            crate::io::csv::Sniffed::Binary
+        )
 }
 
 /// Build the pipeline and run the daemon on a two-thread runtime until its source ends.

@@ -112,15 +112,7 @@ fn imported_span(
 ) -> Result<(Option<crate::frame::Descriptor>, Vec<Sample>)> {
     let defaults = crate::io::csv::ImportOptions::default();
     let loaded = convert::load(path, &Default::default(), &defaults)?;
-    let r = loaded.report(Path::new(""));
-    tracing::info!(
-        "{}: not an imuprep log: read as `imuprep import` reads it, with no flags (`imuprep import {} -o OUT.log` keeps it as a log and takes flags for its units and columns)",
-        path.display(),
-        path.display()
-    );
-    for line in r.decoded.iter().chain(&r.timing).flat_map(|t| t.lines()) {
-        tracing::info!("import: {line}");
-    }
+    say_imported(path, &loaded.report(Path::new("")));
     let mut bytes = bytes::BytesMut::new();
     crate::io::log::encode_log(&loaded.descriptor, &loaded.samples, &mut bytes);
     drop(loaded);
@@ -140,6 +132,19 @@ fn imported_span(
         samples.truncate(to_samples(span));
     }
     Ok((desc, samples))
+}
+
+/// What an import of `path` made for a command that takes a log found, said on the log (stderr):
+/// that it was imported with no flags, and the import's own lines.
+fn say_imported(path: &Path, r: &convert::ImportReport) {
+    tracing::info!(
+        "{}: not an imuprep log: read as `imuprep import` reads it, with no flags (`imuprep import {} -o OUT.log` keeps it as a log and takes flags for its units and columns)",
+        path.display(),
+        path.display()
+    );
+    for line in r.decoded.iter().chain(&r.timing).flat_map(|t| t.lines()) {
+        tracing::info!("import: {line}");
+    }
 }
 
 /// Channel names (gx gy gz ax ay az) → indices; none given = all six.
