@@ -336,7 +336,7 @@ enum Cmd {
     /// Write a recording's samples as canonical CSV plus seq and flags, or (--to) as a native
     /// log, UBX ESF-RAW, MAVLink HIGHRES_IMU or ULog sensor_combined stream.
     Export {
-        /// Recording to export (native log or a protocol file; detected).
+        /// Recording to export (native log or a protocol file, detected; or any recording `import` reads, a CSV or a bag, read as `import` reads it with no flags).
         log: PathBuf,
         /// Output file.
         #[arg(short, long)]

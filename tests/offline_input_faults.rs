@@ -97,8 +97,8 @@ fn csv_with_only_a_header_fails_import() {
 }
 
 /// A CSV or a protocol recording given to an analysis command (`fit`, `allan`, `diagnose`,
-/// `calibrate`, `compare`) is read as `imuprep import` reads it, with no flags: the command's
-/// results are those on the log `import` writes, to the byte, and stderr says what was done
+/// `calibrate`, `compare`), or a CSV to `export`, is read as `imuprep import` reads it, with no
+/// flags: the command's results are those on the log `import` writes, to the byte, and stderr says what was done
 /// and the way to keep it as a log. Once these commands refused such a file and named
 /// `import` as the way in.
 #[test]
@@ -147,6 +147,21 @@ fn analysis_commands_read_a_csv_or_a_recording_as_import_does() {
             "a bias model was fitted: {bias}"
         );
     }
+    // `export` too: a CSV into a ULog, the bytes of the export of its import's log.
+    for (input, out) in [("sim.csv", "direct.ulg"), ("csv.log", "of_log.ulg")] {
+        let (code, err) = run(&["export", &p(input), "--to", "ulog", "-o", &p(out)]);
+        assert_eq!(code, 0, "export {input}: {err}");
+    }
+    let direct = std::fs::read(p("direct.ulg")).unwrap();
+    assert!(
+        direct.len() > 30000 * 40,
+        "every sample: {} bytes",
+        direct.len()
+    );
+    assert!(
+        direct == std::fs::read(p("of_log.ulg")).unwrap(),
+        "export of the CSV"
+    );
     // Every analysis command takes the CSV (the data is a short bench: each command's own
     // verdict on it, as on its log — compare's is "record too short" — but no refusal of the
     // file).

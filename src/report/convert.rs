@@ -7,7 +7,7 @@ use anyhow::{Context, Result, ensure};
 use serde::Serialize;
 
 use super::{InputProblem, check_input};
-use crate::frame::detect::{ProtocolArgs, ProtocolConfig};
+use crate::frame::detect::{ProtocolArgs, ProtocolChoice, ProtocolConfig};
 use crate::io::convert::{ExportFormat, encode_stream, read_any, read_any_whole, read_files_whole};
 use crate::io::csv::{self as csvio, ImportOptions};
 use crate::io::sim_log::SimLogSummary;
@@ -32,6 +32,32 @@ pub fn parse_columns(cols: &[String], o: &mut ImportOptions) -> Result<()> {
 pub fn is_csv_name(p: &Path) -> bool {
     let n = p.to_string_lossy().to_ascii_lowercase();
     n.ends_with(".csv") || n.ends_with(".csv.gz")
+}
+
+/// Whether a command that streams recordings (`replay`, `export`) reads `log` through `import`
+/// instead: not a native log (nor a file `choice` names a sensor protocol's), and text, a
+/// directory, or a bag only `import` reads.
+pub fn through_import(log: &Path, choice: ProtocolChoice) -> bool {
+    if !matches!(choice, ProtocolChoice::Native | ProtocolChoice::Auto) {
+        return false;
+    }
+    if log.is_dir() {
+        return true;
+    }
+    let mut head = [0u8; 16];
+    let n = std::fs::File::open(log)
+        .and_then(|mut f| std::io::Read::read(&mut f, &mut head))
+        .unwrap_or(0);
+    if head[..n].starts_with(&crate::frame::LOG_MAGIC) {
+        return false;
+    }
+    // Text that is no table goes to `import` too: it says why it is none.
+    crate::frame::detect::import_only(&head[..n])
+        || is_csv_name(log)
+        || !matches!(
+            crate::io::csv::sniff_file(log),
+            crate::io::csv::Sniffed::Binary
+        )
 }
 
 /// `--columns t,gx,gy,gz,ax,ay,az` → the importer's columns by position.
@@ -509,20 +535,25 @@ pub fn export(
 ) -> Result<ExportReport> {
     let mut pc = ProtocolConfig::auto();
     proto.apply(&mut pc);
-    let f = read_any(log, &pc)?;
-    check_input(log, f.samples.len() as u64, &f.stats)?;
-    if to == ExportFormat::Csv {
-        csvio::write_csv(output, &f.samples)?;
+    let (descriptor, samples, stats) = if through_import(log, pc.protocol) {
+        super::imported_log(log, proto)?
     } else {
-        let d = f.descriptor.unwrap_or_default();
-        let b = encode_stream(to, &d, &f.samples)?;
+        let f = read_any(log, &pc)?;
+        check_input(log, f.samples.len() as u64, &f.stats)?;
+        (f.descriptor, f.samples, f.stats)
+    };
+    if to == ExportFormat::Csv {
+        csvio::write_csv(output, &samples)?;
+    } else {
+        let d = descriptor.unwrap_or_default();
+        let b = encode_stream(to, &d, &samples)?;
         std::fs::write(output, &b).with_context(|| format!("writing {}", output.display()))?;
     }
     Ok(ExportReport {
         output: output.to_path_buf(),
-        samples: f.samples.len(),
-        crc_errors: f.stats.crc_errors,
-        resyncs: f.stats.resyncs,
+        samples: samples.len(),
+        crc_errors: stats.crc_errors,
+        resyncs: stats.resyncs,
     })
 }
 

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, anyhow, ensure};
 
 use crate::config::{Config, SourceConfig};
-use crate::frame::detect::{ProtocolArgs, ProtocolChoice};
+use crate::frame::detect::ProtocolArgs;
 use crate::runtime::Health;
 
 /// `--out SPEC` flags → extra sinks of `cfg`; every bad spec is reported at once.
@@ -45,7 +45,7 @@ pub fn replay_config(
     let errs = cfg.protocol.validate();
     ensure!(errs.is_empty(), "{errs:?}");
     ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
-    let (log, imported) = if through_import(&log, cfg.protocol.protocol) {
+    let (log, imported) = if super::convert::through_import(&log, cfg.protocol.protocol) {
         let dir = tempfile::tempdir()?;
         let path = dir.path().join("imported.log");
         let loaded = super::convert::load(&log, proto, &Default::default())?;
@@ -60,31 +60,6 @@ pub fn replay_config(
     }
     cfg.source = SourceConfig::Replay { path: log, speed };
     Ok(Replay { cfg, imported })
-}
-
-/// Whether `replay` reads `log` through `import`: not a native log (nor a named sensor
-/// protocol's file), and text, a directory, or a bag only `import` reads.
-fn through_import(log: &Path, choice: ProtocolChoice) -> bool {
-    if !matches!(choice, ProtocolChoice::Native | ProtocolChoice::Auto) {
-        return false;
-    }
-    if log.is_dir() {
-        return true;
-    }
-    let mut head = [0u8; 16];
-    let n = std::fs::File::open(log)
-        .and_then(|mut f| std::io::Read::read(&mut f, &mut head))
-        .unwrap_or(0);
-    if head[..n].starts_with(&crate::frame::LOG_MAGIC) {
-        return false;
-    }
-    // Text that is no table goes to `import` too: it says why it is none.
-    crate::frame::detect::import_only(&head[..n])
-        || super::convert::is_csv_name(log)
-        || !matches!(
-            crate::io::csv::sniff_file(log),
-            crate::io::csv::Sniffed::Binary
-        )
 }
 
 /// Build the pipeline and run the daemon on a two-thread runtime until its source ends.

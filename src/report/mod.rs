@@ -100,24 +100,14 @@ pub fn load_span_to(log: &Path, skip_s: f64, span_s: Option<f64>) -> Result<(f64
 }
 
 /// A recording that is not an imuprep log (a CSV, a sensor protocol's file, a bag) read as
-/// `imuprep import` reads it with no flags, and what the import found said on the log (units,
-/// rate, time faults, each as `import` says them); then the span, counted in samples at the
-/// found rate as for a log. The import is encoded as a log in memory and decoded again, so
-/// every command sees the samples the log `imuprep import` writes would give it, to the bit
-/// (the log holds single-precision values and the decoder's flags).
+/// `imuprep import` reads it with no flags ([`imported_log`]); then the span, counted in
+/// samples at the found rate as for a log.
 fn imported_span(
     path: &Path,
     skip_s: f64,
     span_s: Option<f64>,
 ) -> Result<(Option<crate::frame::Descriptor>, Vec<Sample>)> {
-    let defaults = crate::io::csv::ImportOptions::default();
-    let loaded = convert::load(path, &Default::default(), &defaults)?;
-    say_imported(path, &loaded.report(Path::new("")));
-    let mut bytes = bytes::BytesMut::new();
-    crate::io::log::encode_log(&loaded.descriptor, &loaded.samples, &mut bytes);
-    drop(loaded);
-    let (desc, mut samples, _) = crate::io::log::decode_log(&bytes)
-        .with_context(|| format!("{}: the import as a log", path.display()))?;
+    let (desc, mut samples, _) = imported_log(path, &Default::default())?;
     let rate = desc.map_or(0.0, |d| d.sample_rate_hz);
     ensure!(
         rate > 0.0,
@@ -132,6 +122,23 @@ fn imported_span(
         samples.truncate(to_samples(span));
     }
     Ok((desc, samples))
+}
+
+/// `path` read as `imuprep import` reads it with `proto` and no other flag, what the import
+/// found said ([`say_imported`]), and the samples encoded as a log in memory and decoded again:
+/// to the bit what the log `import` writes would give (single-precision values, the decoder's
+/// flags), with that decoder's counters.
+pub(crate) fn imported_log(
+    path: &Path,
+    proto: &crate::frame::detect::ProtocolArgs,
+) -> Result<crate::io::log::LogContents> {
+    let loaded = convert::load(path, proto, &Default::default())?;
+    say_imported(path, &loaded.report(Path::new("")));
+    let mut bytes = bytes::BytesMut::new();
+    crate::io::log::encode_log(&loaded.descriptor, &loaded.samples, &mut bytes);
+    drop(loaded);
+    crate::io::log::decode_log(&bytes)
+        .with_context(|| format!("{}: the import as a log", path.display()))
 }
 
 /// What an import of `path` made for a command that takes a log found, said on the log (stderr):
