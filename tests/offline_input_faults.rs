@@ -180,8 +180,9 @@ fn analysis_commands_read_a_csv_or_a_recording_as_import_does() {
 }
 
 /// What cannot be read as a recording is still said: a one-row CSV has no sample rate, text
-/// that is no table is an input problem (exit 3), and a log from a newer imuprep is refused as
-/// that, not taken for another format.
+/// that is no table is an input problem (exit 3), a log from a newer imuprep is refused as
+/// that, not taken for another format, and a gzipped log is named as gzip with `gunzip` as the
+/// way.
 #[test]
 fn analysis_commands_say_what_they_cannot_read() {
     let dir = tempfile::tempdir().unwrap();
@@ -196,6 +197,12 @@ fn analysis_commands_say_what_they_cannot_read() {
     let mut newer = b"IMUPLOG\0".to_vec();
     newer.extend_from_slice(&[99, 0, 0, 0]);
     newer.extend_from_slice(&[0; 64]);
+    let gzipped = {
+        use std::io::Write;
+        let mut z = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        z.write_all(&newer).unwrap();
+        write(&dir.path().join("old.log.gz"), &z.finish().unwrap())
+    };
     let newer = write(&dir.path().join("newer.log"), &newer);
     let out = dir.path().join("out");
     let out = out.to_str().unwrap();
@@ -216,6 +223,21 @@ fn analysis_commands_say_what_they_cannot_read() {
         assert_eq!(code, 1, "{cmd}: {err}");
         assert!(err.contains("unsupported log version 99"), "{cmd}: {err}");
         assert!(!err.contains("panicked"), "{cmd}: {err}");
+        // A gzipped log: no table in it, said as what it is with the way (not "garbage").
+        let (code, err) = run(&[cmd, &gzipped, "--out-dir", out]);
+        assert_eq!(code, 3, "{cmd}: {err}");
+        assert!(
+            err.contains("a gzip-compressed file that holds no text table"),
+            "{cmd}: {err}"
+        );
+    }
+    for args in [
+        vec!["replay", &gzipped],
+        vec!["export", &gzipped, "-o", out],
+    ] {
+        let (code, err) = run(&args);
+        assert_ne!(code, 0, "{args:?}: {err}");
+        assert!(err.contains("gunzip"), "{args:?}: {err}");
     }
 }
 

@@ -275,6 +275,13 @@ pub fn foreign_format(head: &[u8]) -> Option<&'static str> {
              `ros2-sqlite` (.db3) imports it (`imuprep import FILE_OR_BAG_DIR -o OUT.log`); or \
              inflate it first (`zstd -d FILE`) and use what it holds"
         })
+    } else if head.starts_with(&[0x1F, 0x8B]) {
+        // A gzipped text table named `.gz` is read as it is (by `import` and every command
+        // that imports): this is said of one that holds something else, a log for one.
+        Some(
+            "a gzip-compressed file that holds no text table (a compressed log?): decompress it \
+             (`gunzip -k FILE`) and use what it holds",
+        )
     } else if head.starts_with(b"PK\x03\x04") {
         Some(
             "a zip archive (phone sensor apps export one): unpack it and import the table inside \
