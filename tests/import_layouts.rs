@@ -622,6 +622,17 @@ fn stated_units_the_data_contradict_are_kept_with_a_warning_naming_the_flag() {
         out.lines().any(|l| l.starts_with("WARNING: accel:")),
         "{out}"
     );
+    // An analysis command given the CSV imports it so and keeps the warning a warning.
+    let out = common::run_cli(&[
+        "allan",
+        p.to_str().unwrap(),
+        "--out-dir",
+        dir.path().join("allan").to_str().unwrap(),
+    ]);
+    assert!(
+        out.lines().any(|l| l.contains(" WARN ") && l.contains("import: accel:")),
+        "{out}"
+    );
     // An option that the data contradict: the same.
     let p = write(
         dir.path(),

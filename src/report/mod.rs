@@ -150,7 +150,11 @@ fn say_imported(path: &Path, r: &convert::ImportReport) {
         path.display()
     );
     for line in r.decoded.iter().chain(&r.timing).flat_map(|t| t.lines()) {
-        tracing::info!("import: {line}");
+        // The import's warnings (a stated unit the data contradict, …) stay warnings.
+        match line.strip_prefix("WARNING: ") {
+            Some(w) => tracing::warn!("import: {w}"),
+            None => tracing::info!("import: {line}"),
+        }
     }
 }
 
