@@ -630,7 +630,8 @@ fn stated_units_the_data_contradict_are_kept_with_a_warning_naming_the_flag() {
         dir.path().join("allan").to_str().unwrap(),
     ]);
     assert!(
-        out.lines().any(|l| l.contains(" WARN ") && l.contains("import: accel:")),
+        out.lines()
+            .any(|l| l.contains(" WARN ") && l.contains("import: accel:")),
         "{out}"
     );
     // An option that the data contradict: the same.
