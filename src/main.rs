@@ -41,7 +41,7 @@ enum Cmd {
     },
     /// Run the daemon's pipeline on a recorded log and print a health summary.
     Replay {
-        /// Recorded log: native, or a UBX, MAVLink, ULog or MCAP recording with --protocol (its name, or auto to detect it).
+        /// Recorded log: native, or a UBX, MAVLink, ULog or MCAP recording (detected when no --protocol names one), or any recording `import` reads (a CSV, a bag: imported with no flags into a temporary log, replayed).
         log: PathBuf,
         /// Config file (default: the embedded config/default.toml).
         #[arg(long)]

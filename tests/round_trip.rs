@@ -235,30 +235,46 @@ fn replay_of_a_csv_is_the_replay_of_its_import() {
 }
 
 #[test]
-fn replay_of_a_sensor_recording_without_protocol_names_the_flag_that_reads_it() {
-    // The native protocol is the default: a UBX or MAVLink file given to `replay` as it is must
-    // say what it looks like and which flag reads it, and that flag must then read it.
+fn replay_of_a_sensor_recording_without_protocol_detects_it() {
+    // With no --protocol a UBX or MAVLink file given to `replay` as it is is replayed as what it
+    // decodes as, and said so: the same cleaned output as with its protocol named. With
+    // `--protocol native` it is refused, naming what it looks like and the flag that reads it.
     let dir = env!("CARGO_MANIFEST_DIR");
+    let tmp = tempfile::tempdir().unwrap();
     for (file, p) in [("ubx_stream.bin", "ubx"), ("mavlink_stream.bin", "mavlink")] {
         let path = format!("{dir}/tests/reference/{file}");
-        let out = Command::new(common::bin())
-            .args(["replay", &path])
-            .output()
-            .unwrap();
-        assert!(!out.status.success());
-        let err = String::from_utf8_lossy(&out.stderr);
+        let replay = |extra: &[&str], out: &str| {
+            let csv = tmp.path().join(out);
+            let mut args = vec!["replay", &path];
+            args.extend_from_slice(extra);
+            let spec = format!("csv:{}", csv.display());
+            args.extend_from_slice(&["--out", &spec]);
+            let o = Command::new(common::bin()).args(&args).output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr).into_owned();
+            (
+                o.status.success(),
+                err,
+                std::fs::read(csv).unwrap_or_default(),
+            )
+        };
+        let (ok, err, plain) = replay(&[], &format!("{p}-plain.csv"));
+        assert!(ok, "{file}: {err}");
+        assert!(
+            err.contains(&format!("it decodes as {p}, replayed as that")),
+            "{file}: {err}"
+        );
+        let (ok, err, named) = replay(&["--protocol", p], &format!("{p}-named.csv"));
+        assert!(ok, "{file} --protocol {p}: {err}");
+        assert!(named.len() > 100, "{file}: samples came out");
+        assert!(
+            plain == named,
+            "{file}: detected and named give the same output"
+        );
+        let (ok, err, _) = replay(&["--protocol", "native"], &format!("{p}-native.csv"));
+        assert!(!ok, "{file} --protocol native");
         assert!(
             err.contains(&format!("looks like a {p} recording, pass --protocol {p}")),
             "{file}: {err}"
-        );
-        let ok = Command::new(common::bin())
-            .args(["replay", &path, "--protocol", p])
-            .output()
-            .unwrap();
-        assert!(
-            ok.status.success(),
-            "{file} --protocol {p}: {}",
-            String::from_utf8_lossy(&ok.stderr)
         );
     }
 }

@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, anyhow, ensure};
 
 use crate::config::{Config, SourceConfig};
-use crate::frame::detect::ProtocolArgs;
+use crate::frame::LogHeaderError;
+use crate::frame::detect::{ProtocolArgs, ProtocolChoice};
 use crate::runtime::Health;
 
 /// `--out SPEC` flags → extra sinks of `cfg`; every bad spec is reported at once.
@@ -34,7 +35,8 @@ pub struct Replay {
 /// decoder reads but `import` does (a CSV or other text table, a bag directory, a ROS 1 or
 /// SQLite bag in a build that imports them) is imported with no flags into a temporary log,
 /// what the import found said on stderr, and that log replayed; with `--protocol` naming a
-/// sensor protocol the file is that protocol's, as ever.
+/// sensor protocol the file is that protocol's, as ever, and with none a file that decodes as
+/// one is replayed as it.
 pub fn replay_config(
     mut cfg: Config,
     log: PathBuf,
@@ -45,6 +47,22 @@ pub fn replay_config(
     let errs = cfg.protocol.validate();
     ensure!(errs.is_empty(), "{errs:?}");
     ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
+    // No --protocol and a file that is no native log but decodes as a sensor protocol: replayed
+    // as that protocol (as `--protocol auto` does), said; `--protocol native` keeps the refusal
+    // that names the flag.
+    if proto.protocol.is_none() && cfg.protocol.protocol == ProtocolChoice::Native {
+        if let Err(crate::io::log::LogError::Header {
+            err: LogHeaderError::LooksLike(p, _),
+            ..
+        }) = crate::io::csv::read_descriptor(&log)
+        {
+            tracing::info!(
+                "{}: not an imuprep log: it decodes as {p}, replayed as that (as `--protocol auto` does; `--protocol NAME` names one)",
+                log.display()
+            );
+            cfg.protocol.protocol = ProtocolChoice::Auto;
+        }
+    }
     let (log, imported) = if super::convert::through_import(&log, cfg.protocol.protocol) {
         let dir = tempfile::tempdir()?;
         let path = dir.path().join("imported.log");
