@@ -50,18 +50,18 @@ pub fn replay_config(
     // No --protocol and a file that is no native log but decodes as a sensor protocol: replayed
     // as that protocol (as `--protocol auto` does), said; `--protocol native` keeps the refusal
     // that names the flag.
-    if proto.protocol.is_none() && cfg.protocol.protocol == ProtocolChoice::Native {
-        if let Err(crate::io::log::LogError::Header {
+    if proto.protocol.is_none()
+        && cfg.protocol.protocol == ProtocolChoice::Native
+        && let Err(crate::io::log::LogError::Header {
             err: LogHeaderError::LooksLike(p, _),
             ..
         }) = crate::io::csv::read_descriptor(&log)
-        {
-            tracing::info!(
-                "{}: not an imuprep log: it decodes as {p}, replayed as that (as `--protocol auto` does; `--protocol NAME` names one)",
-                log.display()
-            );
-            cfg.protocol.protocol = ProtocolChoice::Auto;
-        }
+    {
+        tracing::info!(
+            "{}: not an imuprep log: it decodes as {p}, replayed as that (as `--protocol auto` does; `--protocol NAME` names one)",
+            log.display()
+        );
+        cfg.protocol.protocol = ProtocolChoice::Auto;
     }
     let (log, imported) = if super::convert::through_import(&log, cfg.protocol.protocol) {
         let dir = tempfile::tempdir()?;
