@@ -762,3 +762,50 @@ fn a_bag_directory_imports_its_bag_file_or_says_what_it_holds() {
     assert_ne!(code, 0);
     assert!(err.contains("no .mcap or .db3 bag file in it"), "{err}");
 }
+
+/// `audit` finds a recording in a sensor protocol by its bytes, whatever its name, and reads it
+/// as `import` does; a binary file no decoder knows and prose are not recordings.
+#[test]
+fn audit_finds_protocol_recordings_by_their_bytes() {
+    use imuprep::report::audit::{find_recordings, load_recording};
+    let dir = tempfile::tempdir().unwrap();
+    let reference = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/reference");
+    std::fs::copy(
+        format!("{reference}/ubx_stream.bin"),
+        dir.path().join("rover.raw"),
+    )
+    .unwrap();
+    std::fs::copy(
+        format!("{reference}/mavlink_stream.bin"),
+        dir.path().join("flight.tlog"),
+    )
+    .unwrap();
+    // Bytes of a fixed linear congruential sequence: binary that no decoder takes for frames.
+    let mut x: u32 = 12345;
+    let noise: Vec<u8> = (0..8192)
+        .map(|_| {
+            x = x.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+            (x >> 24) as u8
+        })
+        .collect();
+    write(&dir.path().join("photo.jpg"), &noise);
+    write(
+        &dir.path().join("README.md"),
+        b"# Bench\nRecorded on a bench.\n",
+    );
+    let found: Vec<String> = find_recordings(dir.path())
+        .unwrap()
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(found, ["flight.tlog", "rover.raw"]);
+    for name in found {
+        let path = dir.path().join(&name);
+        let (d, s) = load_recording(&path).unwrap();
+        let pc = imuprep::frame::detect::ProtocolConfig::auto();
+        let (want, _) = imuprep::io::convert::read_any_whole(&path, &pc).unwrap();
+        assert!(!s.is_empty(), "{name}");
+        assert_eq!(s, want.samples, "{name}: the samples import reads");
+        assert!(d.sample_rate_hz > 0.0, "{name}");
+    }
+}

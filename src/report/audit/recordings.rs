@@ -5,13 +5,14 @@ use std::path::{Path, PathBuf};
 
 use crate::config::Config;
 use crate::frame::Descriptor;
-use crate::io::csv::{ImportOptions, Sniffed, read_csv, read_log, sniff_file};
+use crate::io::csv::{ImportOptions, Sniffed, read_log, sniff_file};
 use crate::report::convert;
 use crate::sample::Sample;
 
-/// Recordings under `dir`, sorted by path: `.log` (native), `.csv`, `.csv.gz`, `.ulg` (PX4), and
+/// Recordings under `dir`, sorted by path: `.log` (native), `.csv`, `.csv.gz`, `.ulg` (PX4),
 /// `.txt`, `.tsv`, `.dat` (or their `.gz`) whose content is a text table of numbers (a
-/// `NOTES.txt` is none, and is no recording).
+/// `NOTES.txt` is none, and is no recording), and any other file whose first bytes decode as a
+/// sensor protocol (UBX, MAVLink, ULog, MCAP) or are a bag this build imports (ROS 1, SQLite).
 pub fn find_recordings(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -28,7 +29,7 @@ pub fn find_recordings(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
                 let stem = lower.strip_suffix(".gz").unwrap_or(&lower);
                 let text = [".txt", ".tsv", ".dat"].iter().any(|e| stem.ends_with(e))
                     && matches!(sniff_file(&p), Sniffed::Table(_));
-                if known || text {
+                if known || text || protocol_file(&p) {
                     out.push(p);
                 }
             }
@@ -38,23 +39,32 @@ pub fn find_recordings(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     Ok(out)
 }
 
-/// Read a recording as `imuprep import` (a text table or a ULog) or `imuprep replay` (native
-/// log) would.
+/// A file that is no text (a text table is told by its name or content above) and that the
+/// decoders take for a sensor protocol, or a bag only `import` reads.
+fn protocol_file(p: &Path) -> bool {
+    use crate::frame::detect::{DETECT_BYTES, ProtocolConfig, detect, import_only};
+    use std::io::Read;
+    let mut head = Vec::with_capacity(DETECT_BYTES);
+    let read =
+        std::fs::File::open(p).and_then(|f| f.take(DETECT_BYTES as u64).read_to_end(&mut head));
+    if read.is_err() || head.starts_with(&crate::frame::LOG_MAGIC) {
+        return false;
+    }
+    import_only(&head)
+        || (!matches!(sniff_file(p), Sniffed::Table(_) | Sniffed::Text(_))
+            && detect(&head, &ProtocolConfig::auto()) != crate::frame::Protocol::Native)
+}
+
+/// Read a recording as `imuprep replay` (native log) or `imuprep import` with no flags (any
+/// other: a text table, a sensor protocol's file, a bag) would.
 pub fn load_recording(path: &Path) -> Result<(Descriptor, Vec<Sample>), String> {
-    let name = path.to_string_lossy();
-    if name.ends_with(".log") {
+    if path.to_string_lossy().ends_with(".log") {
         let (d, s, _) = read_log(path).map_err(|e| e.to_string())?;
         Ok((d.unwrap_or_default(), s))
-    } else if name.ends_with(".ulg") {
-        let pc = crate::frame::detect::ProtocolConfig::auto();
-        // As `imuprep import` reads it: time faults and rate over the whole file.
-        let (f, _) = crate::io::convert::read_any_whole(path, &pc).map_err(|e| e.to_string())?;
-        if f.samples.is_empty() {
-            return Err("no IMU samples decoded".into());
-        }
-        Ok((f.descriptor.unwrap_or_default(), f.samples))
     } else {
-        read_csv(path, &ImportOptions::default()).map_err(|e| e.to_string())
+        let loaded = convert::load(path, &Default::default(), &ImportOptions::default())
+            .map_err(|e| format!("{e:#}"))?;
+        Ok((loaded.descriptor, loaded.samples))
     }
 }
 
