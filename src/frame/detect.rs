@@ -317,12 +317,26 @@ pub fn import_only(head: &[u8]) -> bool {
 
 /// The first bytes of `path` told as a [`foreign_format`] (nothing when it cannot be read).
 pub fn foreign_file(path: &std::path::Path) -> Option<&'static str> {
+    foreign_format(&file_head(path, 16)?)
+}
+
+/// The first `max` bytes of the file at `path` (all of a shorter one); `None` when it cannot be
+/// read.
+pub fn file_head(path: &std::path::Path, max: usize) -> Option<Vec<u8>> {
     use std::io::Read;
-    let mut head = [0u8; 16];
-    let n = std::fs::File::open(path)
-        .and_then(|mut f| f.read(&mut head))
+    let mut head = Vec::with_capacity(max);
+    std::fs::File::open(path)
+        .ok()?
+        .take(max as u64)
+        .read_to_end(&mut head)
         .ok()?;
-    foreign_format(&head[..n])
+    Some(head)
+}
+
+/// The sensor protocol the first bytes of `path` decode as ([`detect`]), if not native.
+pub fn file_protocol(path: &std::path::Path) -> Option<Protocol> {
+    let p = detect(&file_head(path, DETECT_BYTES)?, &ProtocolConfig::auto());
+    (p != Protocol::Native).then_some(p)
 }
 
 /// The protocol whose decoder finds the most in `head`.

@@ -31,7 +31,7 @@ pub enum LogError {
 fn header_error(path: &Path) -> impl FnOnce(LogHeaderError) -> LogError + '_ {
     move |err| {
         let err = match err {
-            LogHeaderError::BadMagic(m) => match looks_like(path) {
+            LogHeaderError::BadMagic(m) => match crate::frame::detect::file_protocol(path) {
                 Some(p) => LogHeaderError::LooksLike(p, m),
                 None => LogHeaderError::BadMagic(m),
             },
@@ -42,20 +42,6 @@ fn header_error(path: &Path) -> impl FnOnce(LogHeaderError) -> LogError + '_ {
             err,
         }
     }
-}
-
-/// The protocol the file's first bytes decode as, if not native.
-fn looks_like(path: &Path) -> Option<crate::frame::Protocol> {
-    use crate::frame::detect::{DETECT_BYTES, ProtocolConfig, detect};
-    use std::io::Read;
-    let mut head = Vec::with_capacity(DETECT_BYTES);
-    std::fs::File::open(path)
-        .ok()?
-        .take(DETECT_BYTES as u64)
-        .read_to_end(&mut head)
-        .ok()?;
-    let p = detect(&head, &ProtocolConfig::auto());
-    (p != crate::frame::Protocol::Native).then_some(p)
 }
 
 impl LogError {

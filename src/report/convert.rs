@@ -44,15 +44,12 @@ pub fn through_import(log: &Path, choice: ProtocolChoice) -> bool {
     if log.is_dir() {
         return true;
     }
-    let mut head = [0u8; 16];
-    let n = std::fs::File::open(log)
-        .and_then(|mut f| std::io::Read::read(&mut f, &mut head))
-        .unwrap_or(0);
-    if head[..n].starts_with(&crate::frame::LOG_MAGIC) {
+    let head = crate::frame::detect::file_head(log, 16).unwrap_or_default();
+    if head.starts_with(&crate::frame::LOG_MAGIC) {
         return false;
     }
     // Text that is no table goes to `import` too: it says why it is none.
-    crate::frame::detect::import_only(&head[..n])
+    crate::frame::detect::import_only(&head)
         || is_csv_name(log)
         || !matches!(
             crate::io::csv::sniff_file(log),

@@ -42,17 +42,14 @@ pub fn find_recordings(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
 /// A file that is no text (a text table is told by its name or content above) and that the
 /// decoders take for a sensor protocol, or a bag only `import` reads.
 fn protocol_file(p: &Path) -> bool {
-    use crate::frame::detect::{DETECT_BYTES, ProtocolConfig, detect, import_only};
-    use std::io::Read;
-    let mut head = Vec::with_capacity(DETECT_BYTES);
-    let read =
-        std::fs::File::open(p).and_then(|f| f.take(DETECT_BYTES as u64).read_to_end(&mut head));
-    if read.is_err() || head.starts_with(&crate::frame::LOG_MAGIC) {
-        return false;
+    use crate::frame::detect::{file_head, file_protocol, import_only};
+    match file_head(p, 16) {
+        Some(head) if !head.starts_with(&crate::frame::LOG_MAGIC) => {
+            import_only(&head)
+                || (matches!(sniff_file(p), Sniffed::Binary) && file_protocol(p).is_some())
+        }
+        _ => false,
     }
-    import_only(&head)
-        || (!matches!(sniff_file(p), Sniffed::Table(_) | Sniffed::Text(_))
-            && detect(&head, &ProtocolConfig::auto()) != crate::frame::Protocol::Native)
 }
 
 /// Read a recording as `imuprep replay` (native log) or `imuprep import` with no flags (any
