@@ -326,12 +326,8 @@ fn import_bag<E: std::fmt::Display>(
 #[cfg(any(feature = "ros2", feature = "ros2-sqlite"))]
 fn inflate_whole(input: &Path) -> Result<Option<(tempfile::TempDir, PathBuf, String)>> {
     use crate::frame::inflate;
-    let compressed = |p: &Path| {
-        let mut head = [0u8; 4];
-        std::fs::File::open(p)
-            .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
-            .is_ok_and(|()| inflate::is_zstd(&head))
-    };
+    let compressed =
+        |p: &Path| crate::frame::detect::file_head(p, 4).is_some_and(|h| inflate::is_zstd(&h));
     // In a directory only a bag's storage files (another compressed file there is not the
     // bag's, and the directory's own `.mcap` is read as ever).
     let storage = |p: &Path| {
