@@ -109,22 +109,17 @@ impl Loaded {
     /// The samples written to `output` as a native log, and the report of it.
     pub fn write(self, output: &Path) -> Result<ImportReport> {
         csvio::write_log(output, &self.descriptor, &self.samples)?;
-        Ok(self.report(output))
-    }
-
-    /// The report of an import into `output` (an empty path: none written).
-    pub fn report(&self, output: &Path) -> ImportReport {
-        ImportReport {
-            input: self.input.clone(),
-            accel_input: self.accel_input.clone(),
+        Ok(ImportReport {
             output: output.to_path_buf(),
-            decoded: self.decoded.clone(),
-            timing: self.timing.clone(),
             samples: self.samples.len(),
             // The span of the stamps: first to last would be negative across a restart.
             duration_s: span_s(&self.samples),
             sample_rate_hz: self.descriptor.sample_rate_hz,
-        }
+            input: self.input,
+            accel_input: self.accel_input,
+            decoded: self.decoded,
+            timing: self.timing,
+        })
     }
 }
 

@@ -67,7 +67,8 @@ pub fn replay_config(
         let dir = tempfile::tempdir()?;
         let path = dir.path().join("imported.log");
         let loaded = super::convert::load(&log, proto, &Default::default())?;
-        super::say_imported(&log, &loaded.write(&path)?);
+        super::say_imported(&log, &loaded);
+        loaded.write(&path)?;
         (path, Some(dir))
     } else {
         (log, None)

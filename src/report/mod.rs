@@ -133,7 +133,7 @@ pub(crate) fn imported_log(
     proto: &crate::frame::detect::ProtocolArgs,
 ) -> Result<crate::io::log::LogContents> {
     let loaded = convert::load(path, proto, &Default::default())?;
-    say_imported(path, &loaded.report(Path::new("")));
+    say_imported(path, &loaded);
     let mut bytes = bytes::BytesMut::new();
     crate::io::log::encode_log(&loaded.descriptor, &loaded.samples, &mut bytes);
     drop(loaded);
@@ -143,7 +143,7 @@ pub(crate) fn imported_log(
 
 /// What an import of `path` made for a command that takes a log found, said on the log (stderr):
 /// that it was imported with no flags, and the import's own lines.
-fn say_imported(path: &Path, r: &convert::ImportReport) {
+fn say_imported(path: &Path, r: &convert::Loaded) {
     tracing::info!(
         "{}: not an imuprep log: read as `imuprep import` reads it, with no flags (`imuprep import {} -o OUT.log` keeps it as a log and takes flags for its units and columns)",
         path.display(),
