@@ -420,9 +420,17 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             out,
             summary_json,
         } => {
-            let mut cfg = load_daemon_config(&config)?;
-            report::daemon::add_outs(&mut cfg, &out)?;
-            daemon(cfg, summary_json)
+            // A replay source is read as `imuprep replay` reads its file; the config's
+            // `protocol` counts as named only when it names a sensor protocol.
+            let cfg = load_daemon_config(&config)?;
+            let named = !matches!(
+                cfg.protocol.protocol,
+                imuprep::frame::detect::ProtocolChoice::Native
+            );
+            let mut replay = report::daemon::replay_source(cfg, named)?;
+            report::daemon::add_outs(&mut replay.cfg, &out)?;
+            // `replay.imported` (a CSV's or bag's log) lives until the run has ended.
+            daemon(replay.cfg, summary_json)
         }
         Cmd::Replay {
             log,

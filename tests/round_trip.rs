@@ -235,10 +235,63 @@ fn replay_of_a_csv_is_the_replay_of_its_import() {
 }
 
 #[test]
+fn run_with_a_replay_source_is_replay_of_its_file() {
+    // `imuprep run` whose `[source]` replays a file reads it as `imuprep replay FILE` does: a
+    // CSV imported, and a log's declared rate (200 Hz here, the config's nominal rate is 100)
+    // given to the stages (before, `run` kept the config's): the cleaned output matches
+    // `replay`'s byte for byte.
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let scn = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.toml");
+    let cli = |args: &[&str]| {
+        let out = Command::new(common::bin()).args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{args:?}: {err}");
+        err
+    };
+    cli(&[
+        "simulate",
+        scn,
+        "--set",
+        "motion.duration_s=40",
+        "--set",
+        "sensor.sample_rate_hz=200",
+        "-o",
+        &p("s.log"),
+    ]);
+    cli(&["export", &p("s.log"), "-o", &p("s.csv")]);
+    for input in ["s.log", "s.csv"] {
+        let replayed = p(&format!("replay-{input}.csv"));
+        cli(&["replay", &p(input), "--out", &format!("csv:{replayed}")]);
+        let config = p("run.toml");
+        std::fs::write(
+            &config,
+            format!("[source]\nkind = \"replay\"\npath = {:?}\n", p(input)),
+        )
+        .unwrap();
+        let ran = p(&format!("run-{input}.csv"));
+        let err = cli(&["run", "--config", &config, "--out", &format!("csv:{ran}")]);
+        if input.ends_with(".csv") {
+            assert!(
+                err.contains("not an imuprep log: read as `imuprep import` reads it"),
+                "{err}"
+            );
+        }
+        let (a, b) = (
+            std::fs::read(&replayed).unwrap(),
+            std::fs::read(&ran).unwrap(),
+        );
+        assert!(a.len() > 8000 * 40, "{input}: replayed {} bytes", a.len());
+        assert!(a == b, "{input}: `run` differs from `replay`");
+    }
+}
+
+#[test]
 fn replay_of_a_sensor_recording_without_protocol_detects_it() {
     // With no --protocol a UBX or MAVLink file given to `replay` as it is is replayed as what it
     // decodes as, and said so: the same cleaned output as with its protocol named. With
     // `--protocol native` it is refused, naming what it looks like and the flag that reads it.
+    // `run` with the file as its replay source detects it as `replay` does.
     let dir = env!("CARGO_MANIFEST_DIR");
     let tmp = tempfile::tempdir().unwrap();
     for (file, p) in [("ubx_stream.bin", "ubx"), ("mavlink_stream.bin", "mavlink")] {
@@ -269,6 +322,27 @@ fn replay_of_a_sensor_recording_without_protocol_detects_it() {
         assert!(
             plain == named,
             "{file}: detected and named give the same output"
+        );
+        // `run` with a config whose `[source]` replays the file (protocol left at its
+        // "native" default) detects it the same way.
+        let config = tmp.path().join(format!("{p}.toml"));
+        std::fs::write(
+            &config,
+            format!("[source]\nkind = \"replay\"\npath = {path:?}\n"),
+        )
+        .unwrap();
+        let ran = tmp.path().join(format!("{p}-run.csv"));
+        let o = Command::new(common::bin())
+            .args(["run", "--config", config.to_str().unwrap()])
+            .args(["--out", &format!("csv:{}", ran.display())])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "run {file}: {err}");
+        assert!(err.contains(&format!("it decodes as {p}, replayed as that")));
+        assert!(
+            std::fs::read(&ran).unwrap() == plain,
+            "{file}: `run` gives `replay`'s output"
         );
         let (ok, err, _) = replay(&["--protocol", "native"], &format!("{p}-native.csv"));
         assert!(!ok, "{file} --protocol native");

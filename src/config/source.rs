@@ -26,7 +26,8 @@ pub enum SourceConfig {
         #[serde(default = "default_stall_ms")]
         stall_ms: u64,
     },
-    /// A recorded log (file header + frames).
+    /// A recorded file: a native log (file header + frames), a sensor protocol's recording or
+    /// any file `import` reads (`report::daemon::replay_source`).
     Replay {
         path: PathBuf,
         /// 0 = as fast as possible; otherwise paced by sensor time at this speed factor.

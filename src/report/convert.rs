@@ -57,6 +57,16 @@ pub fn through_import(log: &Path, choice: ProtocolChoice) -> bool {
         )
 }
 
+/// The options a file [`through_import`] says goes to `import` is read with: `pc`'s (a bag's
+/// topic, …) with no protocol named, as `import` without `--protocol` reads it (a table as one,
+/// any other file detected).
+pub fn detecting(pc: &ProtocolConfig) -> ProtocolConfig {
+    ProtocolConfig {
+        protocol: ProtocolChoice::Auto,
+        ..pc.clone()
+    }
+}
+
 /// `--columns t,gx,gy,gz,ax,ay,az` → the importer's columns by position.
 pub fn parse_positions(spec: Option<&str>, o: &mut ImportOptions) -> Result<()> {
     if let Some(spec) = spec {
@@ -89,7 +99,7 @@ pub fn import(
     proto: &ProtocolArgs,
     o: &ImportOptions,
 ) -> Result<ImportReport> {
-    load(input, proto, o)?.write(output)
+    load(input, &protocol_config(proto), o)?.write(output)
 }
 
 /// A recording read as `import` reads it, held in memory: the samples and what was found.
@@ -124,8 +134,10 @@ impl Loaded {
 }
 
 /// Read `input` as [`import`] does (a text table as `o` says, else any protocol the decoders
-/// read, a bag or a bag directory), without writing it.
-pub fn load(input: &Path, proto: &ProtocolArgs, o: &ImportOptions) -> Result<Loaded> {
+/// read, a bag or a bag directory), without writing it. `pc.protocol` other than `Auto` names
+/// the protocol (a file is then never read as a table); its options pick the stream (a bag's
+/// topic, a ULog instance, …).
+pub fn load(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Result<Loaded> {
     if let Some(r) = o.time_from_index_hz {
         ensure!(r.is_finite() && r > 0.0, "--rate must be > 0 Hz");
     }
@@ -133,7 +145,7 @@ pub fn load(input: &Path, proto: &ProtocolArgs, o: &ImportOptions) -> Result<Loa
     #[cfg(any(feature = "ros2", feature = "ros2-sqlite"))]
     if let Some((dir, inflated, said)) = inflate_whole(input)? {
         // What the inflated copy's import says names the input, not the temporary copy.
-        let mut r = load(&inflated, proto, o).map_err(|e| {
+        let mut r = load(&inflated, pc, o).map_err(|e| {
             let named = input.display().to_string();
             let text = format!("{e:#}")
                 .replace(&inflated.display().to_string(), &named)
@@ -153,7 +165,6 @@ pub fn load(input: &Path, proto: &ProtocolArgs, o: &ImportOptions) -> Result<Loa
     // Bags read whole by their own readers (each behind its feature).
     #[cfg(feature = "ros1")]
     if crate::io::ros1::is_bag(input) {
-        let pc = protocol_config(proto);
         let bag = crate::io::ros1::read_bag(input, &pc.mcap);
         return import_bag(
             input,
@@ -165,7 +176,6 @@ pub fn load(input: &Path, proto: &ProtocolArgs, o: &ImportOptions) -> Result<Loa
     }
     #[cfg(feature = "ros2-sqlite")]
     if crate::io::ros2_db3::is_db3(input) {
-        let pc = protocol_config(proto);
         let bag = crate::io::ros2_db3::read_db3(input, &pc.mcap);
         let what = "an SQLite file that cannot be imported as a ROS 2 bag";
         return import_bag(input, o, what, "ROS 2 bag (SQLite)", bag);
@@ -176,11 +186,9 @@ pub fn load(input: &Path, proto: &ProtocolArgs, o: &ImportOptions) -> Result<Loa
         let files = bag_dir_files(input)?;
         // One file, or a build that reads no MCAP (its first file then says so).
         if files.len() == 1 || !cfg!(feature = "ros2") {
-            return load(&files[0], proto, o);
+            return load(&files[0], pc, o);
         }
-        let mut pc = ProtocolConfig::auto();
-        proto.apply(&mut pc);
-        let (d, samples, decoded, timing) = decoded(input, read_files_whole(&files, &pc)?, o)?;
+        let (d, samples, decoded, timing) = decoded(input, read_files_whole(&files, pc)?, o)?;
         let decoded = format!(
             "{} files read as one ({}); {decoded}",
             files.len(),
@@ -191,7 +199,7 @@ pub fn load(input: &Path, proto: &ProtocolArgs, o: &ImportOptions) -> Result<Loa
     // A text table by its name (.csv, .csv.gz: read as one whatever its content, as always), or
     // by its content (any other name: text with a consistent delimiter; a binary file goes to
     // the protocol decoders, text that is no table is said to be so).
-    let table = if proto.protocol.is_some() {
+    let table = if pc.protocol != ProtocolChoice::Auto {
         None
     } else {
         match csvio::sniff_file(input) {
@@ -218,11 +226,9 @@ pub fn load(input: &Path, proto: &ProtocolArgs, o: &ImportOptions) -> Result<Loa
         }
         (d, s, None, Some(report.to_string()))
     } else {
-        let mut pc = ProtocolConfig::auto();
-        proto.apply(&mut pc);
         // The whole file is at hand: time faults and rate derived over all of it, as for a CSV
         // (`read_any_whole`), not as the streaming decoder learned them.
-        let (d, s, decoded, timing) = decoded(input, read_any_whole(input, &pc)?, o)?;
+        let (d, s, decoded, timing) = decoded(input, read_any_whole(input, pc)?, o)?;
         (d, s, Some(decoded), timing)
     };
     Ok(loaded(input, None, (d, samples), decoded, timing))
@@ -271,8 +277,8 @@ fn names(files: &[PathBuf]) -> String {
         .join(", ")
 }
 
-/// The protocol options as the flags set them (`--topic` for a bag).
-#[cfg(any(feature = "ros1", feature = "ros2-sqlite"))]
+/// The protocol options as the flags set them on the detecting default (`Auto`: no protocol
+/// named, a text table read as one).
 fn protocol_config(proto: &ProtocolArgs) -> ProtocolConfig {
     let mut pc = ProtocolConfig::auto();
     proto.apply(&mut pc);
@@ -521,10 +527,9 @@ pub fn export(
     to: ExportFormat,
     proto: &ProtocolArgs,
 ) -> Result<ExportReport> {
-    let mut pc = ProtocolConfig::auto();
-    proto.apply(&mut pc);
+    let pc = protocol_config(proto);
     let (descriptor, samples, stats) = if through_import(log, pc.protocol) {
-        super::imported_log(log, proto)?
+        super::imported_log(log, &detecting(&pc))?
     } else {
         let f = read_any(log, &pc)?;
         check_input(log, f.samples.len() as u64, &f.stats)?;

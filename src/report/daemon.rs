@@ -31,12 +31,9 @@ pub struct Replay {
 }
 
 /// `cfg` turned into a replay of `log` at `speed` (0 = as fast as possible), with the protocol
-/// flags applied and the log's declared rate given to the stages. A recording no streaming
-/// decoder reads but `import` does (a CSV or other text table, a bag directory, a ROS 1 or
-/// SQLite bag in a build that imports them) is imported with no flags into a temporary log,
-/// what the import found said on stderr, and that log replayed; with `--protocol` naming a
-/// sensor protocol the file is that protocol's, as ever, and with none a file that decodes as
-/// one is replayed as it.
+/// flags applied, then made ready as [`replay_source`] says. With `--protocol` naming a sensor
+/// protocol the file is that protocol's, as ever; `--protocol native` keeps the refusal of a
+/// file that is no native log.
 pub fn replay_config(
     mut cfg: Config,
     log: PathBuf,
@@ -44,13 +41,29 @@ pub fn replay_config(
     proto: &ProtocolArgs,
 ) -> Result<Replay> {
     proto.apply(&mut cfg.protocol);
+    cfg.source = SourceConfig::Replay { path: log, speed };
+    replay_source(cfg, proto.protocol.is_some())
+}
+
+/// A config whose source replays a file (`imuprep replay`, or `imuprep run` with `[source]
+/// kind = "replay"`) made ready to run, the same way for both. A recording no streaming decoder
+/// reads but `import` does (a CSV or other text table, a bag directory, a ROS 1 or SQLite bag
+/// in a build that imports them) is imported with the source's protocol options and no other
+/// flag into a temporary log, what the import found said on stderr, and that log replayed.
+/// Unless `protocol_named`, a native source whose file is no native log but decodes as a
+/// sensor protocol is replayed as that protocol, said. The log's declared rate is given to the
+/// stages. Any other source is returned as it is.
+pub fn replay_source(mut cfg: Config, protocol_named: bool) -> Result<Replay> {
+    let SourceConfig::Replay { path: log, speed } = cfg.source.clone() else {
+        return Ok(Replay {
+            cfg,
+            imported: None,
+        });
+    };
     let errs = cfg.protocol.validate();
     ensure!(errs.is_empty(), "{errs:?}");
     ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
-    // No --protocol and a file that is no native log but decodes as a sensor protocol: replayed
-    // as that protocol (as `--protocol auto` does), said; `--protocol native` keeps the refusal
-    // that names the flag.
-    if proto.protocol.is_none()
+    if !protocol_named
         && cfg.protocol.protocol == ProtocolChoice::Native
         && let Err(crate::io::log::LogError::Header {
             err: LogHeaderError::LooksLike(p, _),
@@ -66,7 +79,8 @@ pub fn replay_config(
     let (log, imported) = if super::convert::through_import(&log, cfg.protocol.protocol) {
         let dir = tempfile::tempdir()?;
         let path = dir.path().join("imported.log");
-        let loaded = super::convert::load(&log, proto, &Default::default())?;
+        let pc = super::convert::detecting(&cfg.protocol);
+        let loaded = super::convert::load(&log, &pc, &Default::default())?;
         super::say_imported(&log, &loaded);
         loaded.write(&path)?;
         (path, Some(dir))

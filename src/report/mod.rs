@@ -22,6 +22,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, ensure};
 
+use crate::frame::detect::ProtocolConfig;
 use crate::sample::Sample;
 
 /// Exit status of an offline command whose input decoded to nothing or was mostly garbage.
@@ -107,7 +108,7 @@ fn imported_span(
     skip_s: f64,
     span_s: Option<f64>,
 ) -> Result<(Option<crate::frame::Descriptor>, Vec<Sample>)> {
-    let (desc, mut samples, _) = imported_log(path, &Default::default())?;
+    let (desc, mut samples, _) = imported_log(path, &ProtocolConfig::auto())?;
     let rate = desc.map_or(0.0, |d| d.sample_rate_hz);
     ensure!(
         rate > 0.0,
@@ -124,15 +125,15 @@ fn imported_span(
     Ok((desc, samples))
 }
 
-/// `path` read as `imuprep import` reads it with `proto` and no other flag, what the import
+/// `path` read as `imuprep import` reads it with the protocol options `pc` and no other flag, what the import
 /// found said ([`say_imported`]), and the samples encoded as a log in memory and decoded again:
 /// to the bit what the log `import` writes would give (single-precision values, the decoder's
 /// flags), with that decoder's counters.
 pub(crate) fn imported_log(
     path: &Path,
-    proto: &crate::frame::detect::ProtocolArgs,
+    pc: &ProtocolConfig,
 ) -> Result<crate::io::log::LogContents> {
-    let loaded = convert::load(path, proto, &Default::default())?;
+    let loaded = convert::load(path, pc, &Default::default())?;
     say_imported(path, &loaded);
     let mut bytes = bytes::BytesMut::new();
     crate::io::log::encode_log(&loaded.descriptor, &loaded.samples, &mut bytes);

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use crate::config::Config;
 use crate::frame::Descriptor;
+use crate::frame::detect::ProtocolConfig;
 use crate::io::csv::{ImportOptions, Sniffed, read_log, sniff_file};
 use crate::report::convert;
 use crate::sample::Sample;
@@ -59,7 +60,7 @@ pub fn load_recording(path: &Path) -> Result<(Descriptor, Vec<Sample>), String> 
         let (d, s, _) = read_log(path).map_err(|e| e.to_string())?;
         Ok((d.unwrap_or_default(), s))
     } else {
-        let loaded = convert::load(path, &Default::default(), &ImportOptions::default())
+        let loaded = convert::load(path, &ProtocolConfig::auto(), &ImportOptions::default())
             .map_err(|e| format!("{e:#}"))?;
         Ok((loaded.descriptor, loaded.samples))
     }
