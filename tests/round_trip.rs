@@ -180,49 +180,40 @@ fn replay_refuses_a_file_that_is_not_a_log() {
     assert!(!err.contains("panicked"), "{err}");
 }
 
+/// The static bench simulated for `secs` at `rate_hz` as `s.log` in `dir`, exported as `s.csv`;
+/// the path maker of `dir`.
+fn simulated_bench(dir: &std::path::Path, secs: u32, rate_hz: u32) -> impl Fn(&str) -> String {
+    let p = move |n: &str| dir.join(n).to_str().unwrap().to_string();
+    let scn = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.toml");
+    let duration = format!("motion.duration_s={secs}");
+    let rate = format!("sensor.sample_rate_hz={rate_hz}");
+    let log = p("s.log");
+    common::run_cli(&[
+        "simulate", scn, "--set", &duration, "--set", &rate, "-o", &log,
+    ]);
+    common::run_cli(&["export", &log, "-o", &p("s.csv")]);
+    p
+}
+
+/// `imuprep replay INPUT --out csv:OUT` (asserted to succeed): what it said, and the cleaned CSV.
+fn replayed(input: &str, out: &str) -> (String, Vec<u8>) {
+    let said = common::run_cli(&["replay", input, "--out", &format!("csv:{out}")]);
+    (said, std::fs::read(out).unwrap())
+}
+
 /// A CSV given to `replay` is imported with no flags into a temporary log and that log replayed:
 /// the cleaned output is the replay of the log `import` writes, byte for byte.
 #[test]
 fn replay_of_a_csv_is_the_replay_of_its_import() {
     let dir = tempfile::tempdir().unwrap();
-    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
-    let scn = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.toml");
-    let run = |args: &[&str]| {
-        let out = Command::new(common::bin()).args(args).output().unwrap();
-        let err = String::from_utf8_lossy(&out.stderr).into_owned();
-        assert!(out.status.success(), "{args:?}: {err}");
-        err
-    };
-    run(&[
-        "simulate",
-        scn,
-        "--set",
-        "motion.duration_s=60",
-        "-o",
-        &p("s.log"),
-    ]);
-    run(&["export", &p("s.log"), "-o", &p("s.csv")]);
-    run(&["import", &p("s.csv"), "-o", &p("i.log")]);
-    let err = run(&[
-        "replay",
-        &p("s.csv"),
-        "--out",
-        &format!("csv:{}", p("a.csv")),
-    ]);
+    let p = simulated_bench(dir.path(), 60, 100);
+    common::run_cli(&["import", &p("s.csv"), "-o", &p("i.log")]);
+    let (said, a) = replayed(&p("s.csv"), &p("a.csv"));
     assert!(
-        err.contains("not an imuprep log: read as `imuprep import` reads it"),
-        "{err}"
+        said.contains("not an imuprep log: read as `imuprep import` reads it"),
+        "{said}"
     );
-    run(&[
-        "replay",
-        &p("i.log"),
-        "--out",
-        &format!("csv:{}", p("b.csv")),
-    ]);
-    let (a, b) = (
-        std::fs::read(p("a.csv")).unwrap(),
-        std::fs::read(p("b.csv")).unwrap(),
-    );
+    let (_, b) = replayed(&p("i.log"), &p("b.csv"));
     assert!(
         a.len() > 6000 * 40,
         "the whole minute was replayed: {} bytes",
@@ -234,35 +225,16 @@ fn replay_of_a_csv_is_the_replay_of_its_import() {
     );
 }
 
+/// `imuprep run` whose `[source]` replays a file reads it as `imuprep replay FILE` does: a CSV
+/// imported, and a log's declared rate (200 Hz here, the config's nominal rate is 100) given to
+/// the stages (before, `run` kept the config's): the cleaned output matches `replay`'s byte for
+/// byte.
 #[test]
 fn run_with_a_replay_source_is_replay_of_its_file() {
-    // `imuprep run` whose `[source]` replays a file reads it as `imuprep replay FILE` does: a
-    // CSV imported, and a log's declared rate (200 Hz here, the config's nominal rate is 100)
-    // given to the stages (before, `run` kept the config's): the cleaned output matches
-    // `replay`'s byte for byte.
     let dir = tempfile::tempdir().unwrap();
-    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
-    let scn = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.toml");
-    let cli = |args: &[&str]| {
-        let out = Command::new(common::bin()).args(args).output().unwrap();
-        let err = String::from_utf8_lossy(&out.stderr).into_owned();
-        assert!(out.status.success(), "{args:?}: {err}");
-        err
-    };
-    cli(&[
-        "simulate",
-        scn,
-        "--set",
-        "motion.duration_s=40",
-        "--set",
-        "sensor.sample_rate_hz=200",
-        "-o",
-        &p("s.log"),
-    ]);
-    cli(&["export", &p("s.log"), "-o", &p("s.csv")]);
+    let p = simulated_bench(dir.path(), 40, 200);
     for input in ["s.log", "s.csv"] {
-        let replayed = p(&format!("replay-{input}.csv"));
-        cli(&["replay", &p(input), "--out", &format!("csv:{replayed}")]);
+        let (_, a) = replayed(&p(input), &p(&format!("replay-{input}.csv")));
         let config = p("run.toml");
         std::fs::write(
             &config,
@@ -270,17 +242,14 @@ fn run_with_a_replay_source_is_replay_of_its_file() {
         )
         .unwrap();
         let ran = p(&format!("run-{input}.csv"));
-        let err = cli(&["run", "--config", &config, "--out", &format!("csv:{ran}")]);
+        let said = common::run_cli(&["run", "--config", &config, "--out", &format!("csv:{ran}")]);
         if input.ends_with(".csv") {
             assert!(
-                err.contains("not an imuprep log: read as `imuprep import` reads it"),
-                "{err}"
+                said.contains("not an imuprep log: read as `imuprep import` reads it"),
+                "{said}"
             );
         }
-        let (a, b) = (
-            std::fs::read(&replayed).unwrap(),
-            std::fs::read(&ran).unwrap(),
-        );
+        let b = std::fs::read(&ran).unwrap();
         assert!(a.len() > 8000 * 40, "{input}: replayed {} bytes", a.len());
         assert!(a == b, "{input}: `run` differs from `replay`");
     }
