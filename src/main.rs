@@ -4,7 +4,6 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use imuprep::config::Config;
-use imuprep::io::csv::{AccelUnit, G0, GyroUnit, ImportOptions, TimeUnit};
 use imuprep::report::{self, fit::BiasMethod, write_json};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -41,7 +40,7 @@ enum Cmd {
     },
     /// Run the daemon's pipeline on a recorded log and print a health summary.
     Replay {
-        /// Recorded log: native, or a UBX, MAVLink, ULog or MCAP recording (detected when no --protocol names one), or any recording `import` reads (a CSV, a bag: imported with no flags into a temporary log, replayed).
+        /// Recorded log: native, or a UBX, MAVLink, ULog or MCAP recording (detected when no --protocol names one), or any recording `import` reads (a CSV, a bag: imported into a temporary log, replayed; with an import flag, any file that is no imuprep log).
         log: PathBuf,
         /// Config file (default: the embedded config/default.toml).
         #[arg(long)]
@@ -59,6 +58,8 @@ enum Cmd {
         summary_json: Option<PathBuf>,
         #[command(flatten)]
         proto: imuprep::frame::detect::ProtocolArgs,
+        #[command(flatten)]
+        import: report::convert::ImportArgs,
     },
     /// Convert a recording into a replay log: a text table (CSV in a canonical or vendor layout;
     /// semicolon, tab or whitespace separated, decimal commas, comment lines, no header with
@@ -73,48 +74,8 @@ enum Cmd {
         /// Output replay log (native).
         #[arg(short, long)]
         output: PathBuf,
-        /// The accelerometer's own table, when each sensor has a file (phone sensor apps): INPUT
-        /// is then the gyro's. Bare x, y, z columns are each file's triad; the rows are merged
-        /// onto the file with more rows, the other interpolated between its rows on each side.
-        #[arg(long, value_name = "FILE")]
-        accel_file: Option<PathBuf>,
-        /// Only the rows whose COLUMN cell is VALUE: one sensor of several in one table (a
-        /// multi-IMU rig's id column, ArduPilot's IMU instance `I`).
-        #[arg(long = "where", value_name = "COLUMN=VALUE")]
-        select: Option<String>,
-        /// Column mapping by header name, repeatable: --col gx=gyro_x_dps (keys: t gx gy gz ax
-        /// ay az temp).
-        #[arg(long = "col")]
-        cols: Vec<String>,
-        /// Columns by position, for a file without a header (or to ignore its header): each
-        /// column's key in order, `_` to skip one, later columns skipped: --columns
-        /// t,gx,gy,gz,ax,ay,az (keys as --col; units from the flags, else the data).
-        #[arg(long, value_name = "KEYS", conflicts_with = "cols")]
-        columns: Option<String>,
-        /// Unit of the gyro columns (default: the column name's; else checked against the data:
-        /// range, and the turning of gravity's direction; canonical names = rad/s when they cannot tell).
-        #[arg(long, value_enum)]
-        gyro_unit: Option<GyroUnit>,
-        /// Unit of the accel columns (default: the column name's; else the data's median |f|:
-        /// ≈ 1 is g, ≈ 9.8 m/s2).
-        #[arg(long, value_enum)]
-        accel_unit: Option<AccelUnit>,
-        /// Unit of the time column (default: the column name's; else s, or the first of ms, us, ns
-        /// giving 2 Hz–100 kHz).
-        #[arg(long, value_enum)]
-        time_unit: Option<TimeUnit>,
-        /// Ignore the time column; time = row index / RATE (Hz).
-        #[arg(long, allow_negative_numbers = true)]
-        rate: Option<f64>,
-        /// Start the log at t = 0 (subtract the first time stamp).
-        #[arg(long)]
-        rebase_time: bool,
-        /// Gyro full-scale range, deg/s (enables saturation flags on replay).
-        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
-        gyro_range_dps: f64,
-        /// Accelerometer full-scale range, g.
-        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
-        accel_range_g: f64,
+        #[command(flatten)]
+        import: report::convert::ImportArgs,
     },
     /// Simulate a MEMS IMU (scenario TOML, see docs/scenario.md) into a replay log + truth sidecar.
     Simulate {
@@ -137,7 +98,7 @@ enum Cmd {
     /// the AR bias model per channel (bias stage; Burg, Yule-Walker, covariance or linear FOS)
     /// → DIR/bias.toml.
     Fit {
-        /// Recorded log to fit on (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with no flags, what it found said on stderr).
+        /// Recorded log to fit on (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with the import flags given, none by default, what it found said on stderr).
         log: PathBuf,
         /// Directory for the model files (created if needed).
         #[arg(long, default_value = "models")]
@@ -165,6 +126,10 @@ enum Cmd {
         /// holds no channel models and the stage learns each gyro's bias at warm-up.
         #[arg(long, allow_negative_numbers = true, default_value_t = 60.0)]
         min_still_s: f64,
+        #[command(flatten)]
+        proto: imuprep::frame::detect::ProtocolArgs,
+        #[command(flatten)]
+        import: report::convert::ImportArgs,
     },
     /// Score the configured pipeline against a calibration-only baseline on a simulated scenario
     /// (truth known): RMS of 1-s mean error, 60-s heading drift, manoeuvre integrals (gyros).
@@ -191,7 +156,7 @@ enum Cmd {
     /// more than its noise; one report, plots, and one bias model (DIR/bias.toml) that the
     /// daemon's [bias] model can load.
     Diagnose {
-        /// Recorded log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with no flags, what it found said on stderr).
+        /// Recorded log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with the import flags given, none by default, what it found said on stderr).
         log: PathBuf,
         /// Channels (gx gy gz ax ay az); repeatable; default all.
         #[arg(long = "channel")]
@@ -213,6 +178,10 @@ enum Cmd {
         /// then: its effects would be fitted to the motion and subtract it from real motion).
         #[arg(long)]
         allow_motion: bool,
+        #[command(flatten)]
+        proto: imuprep::frame::detect::ProtocolArgs,
+        #[command(flatten)]
+        import: report::convert::ImportArgs,
     },
     /// Accelerometer bias, scale factor and misalignment from the still stretches of a moving
     /// recording (multi-position calibration without a turntable), each kept only if it
@@ -222,7 +191,7 @@ enum Cmd {
     /// directions. Writes DIR/report.txt, DIR/report.json and, when something is kept,
     /// DIR/calibration.toml ([bias.settings.accel], [bias.settings.gyro], usable as --config).
     Calibrate {
-        /// Recorded log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with no flags, what it found said on stderr).
+        /// Recorded log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with the import flags given, none by default, what it found said on stderr).
         log: PathBuf,
         /// Analyse only from this time, s from the start of the log...
         #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
@@ -240,11 +209,15 @@ enum Cmd {
         /// about the vertical from the turns of a drive.
         #[arg(long)]
         gnss: Option<PathBuf>,
+        #[command(flatten)]
+        proto: imuprep::frame::detect::ProtocolArgs,
+        #[command(flatten)]
+        import: report::convert::ImportArgs,
     },
     /// Compare methods on the same data. `--detectors --scenario S.toml`: gross-error detectors
     /// against the simulator's truth. `LOG --channel C`: the bias models of the FOS paper.
     Compare {
-        /// Recorded log for the bias-model comparison (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with no flags, what it found said on stderr).
+        /// Recorded log for the bias-model comparison (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with the import flags given, none by default, what it found said on stderr).
         log: Option<PathBuf>,
         /// Compare gross-error detectors (needs --scenario: truth comes from the simulator).
         #[arg(long)]
@@ -273,6 +246,10 @@ enum Cmd {
         /// Write the report as JSON here (and CSV beside it for the bias comparison).
         #[arg(long)]
         json: Option<PathBuf>,
+        #[command(flatten)]
+        proto: imuprep::frame::detect::ProtocolArgs,
+        #[command(flatten)]
+        import: report::convert::ImportArgs,
     },
     /// Do-no-harm audit: the embedded default pipeline over every recording under DIR (CSV as
     /// `import` reads it, or native logs), scored against the targets of issue 12, with seeded
@@ -299,7 +276,7 @@ enum Cmd {
     /// IEEE-952 terms fitted to it, a plot, and exports (Kalibr imu.yaml, GNSS_IMU config lines,
     /// bias model TOML) in OUT_DIR.
     Allan {
-        /// Static recording (replay log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with no flags, what it found said on stderr)); the samples are taken as equally spaced at its rate.
+        /// Static recording (replay log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with the import flags given, none by default, what it found said on stderr)); the samples are taken as equally spaced at its rate.
         log: PathBuf,
         /// Channels (gx gy gz in rad/s, ax ay az in m/s^2); repeatable; default all.
         #[arg(long = "channel")]
@@ -315,6 +292,10 @@ enum Cmd {
         /// Also write the report as JSON here (tau in s, deviations in the channel's unit).
         #[arg(long)]
         json: Option<PathBuf>,
+        #[command(flatten)]
+        proto: imuprep::frame::detect::ProtocolArgs,
+        #[command(flatten)]
+        import: report::convert::ImportArgs,
     },
     /// Navigation test: imuprep's GNSS/INS filter on the rtklibexplorer drive and walk with
     /// simulated 10/30/60-s GNSS outages, fed the raw IMU, the cleaned IMU, and the raw IMU with
@@ -336,7 +317,7 @@ enum Cmd {
     /// Write a recording's samples as canonical CSV plus seq and flags, or (--to) as a native
     /// log, UBX ESF-RAW, MAVLink HIGHRES_IMU or ULog sensor_combined stream.
     Export {
-        /// Recording to export (native log or a protocol file, detected; or any recording `import` reads, a CSV or a bag, read as `import` reads it with no flags).
+        /// Recording to export (native log or a protocol file, detected; or any recording `import` reads, a CSV or a bag, read as `import` reads it; with an import flag, any file that is no imuprep log).
         log: PathBuf,
         /// Output file.
         #[arg(short, long)]
@@ -346,6 +327,8 @@ enum Cmd {
         to: imuprep::io::convert::ExportFormat,
         #[command(flatten)]
         proto: imuprep::frame::detect::ProtocolArgs,
+        #[command(flatten)]
+        import: report::convert::ImportArgs,
     },
 }
 
@@ -427,7 +410,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 cfg.protocol.protocol,
                 imuprep::frame::detect::ProtocolChoice::Native
             );
-            let mut replay = report::daemon::replay_source(cfg, named)?;
+            let mut replay = report::daemon::replay_source(cfg, named, &Default::default())?;
             report::daemon::add_outs(&mut replay.cfg, &out)?;
             // `replay.imported` (a CSV's or bag's log) lives until the run has ended.
             daemon(replay.cfg, summary_json)
@@ -439,9 +422,14 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             speed,
             summary_json,
             proto,
+            import,
         } => {
-            let mut replay =
-                report::daemon::replay_config(load_config(&config)?, log, speed, &proto)?;
+            let log = report::Recording {
+                path: log,
+                proto,
+                import,
+            };
+            let mut replay = report::daemon::replay_config(load_config(&config)?, &log, speed)?;
             report::daemon::add_outs(&mut replay.cfg, &out)?;
             // `replay.imported` (a CSV's or bag's log) lives until the run has ended.
             daemon(replay.cfg, summary_json)
@@ -450,40 +438,9 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             input,
             proto,
             output,
-            accel_file,
-            select,
-            cols,
-            columns,
-            gyro_unit,
-            accel_unit,
-            time_unit,
-            rate,
-            rebase_time,
-            gyro_range_dps,
-            accel_range_g,
+            import,
         } => {
-            let mut o = ImportOptions {
-                gyro_unit,
-                accel_unit,
-                time_unit,
-                time_from_index_hz: rate,
-                rebase_time,
-                gyro_range_rad_s: gyro_range_dps.to_radians() as f32,
-                accel_range_m_s2: (accel_range_g * G0) as f32,
-                ..Default::default()
-            };
-            report::convert::parse_columns(&cols, &mut o)?;
-            if let Some(w) = select {
-                let (c, v) = w
-                    .split_once('=')
-                    .with_context(|| format!("--where {w:?}: expected COLUMN=VALUE"))?;
-                o.select = Some((c.trim().to_string(), v.trim().to_string()));
-            }
-            report::convert::parse_positions(columns.as_deref(), &mut o)?;
-            let r = match accel_file {
-                Some(a) => report::convert::import_per_sensor(&input, &a, &output, &o)?,
-                None => report::convert::import(&input, &output, &proto, &o)?,
-            };
+            let r = report::convert::load_with(&input, &proto, &import)?.write(&output)?;
             eprint!("{r}");
             Ok(ExitCode::SUCCESS)
         }
@@ -506,7 +463,14 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             bias_method,
             bias_order,
             min_still_s,
+            proto,
+            import,
         } => {
+            let log = report::Recording {
+                path: log,
+                proto,
+                import,
+            };
             let o = report::fit::FitOptions {
                 train_s,
                 skip_s,
@@ -539,7 +503,14 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             out_dir,
             paper_split,
             allow_motion,
+            proto,
+            import,
         } => {
+            let log = report::Recording {
+                path: log,
+                proto,
+                import,
+            };
             let mut stdout = std::io::stdout();
             report::diagnose::diagnose(
                 &log,
@@ -558,7 +529,14 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             gravity,
             out_dir,
             gnss,
+            proto,
+            import,
         } => {
+            let log = report::Recording {
+                path: log,
+                proto,
+                import,
+            };
             let o = report::calibrate::CalibrateOptions {
                 from_s,
                 to_s,
@@ -581,6 +559,8 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             temp_exo,
             json,
             sets,
+            proto,
+            import,
         } => {
             if detectors {
                 let scenario = scenario.context(
@@ -591,9 +571,13 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 print!("{r}");
                 maybe_json(json, &r)?;
             } else {
-                let log = log.context(
-                    "compare needs a LOG (bias models) or --detectors --scenario S.toml",
-                )?;
+                let log = report::Recording {
+                    path: log.context(
+                        "compare needs a LOG (bias models) or --detectors --scenario S.toml",
+                    )?,
+                    proto,
+                    import,
+                };
                 let r = report::compare::bias_models(&log, &channels, skip_s, temp_exo)?;
                 print!("{r}");
                 if let Some(p) = json {
@@ -611,7 +595,14 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             skip_s,
             out_dir,
             json,
+            proto,
+            import,
         } => {
+            let log = report::Recording {
+                path: log,
+                proto,
+                import,
+            };
             let r = report::allan::allan(&log, &channels, skip_s, &out_dir)?;
             maybe_json(json, &r.report)?;
             print!("{r}");
@@ -638,8 +629,12 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             output,
             to,
             proto,
+            import,
         } => {
-            eprint!("{}", report::convert::export(&log, &output, to, &proto)?);
+            eprint!(
+                "{}",
+                report::convert::export(&log, &output, to, &proto, &import)?
+            );
             Ok(ExitCode::SUCCESS)
         }
     }

@@ -271,7 +271,12 @@ fn fit_judges_stillness_after_the_gross_error_stage() {
         bias_order: 64,
         min_still_s: 60.0,
     };
-    let r = imuprep::report::fit::fit(&log, &dir.path().join("m"), &o).unwrap();
+    let r = imuprep::report::fit::fit(
+        &imuprep::report::Recording::new(&log),
+        &dir.path().join("m"),
+        &o,
+    )
+    .unwrap();
     assert!(r.bias_skipped.is_none(), "{:?}", r.bias_skipped);
     assert_eq!(r.bias.len(), 6);
     // ≥ 175 s of the 180: the stillness detector's own warm-up (1.5 s) is the only gap on the

@@ -179,6 +179,161 @@ fn analysis_commands_read_a_csv_or_a_recording_as_import_does() {
     }
 }
 
+/// The import flags on the commands that read recordings: a headerless table in deg/s and g,
+/// 1000 s into its clock, read with `--columns`, `--gyro-unit`, `--accel-unit` by `fit` and
+/// `replay` gives, to the byte, what the log `import` writes with the same flags gives. A flag
+/// a reader would ignore is refused, naming it: any import flag on an imuprep log, a table's flag
+/// on a sensor protocol's file. `--rebase-time` applies to a protocol's file too (before, it was
+/// ignored there).
+#[test]
+fn commands_take_import_flags_and_refuse_those_they_would_ignore() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let scn = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.toml");
+    let ok = |args: &[&str]| {
+        let (code, err) = run(args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        err
+    };
+    ok(&[
+        "simulate",
+        scn,
+        "--set",
+        "motion.duration_s=300",
+        "-o",
+        &p("sim.log"),
+    ]);
+    ok(&["export", &p("sim.log"), "-o", &p("sim.csv")]);
+    // t + 1000 s, rad/s → deg/s, m/s² → g, no header, the temperature and flags left out.
+    let text = std::fs::read_to_string(p("sim.csv")).unwrap();
+    let mut table = String::new();
+    for line in text.lines().skip(1) {
+        let v: Vec<f64> = line
+            .split(',')
+            .take(7)
+            .map(|c| c.parse().unwrap())
+            .collect();
+        let g = 9.80665;
+        table += &format!(
+            "{:.6},{},{},{},{},{},{}\n",
+            v[0] + 1000.0,
+            v[1].to_degrees(),
+            v[2].to_degrees(),
+            v[3].to_degrees(),
+            v[4] / g,
+            v[5] / g,
+            v[6] / g
+        );
+    }
+    std::fs::write(p("deg.txt"), table).unwrap();
+    let flags = [
+        "--columns",
+        "t,gx,gy,gz,ax,ay,az",
+        "--gyro-unit",
+        "deg/s",
+        "--accel-unit",
+        "g",
+    ];
+    fn with<'a>(head: &[&'a str], flags: &[&'a str]) -> Vec<&'a str> {
+        [head, flags].concat()
+    }
+    ok(&with(
+        &["import", &p("deg.txt"), "-o", &p("deg.log")],
+        &flags,
+    ));
+    let fit = |input: &str, extra: &[&str]| {
+        let (out, input) = (p(&format!("fit-{}", extra.len())), p(input));
+        let args = [
+            &["fit", &input, "--train-s", "250", "--out-dir", &out][..],
+            extra,
+        ]
+        .concat();
+        let err = ok(&args);
+        let read = |f: &str| std::fs::read_to_string(format!("{out}/{f}")).unwrap();
+        (read("arima.toml"), read("bias.toml"), err)
+    };
+    let (arima, bias, err) = fit("deg.txt", &flags);
+    assert!(
+        err.contains(
+            "read as `imuprep import` reads it, with --columns, --gyro-unit, --accel-unit"
+        ),
+        "{err}"
+    );
+    let (arima_log, bias_log, _) = fit("deg.log", &[]);
+    assert_eq!(arima, arima_log, "arima.toml");
+    assert_eq!(bias, bias_log, "bias.toml");
+    assert!(
+        bias.contains("[[channels]]"),
+        "a bias model was fitted: {bias}"
+    );
+    let replayed = |head: &[&str], out: &str| {
+        ok(&[head, &["--out", &format!("csv:{}", p(out))][..]].concat());
+        std::fs::read(p(out)).unwrap()
+    };
+    let direct = replayed(&with(&["replay", &p("deg.txt")], &flags), "direct.csv");
+    assert!(direct.len() > 30000 * 40, "{} bytes", direct.len());
+    assert!(
+        direct == replayed(&["replay", &p("deg.log")], "of_log.csv"),
+        "replay with the flags differs from replay of the log import writes with them"
+    );
+    // Import flags on a log: refused by every reader, naming the flags.
+    for head in [
+        &["fit", &p("deg.log"), "--out-dir", &p("x")][..],
+        &["allan", &p("deg.log"), "--out-dir", &p("x")],
+        &["replay", &p("deg.log")],
+        &["export", &p("deg.log"), "-o", &p("x.csv")],
+    ] {
+        let (code, err) = run(&[head, &["--gyro-unit", "deg/s", "--rate", "100"][..]].concat());
+        assert_ne!(code, 0, "{head:?}");
+        assert!(
+            err.contains("an imuprep log, which carries its own units")
+                && err.contains("(--gyro-unit, --rate)"),
+            "{head:?}: {err}"
+        );
+    }
+    // A protocol's file: a table's flags refused, `--rebase-time` applied.
+    ok(&["export", &p("deg.log"), "--to", "ulog", "-o", &p("deg.ulg")]);
+    for head in [
+        &["import", &p("deg.ulg"), "-o", &p("y.log")][..],
+        &["fit", &p("deg.ulg"), "--out-dir", &p("y")],
+        &["replay", &p("deg.ulg")],
+    ] {
+        let (code, err) = run(&[head, &["--gyro-unit", "deg/s"][..]].concat());
+        assert_ne!(code, 0, "{head:?}");
+        assert!(
+            err.contains("read as a ulog recording, whose messages carry their own units")
+                && err.contains("--gyro-unit read only a text table"),
+            "{head:?}: {err}"
+        );
+    }
+    let first_t = |csv: &str| -> f64 {
+        let text = std::fs::read_to_string(p(csv)).unwrap();
+        text.lines()
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    ok(&["export", &p("deg.ulg"), "-o", &p("kept.csv")]);
+    ok(&[
+        "export",
+        &p("deg.ulg"),
+        "--rebase-time",
+        "-o",
+        &p("rebased.csv"),
+    ]);
+    // The ULog's stamps are whole microseconds: 1000 s within 1 µs.
+    assert!(
+        (first_t("kept.csv") - 1000.0).abs() < 1e-6,
+        "{}",
+        first_t("kept.csv")
+    );
+    assert_eq!(first_t("rebased.csv"), 0.0);
+}
+
 /// What cannot be read as a recording is still said: a one-row CSV has no sample rate, text
 /// that is no table is an input problem (exit 3), a log from a newer imuprep is refused as
 /// that, not taken for another format, and a gzipped log is named as gzip with `gunzip` as the

@@ -192,6 +192,24 @@ pub struct ProtocolArgs {
 }
 
 impl ProtocolArgs {
+    /// The flags given, by name (`--protocol`, `--topic`, …).
+    pub fn given(&self) -> Vec<&'static str> {
+        [
+            ("--protocol", self.protocol.is_some()),
+            ("--topic", self.topic.is_some()),
+            ("--instance", self.instance.is_some()),
+            ("--sysid", self.sysid.is_some()),
+            ("--compid", self.compid.is_some()),
+            ("--mavlink-message", self.mavlink_message.is_some()),
+            ("--raw-gyro-scale", self.raw_gyro_scale.is_some()),
+            ("--raw-accel-scale", self.raw_accel_scale.is_some()),
+            ("--ubx-raw-tick-us", self.ubx_raw_tick_us.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(name, set)| set.then_some(name))
+        .collect()
+    }
+
     /// Apply the flags given on top of `c`.
     pub fn apply(&self, c: &mut ProtocolConfig) {
         if let Some(p) = self.protocol {

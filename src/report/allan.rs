@@ -20,7 +20,12 @@ pub struct AllanRun {
 }
 
 /// Allan deviation and terms of `log` (after `skip_s`) on `channels`; exports into `out_dir`.
-pub fn allan(log: &Path, channels: &[String], skip_s: f64, out_dir: &Path) -> Result<AllanRun> {
+pub fn allan(
+    log: &super::Recording,
+    channels: &[String],
+    skip_s: f64,
+    out_dir: &Path,
+) -> Result<AllanRun> {
     let (rate, samples) = load_span(log, skip_s)?;
     let chans = parse_channels(channels)?;
     // A partial sensor's absent channels are said in the report, never analysed as NaN.

@@ -81,7 +81,7 @@ fn accel_lsb(samples: &[Sample], ranges: &[(usize, usize)]) -> Option<f64> {
 }
 
 /// Run `calibrate` on `log` and write its outputs.
-pub fn calibrate(log: &Path, o: &CalibrateOptions) -> Result<CalibrateReport> {
+pub fn calibrate(log: &super::Recording, o: &CalibrateOptions) -> Result<CalibrateReport> {
     ensure!(
         o.gravity_m_s2 > 9.7 && o.gravity_m_s2 < 9.9,
         "--gravity must be in (9.7, 9.9) m/s² (got {})",

@@ -91,7 +91,7 @@ impl fmt::Display for BiasCompareReport {
 /// `compare LOG`: each channel's comparison, after `skip_s`; `temp_exo` adds the temperature as
 /// an exogenous FOS input (the log must carry it on every sample).
 pub fn bias_models(
-    log: &Path,
+    log: &super::Recording,
     channels: &[String],
     skip_s: f64,
     temp_exo: bool,

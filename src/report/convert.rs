@@ -13,6 +13,126 @@ use crate::io::csv::{self as csvio, ImportOptions};
 use crate::io::sim_log::SimLogSummary;
 use crate::text::count;
 
+/// The flags of `imuprep import` that say how a recording it imports is read (a text table's
+/// columns and units, its rate, …). Every command that reads a recording takes them.
+#[derive(Clone, Debug, Default, clap::Args)]
+#[command(next_help_heading = "Reading a recording that is no imuprep log (import's flags)")]
+pub struct ImportArgs {
+    /// The accelerometer's own table, when each sensor has a file (phone sensor apps): the input
+    /// is then the gyro's. Bare x, y, z columns are each file's triad; the rows are merged onto
+    /// the file with more rows, the other interpolated between its rows on each side.
+    #[arg(long, value_name = "FILE")]
+    pub accel_file: Option<PathBuf>,
+    /// Only the rows whose COLUMN cell is VALUE: one sensor of several in one table (a
+    /// multi-IMU rig's id column, ArduPilot's IMU instance `I`).
+    #[arg(long = "where", value_name = "COLUMN=VALUE")]
+    pub select: Option<String>,
+    /// Column mapping by header name, repeatable: --col gx=gyro_x_dps (keys: t gx gy gz ax ay
+    /// az temp).
+    #[arg(long = "col")]
+    pub cols: Vec<String>,
+    /// Columns by position, for a file without a header (or to ignore its header): each
+    /// column's key in order, `_` to skip one, later columns skipped: --columns
+    /// t,gx,gy,gz,ax,ay,az (keys as --col; units from the flags, else the data).
+    #[arg(long, value_name = "KEYS", conflicts_with = "cols")]
+    pub columns: Option<String>,
+    /// Unit of the gyro columns (default: the column name's; else checked against the data:
+    /// range, and the turning of gravity's direction; canonical names = rad/s when they cannot tell).
+    #[arg(long, value_enum)]
+    pub gyro_unit: Option<csvio::GyroUnit>,
+    /// Unit of the accel columns (default: the column name's; else the data's median |f|:
+    /// ≈ 1 is g, ≈ 9.8 m/s2).
+    #[arg(long, value_enum)]
+    pub accel_unit: Option<csvio::AccelUnit>,
+    /// Unit of the time column (default: the column name's; else s, or the first of ms, us, ns
+    /// giving 2 Hz–100 kHz).
+    #[arg(long, value_enum)]
+    pub time_unit: Option<csvio::TimeUnit>,
+    /// Ignore the time column; time = row index / RATE (Hz).
+    #[arg(long, allow_negative_numbers = true)]
+    pub rate: Option<f64>,
+    /// Start the log at t = 0 (subtract the first time stamp).
+    #[arg(long)]
+    pub rebase_time: bool,
+    /// Gyro full-scale range, deg/s (enables saturation flags on replay).
+    #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
+    pub gyro_range_dps: f64,
+    /// Accelerometer full-scale range, g.
+    #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
+    pub accel_range_g: f64,
+}
+
+impl ImportArgs {
+    /// The flags given, by name (`--gyro-unit`, …).
+    pub fn given(&self) -> Vec<&'static str> {
+        [
+            ("--accel-file", self.accel_file.is_some()),
+            ("--where", self.select.is_some()),
+            ("--col", !self.cols.is_empty()),
+            ("--columns", self.columns.is_some()),
+            ("--gyro-unit", self.gyro_unit.is_some()),
+            ("--accel-unit", self.accel_unit.is_some()),
+            ("--time-unit", self.time_unit.is_some()),
+            ("--rate", self.rate.is_some()),
+            ("--rebase-time", self.rebase_time),
+            ("--gyro-range-dps", self.gyro_range_dps != 0.0),
+            ("--accel-range-g", self.accel_range_g != 0.0),
+        ]
+        .into_iter()
+        .filter_map(|(name, set)| set.then_some(name))
+        .collect()
+    }
+
+    /// The importer's options these flags set (a malformed `--col`, `--columns` or `--where`
+    /// said).
+    pub fn options(&self) -> Result<ImportOptions> {
+        let mut o = ImportOptions {
+            gyro_unit: self.gyro_unit,
+            accel_unit: self.accel_unit,
+            time_unit: self.time_unit,
+            time_from_index_hz: self.rate,
+            rebase_time: self.rebase_time,
+            gyro_range_rad_s: self.gyro_range_dps.to_radians() as f32,
+            accel_range_m_s2: (self.accel_range_g * csvio::G0) as f32,
+            ..Default::default()
+        };
+        parse_columns(&self.cols, &mut o)?;
+        if let Some(w) = &self.select {
+            let (c, v) = w
+                .split_once('=')
+                .with_context(|| format!("--where {w:?}: expected COLUMN=VALUE"))?;
+            o.select = Some((c.trim().to_string(), v.trim().to_string()));
+        }
+        parse_positions(self.columns.as_deref(), &mut o)?;
+        Ok(o)
+    }
+}
+
+/// `input` read as `imuprep import` reads it with the protocol flags `proto` and the import
+/// flags `a`.
+pub fn load_with(input: &Path, proto: &ProtocolArgs, a: &ImportArgs) -> Result<Loaded> {
+    load_as(input, &protocol_config(proto), a)
+}
+
+/// `input` read as [`load`] reads it with the protocol options `pc` and the importer's options
+/// the flags `a` set (with `--accel-file`: the gyro's and the accelerometer's tables merged).
+pub fn load_as(input: &Path, pc: &ProtocolConfig, a: &ImportArgs) -> Result<Loaded> {
+    let o = a.options()?;
+    match &a.accel_file {
+        Some(accel) => {
+            let (d, s, report) = csvio::read_per_sensor_report(input, accel, &o)?;
+            Ok(loaded(
+                input,
+                Some(accel),
+                (d, s),
+                None,
+                Some(report.to_string()),
+            ))
+        }
+        None => load(input, pc, &o),
+    }
+}
+
 /// `--col KEY=COLUMN` mappings → the importer's column names (keys: t gx gy gz ax ay az temp).
 pub fn parse_columns(cols: &[String], o: &mut ImportOptions) -> Result<()> {
     for c in cols {
@@ -91,17 +211,6 @@ pub struct ImportReport {
     pub sample_rate_hz: f64,
 }
 
-/// Convert `input` (a text table as `o` says, else any protocol the decoders read) into a
-/// native log.
-pub fn import(
-    input: &Path,
-    output: &Path,
-    proto: &ProtocolArgs,
-    o: &ImportOptions,
-) -> Result<ImportReport> {
-    load(input, &protocol_config(proto), o)?.write(output)
-}
-
 /// A recording read as `import` reads it, held in memory: the samples and what was found.
 #[derive(Debug)]
 pub struct Loaded {
@@ -141,6 +250,52 @@ pub fn load(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Result<Load
     if let Some(r) = o.time_from_index_hz {
         ensure!(r.is_finite() && r > 0.0, "--rate must be > 0 Hz");
     }
+    let mut r = read_recording(input, pc, o)?;
+    // `--rebase-time` for every input (a table's reader has already done it: then a no-op):
+    // the earliest stamp, the first in any record whose time does not run backwards.
+    if o.rebase_time
+        && let Some(t0) = r.samples.iter().map(|s| s.t_ns).min()
+    {
+        for s in &mut r.samples {
+            s.t_ns -= t0;
+        }
+    }
+    Ok(r)
+}
+
+/// The flags set in `o` that only a text table's reader reads (its columns, units, rows and
+/// time column), by name.
+fn table_only_flags(o: &ImportOptions) -> Vec<&'static str> {
+    [
+        ("--col", o.columns.iter().any(Option::is_some)),
+        ("--columns", !o.positions.is_empty()),
+        ("--where", o.select.is_some()),
+        ("--gyro-unit", o.gyro_unit.is_some()),
+        ("--accel-unit", o.accel_unit.is_some()),
+        ("--time-unit", o.time_unit.is_some()),
+        ("--rate", o.time_from_index_hz.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(name, set)| set.then_some(name))
+    .collect()
+}
+
+/// Refuses the table-only flags of `o` for `input`, a recording read as `label` (a protocol's,
+/// a bag): its messages carry their own units and time stamps, and a flag it would ignore must
+/// not be taken in silence.
+fn no_table_flags(input: &Path, label: &str, o: &ImportOptions) -> Result<()> {
+    let flags = table_only_flags(o);
+    ensure!(
+        flags.is_empty(),
+        "{}: read as {label}, whose messages carry their own units and time stamps: {} read only a text table (its columns, units, rows and time column)",
+        input.display(),
+        flags.join(", ")
+    );
+    Ok(())
+}
+
+/// [`load`] before `--rebase-time`.
+fn read_recording(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Result<Loaded> {
     // A bag compressed whole (rosbag2's file compression): inflated, then read as what it is.
     #[cfg(any(feature = "ros2", feature = "ros2-sqlite"))]
     if let Some((dir, inflated, said)) = inflate_whole(input)? {
@@ -253,6 +408,7 @@ fn decoded(
     o: &ImportOptions,
 ) -> Result<Imported> {
     check_input(input, f.samples.len() as u64, &f.stats)?;
+    no_table_flags(input, &format!("a {} recording", f.protocol), o)?;
     let mut d = f.descriptor.unwrap_or_default();
     d.gyro_range_rad_s = o.gyro_range_rad_s;
     d.accel_range_m_s2 = o.accel_range_m_s2;
@@ -279,7 +435,7 @@ fn names(files: &[PathBuf]) -> String {
 
 /// The protocol options as the flags set them on the detecting default (`Auto`: no protocol
 /// named, a text table read as one).
-fn protocol_config(proto: &ProtocolArgs) -> ProtocolConfig {
+pub fn protocol_config(proto: &ProtocolArgs) -> ProtocolConfig {
     let mut pc = ProtocolConfig::auto();
     proto.apply(&mut pc);
     pc
@@ -296,6 +452,7 @@ fn import_bag<E: std::fmt::Display>(
     label: &str,
     bag: std::result::Result<crate::io::bag::BagRead, E>,
 ) -> Result<Loaded> {
+    no_table_flags(input, &format!("a {label}"), o)?;
     let mut bag = bag.map_err(|e| InputProblem(format!("{}: {what}: {e}", input.display())))?;
     if bag.samples.is_empty() {
         return Err(InputProblem(format!(
@@ -433,18 +590,6 @@ fn span_s(samples: &[crate::sample::Sample]) -> f64 {
     }
 }
 
-/// `import GYRO --accel-file ACCEL`: one table per sensor, merged
-/// ([`csvio::read_per_sensor_report`]).
-pub fn import_per_sensor(
-    gyro: &Path,
-    accel: &Path,
-    output: &Path,
-    o: &ImportOptions,
-) -> Result<ImportReport> {
-    let (d, s, report) = csvio::read_per_sensor_report(gyro, accel, o)?;
-    loaded(gyro, Some(accel), (d, s), None, Some(report.to_string())).write(output)
-}
-
 /// A native log's sequence and frame faults, said at import as a CSV's time faults are (they
 /// are flagged on the samples and counted again on replay; a log whose writer dropped a quarter
 /// of its samples must not import in silence).
@@ -520,16 +665,21 @@ pub struct ExportReport {
     pub resyncs: u64,
 }
 
-/// Write the samples of `log` (any protocol) to `output` as `to`.
+/// Write the samples of `log` (any protocol, or any recording `import` reads, with the import
+/// flags `import`) to `output` as `to`.
 pub fn export(
     log: &Path,
     output: &Path,
     to: ExportFormat,
     proto: &ProtocolArgs,
+    import: &ImportArgs,
 ) -> Result<ExportReport> {
     let pc = protocol_config(proto);
-    let (descriptor, samples, stats) = if through_import(log, pc.protocol) {
-        super::imported_log(log, &detecting(&pc))?
+    super::no_import_flags_on_a_log(log, &import.given())?;
+    // Import flags given: the file is read as `import` reads it with them, whatever it is.
+    let imports = !import.given().is_empty() || through_import(log, pc.protocol);
+    let (descriptor, samples, stats) = if imports {
+        super::imported_log(log, &detecting(&pc), import)?
     } else {
         let f = read_any(log, &pc)?;
         check_input(log, f.samples.len() as u64, &f.stats)?;

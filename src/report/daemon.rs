@@ -1,13 +1,13 @@
 //! `imuprep run` and `replay`: the daemon's pipeline from a config until the source ends (or
 //! SIGINT/SIGTERM), returning the final health summary.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::{Result, anyhow, ensure};
 
 use crate::config::{Config, SourceConfig};
 use crate::frame::LogHeaderError;
-use crate::frame::detect::{ProtocolArgs, ProtocolChoice};
+use crate::frame::detect::ProtocolChoice;
 use crate::runtime::Health;
 
 /// `--out SPEC` flags → extra sinks of `cfg`; every bad spec is reported at once.
@@ -34,26 +34,30 @@ pub struct Replay {
 /// flags applied, then made ready as [`replay_source`] says. With `--protocol` naming a sensor
 /// protocol the file is that protocol's, as ever; `--protocol native` keeps the refusal of a
 /// file that is no native log.
-pub fn replay_config(
-    mut cfg: Config,
-    log: PathBuf,
-    speed: f64,
-    proto: &ProtocolArgs,
-) -> Result<Replay> {
-    proto.apply(&mut cfg.protocol);
-    cfg.source = SourceConfig::Replay { path: log, speed };
-    replay_source(cfg, proto.protocol.is_some())
+pub fn replay_config(mut cfg: Config, log: &super::Recording, speed: f64) -> Result<Replay> {
+    log.proto.apply(&mut cfg.protocol);
+    cfg.source = SourceConfig::Replay {
+        path: log.path.clone(),
+        speed,
+    };
+    replay_source(cfg, log.proto.protocol.is_some(), &log.import)
 }
 
 /// A config whose source replays a file (`imuprep replay`, or `imuprep run` with `[source]
 /// kind = "replay"`) made ready to run, the same way for both. A recording no streaming decoder
 /// reads but `import` does (a CSV or other text table, a bag directory, a ROS 1 or SQLite bag
-/// in a build that imports them) is imported with the source's protocol options and no other
-/// flag into a temporary log, what the import found said on stderr, and that log replayed.
+/// in a build that imports them) is imported with the source's protocol options and the import
+/// flags `import` into a temporary log, what the import found said on stderr, and that log
+/// replayed; so is any file that is no imuprep log when import flags are given (they are
+/// refused for a log).
 /// Unless `protocol_named`, a native source whose file is no native log but decodes as a
 /// sensor protocol is replayed as that protocol, said. The log's declared rate is given to the
 /// stages. Any other source is returned as it is.
-pub fn replay_source(mut cfg: Config, protocol_named: bool) -> Result<Replay> {
+pub fn replay_source(
+    mut cfg: Config,
+    protocol_named: bool,
+    import: &super::convert::ImportArgs,
+) -> Result<Replay> {
     let SourceConfig::Replay { path: log, speed } = cfg.source.clone() else {
         return Ok(Replay {
             cfg,
@@ -63,6 +67,8 @@ pub fn replay_source(mut cfg: Config, protocol_named: bool) -> Result<Replay> {
     let errs = cfg.protocol.validate();
     ensure!(errs.is_empty(), "{errs:?}");
     ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
+    let flags = import.given();
+    super::no_import_flags_on_a_log(&log, &flags)?;
     if !protocol_named
         && cfg.protocol.protocol == ProtocolChoice::Native
         && let Err(crate::io::log::LogError::Header {
@@ -76,12 +82,13 @@ pub fn replay_source(mut cfg: Config, protocol_named: bool) -> Result<Replay> {
         );
         cfg.protocol.protocol = ProtocolChoice::Auto;
     }
-    let (log, imported) = if super::convert::through_import(&log, cfg.protocol.protocol) {
+    let imports = !flags.is_empty() || super::convert::through_import(&log, cfg.protocol.protocol);
+    let (log, imported) = if imports {
         let dir = tempfile::tempdir()?;
         let path = dir.path().join("imported.log");
         let pc = super::convert::detecting(&cfg.protocol);
-        let loaded = super::convert::load(&log, &pc, &Default::default())?;
-        super::say_imported(&log, &loaded);
+        let loaded = super::convert::load_as(&log, &pc, import)?;
+        super::say_imported(&log, &loaded, &flags);
         loaded.write(&path)?;
         (path, Some(dir))
     } else {

@@ -39,7 +39,7 @@ pub fn effects_text(v: &[String]) -> String {
 /// stretch is diagnosed as one ([`diagnose_whole_samples`]) unless `paper_split`. On a stretch
 /// not at rest no `bias.toml` is written unless `allow_motion` ([`Stretch::motion`]).
 pub fn diagnose(
-    log: &Path,
+    log: &super::Recording,
     channels: &[String],
     (from_s, to_s): (f64, Option<f64>),
     out_dir: &Path,

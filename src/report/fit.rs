@@ -149,7 +149,7 @@ pub struct FitReport {
 }
 
 /// Fit both models on `log` and write them into `out_dir` (created if needed).
-pub fn fit(log: &Path, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
+pub fn fit(log: &super::Recording, out_dir: &Path, o: &FitOptions) -> Result<FitReport> {
     let bias_order = o.bias_order;
     ensure!(
         (1..=MAX_FILE_AR_ORDER).contains(&bias_order),

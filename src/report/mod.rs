@@ -18,12 +18,13 @@ pub mod flag_review;
 pub mod gate_sweep;
 pub mod navtest;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, ensure};
 
-use crate::frame::detect::ProtocolConfig;
+use crate::frame::detect::{ProtocolArgs, ProtocolConfig};
 use crate::sample::Sample;
+use convert::ImportArgs;
 
 /// Exit status of an offline command whose input decoded to nothing or was mostly garbage.
 pub const INPUT_PROBLEM_EXIT: u8 = 3;
@@ -56,14 +57,68 @@ pub fn check_input(what: &Path, samples: u64, stats: &crate::frame::DecoderStats
     }
 }
 
+/// A recording as a command is asked to read it: its path, and the flags that say how a file
+/// imuprep imports is read (none given: as `imuprep import` reads it with no flags). It is its
+/// path where a path is wanted.
+#[derive(Clone, Debug, Default)]
+pub struct Recording {
+    pub path: PathBuf,
+    pub proto: ProtocolArgs,
+    pub import: ImportArgs,
+}
+
+impl Recording {
+    /// `path`, read with no flags.
+    pub fn new(path: impl Into<PathBuf>) -> Self {
+        Recording {
+            path: path.into(),
+            ..Default::default()
+        }
+    }
+
+    /// The flags given, by name.
+    pub fn flags(&self) -> Vec<&'static str> {
+        let mut f = self.proto.given();
+        f.extend(self.import.given());
+        f
+    }
+}
+
+impl std::ops::Deref for Recording {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.path
+    }
+}
+
+/// Refuses import `flags` for an imuprep log: it carries its own units, columns and rate, and
+/// a flag it would ignore must not be taken in silence.
+pub fn no_import_flags_on_a_log(path: &Path, flags: &[&str]) -> Result<()> {
+    let is_log = crate::frame::detect::file_head(path, crate::frame::LOG_MAGIC.len())
+        .is_some_and(|h| h.starts_with(&crate::frame::LOG_MAGIC));
+    ensure!(
+        flags.is_empty() || !is_log,
+        "{}: an imuprep log, which carries its own units, columns and rate; the import flags given ({}) are for a recording imuprep imports (a CSV or other table, a sensor protocol's file, a bag)",
+        path.display(),
+        flags.join(", ")
+    );
+    Ok(())
+}
+
 /// Samples of a log after `skip_s`, with the log's sample rate.
-pub fn load_span(log: &Path, skip_s: f64) -> Result<(f64, Vec<Sample>)> {
+pub fn load_span(log: &Recording, skip_s: f64) -> Result<(f64, Vec<Sample>)> {
     load_span_to(log, skip_s, None)
 }
 
 /// Samples of a log after `skip_s`, at most `span_s` seconds of them (streamed: the rest of the
-/// file is not read), with the log's sample rate.
-pub fn load_span_to(log: &Path, skip_s: f64, span_s: Option<f64>) -> Result<(f64, Vec<Sample>)> {
+/// file is not read), with the log's sample rate. A recording that is no imuprep log is read as
+/// `imuprep import` reads it with the recording's flags; flags on a log are refused.
+pub fn load_span_to(
+    log: &Recording,
+    skip_s: f64,
+    span_s: Option<f64>,
+) -> Result<(f64, Vec<Sample>)> {
+    no_import_flags_on_a_log(log, &log.flags())?;
     // A negative start or a span of no length is a mistake in what was asked, said as such
     // (not as a log that "ends before that").
     ensure!(
@@ -104,11 +159,13 @@ pub fn load_span_to(log: &Path, skip_s: f64, span_s: Option<f64>) -> Result<(f64
 /// `imuprep import` reads it with no flags ([`imported_log`]); then the span, counted in
 /// samples at the found rate as for a log.
 fn imported_span(
-    path: &Path,
+    rec: &Recording,
     skip_s: f64,
     span_s: Option<f64>,
 ) -> Result<(Option<crate::frame::Descriptor>, Vec<Sample>)> {
-    let (desc, mut samples, _) = imported_log(path, &ProtocolConfig::auto())?;
+    let path = &rec.path;
+    let pc = convert::protocol_config(&rec.proto);
+    let (desc, mut samples, _) = imported_log(path, &pc, &rec.import)?;
     let rate = desc.map_or(0.0, |d| d.sample_rate_hz);
     ensure!(
         rate > 0.0,
@@ -125,16 +182,17 @@ fn imported_span(
     Ok((desc, samples))
 }
 
-/// `path` read as `imuprep import` reads it with the protocol options `pc` and no other flag, what the import
-/// found said ([`say_imported`]), and the samples encoded as a log in memory and decoded again:
-/// to the bit what the log `import` writes would give (single-precision values, the decoder's
-/// flags), with that decoder's counters.
+/// `path` read as `imuprep import` reads it with the protocol options `pc` and the import flags
+/// `import`, what the import found said ([`say_imported`]), and the samples encoded as a log in
+/// memory and decoded again: to the bit what the log `import` writes would give
+/// (single-precision values, the decoder's flags), with that decoder's counters.
 pub(crate) fn imported_log(
     path: &Path,
     pc: &ProtocolConfig,
+    import: &ImportArgs,
 ) -> Result<crate::io::log::LogContents> {
-    let loaded = convert::load(path, pc, &Default::default())?;
-    say_imported(path, &loaded);
+    let loaded = convert::load_as(path, pc, import)?;
+    say_imported(path, &loaded, &import.given());
     let mut bytes = bytes::BytesMut::new();
     crate::io::log::encode_log(&loaded.descriptor, &loaded.samples, &mut bytes);
     drop(loaded);
@@ -143,13 +201,21 @@ pub(crate) fn imported_log(
 }
 
 /// What an import of `path` made for a command that takes a log found, said on the log (stderr):
-/// that it was imported with no flags, and the import's own lines.
-fn say_imported(path: &Path, r: &convert::Loaded) {
-    tracing::info!(
-        "{}: not an imuprep log: read as `imuprep import` reads it, with no flags (`imuprep import {} -o OUT.log` keeps it as a log and takes flags for its units and columns)",
-        path.display(),
-        path.display()
-    );
+/// the import flags it was read with, and the import's own lines.
+fn say_imported(path: &Path, r: &convert::Loaded, flags: &[&str]) {
+    if flags.is_empty() {
+        tracing::info!(
+            "{}: not an imuprep log: read as `imuprep import` reads it, with no flags (`imuprep import {} -o OUT.log` keeps it as a log; the import flags, e.g. --gyro-unit, --columns, --rate, set its units, columns and rate here too)",
+            path.display(),
+            path.display()
+        );
+    } else {
+        tracing::info!(
+            "{}: not an imuprep log: read as `imuprep import` reads it, with {}",
+            path.display(),
+            flags.join(", ")
+        );
+    }
     for line in r.decoded.iter().chain(&r.timing).flat_map(|t| t.lines()) {
         // The import's warnings (a stated unit the data contradict, …) stay warnings.
         match line.strip_prefix("WARNING: ") {

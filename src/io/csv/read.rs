@@ -655,6 +655,7 @@ pub(super) fn finish(
         first_empty_row,
         ..ImportReport::default()
     };
+    report.index_rate_hz = o.time_from_index_hz;
     let rate = match o.time_from_index_hz {
         Some(hz) => hz,
         None => {

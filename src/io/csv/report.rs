@@ -41,6 +41,8 @@ pub struct ImportReport {
     pub warnings: Vec<String>,
     /// Sequence and time faults derived from the time stamps (all zero with `--rate`).
     pub time: TimeFaults,
+    /// `--rate`: the time stamps are the row index over this rate, Hz (no time column read).
+    pub index_rate_hz: Option<f64>,
     /// Channels the file does not have (no column, or a column empty in every row): written as
     /// absent (the descriptor's absent mask, NaN values), never as zeros.
     pub absent: Vec<String>,
@@ -65,12 +67,14 @@ impl std::fmt::Display for ImportReport {
         if let Some(t) = &self.table {
             writeln!(f, "table: {t}")?;
         }
-        write!(
-            f,
-            "{}; {}",
-            crate::text::count(self.rows, "row", "rows"),
-            self.time
-        )?;
+        let rows = crate::text::count(self.rows, "row", "rows");
+        match self.index_rate_hz {
+            Some(hz) => write!(
+                f,
+                "{rows}; time: row index / {hz} Hz (--rate: no time column read, so no gap or time fault can be seen)"
+            )?,
+            None => write!(f, "{rows}; {}", self.time)?,
+        }
         if !self.absent.is_empty() {
             write!(
                 f,

@@ -116,7 +116,12 @@ fn fit_in(
         bias_order: BiasMethod::Burg.default_order(),
         min_still_s,
     };
-    let rep = fit(&log, &dir.join("models"), &o).map_err(|e| format!("imuprep fit: {e:#}"))?;
+    let rep = fit(
+        &crate::report::Recording::new(&log),
+        &dir.join("models"),
+        &o,
+    )
+    .map_err(|e| format!("imuprep fit: {e:#}"))?;
     let read = |p: &std::path::Path| std::fs::read_to_string(p).map_err(|e| e.to_string());
     let arima =
         ArimaModelFile::from_toml_str(&read(&rep.arima_path)?).map_err(|e| e.to_string())?;
