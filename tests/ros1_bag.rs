@@ -108,6 +108,7 @@ fn topic_and_time_source_are_selectable() {
     assert!(b.samples.iter().all(|s| s.temp_c.is_none()));
 }
 
+/// Also: a table's flag on the bag is refused.
 #[test]
 fn import_writes_a_log_with_the_gap_flagged_and_replay_runs_it() {
     let dir = std::env::temp_dir().join(format!("imuprep_ros1_{}", std::process::id()));
@@ -159,6 +160,25 @@ fn import_writes_a_log_with_the_gap_flagged_and_replay_runs_it() {
     assert!(
         of_bag == of_log,
         "replay of the bag differs from replay of its import"
+    );
+    // A text table's flag on a bag is refused, naming it: the bag's messages carry their own
+    // units and stamps, and the flag would be ignored.
+    let out = imuprep(&[
+        "import",
+        "tests/reference/ros1_bag_bz2.bag",
+        "--gyro-unit",
+        "deg/s",
+        "-o",
+        log.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert_says(
+        &err,
+        &[
+            "read as a ROS 1 bag, whose messages carry their own units",
+            "--gyro-unit read only a text table",
+        ],
     );
     std::fs::remove_dir_all(&dir).ok();
 }
