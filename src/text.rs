@@ -53,3 +53,11 @@ mod tests {
         assert_eq!(trim_decimals(2.5, 2), "2.5");
     }
 }
+
+/// The names of the flags set, in order: `(name, set)` pairs as a command's arguments give them.
+pub fn flags_set<const N: usize>(flags: [(&'static str, bool); N]) -> Vec<&'static str> {
+    flags
+        .into_iter()
+        .filter_map(|(name, set)| set.then_some(name))
+        .collect()
+}

@@ -194,7 +194,7 @@ pub struct ProtocolArgs {
 impl ProtocolArgs {
     /// The flags given, by name (`--protocol`, `--topic`, …).
     pub fn given(&self) -> Vec<&'static str> {
-        [
+        crate::text::flags_set([
             ("--protocol", self.protocol.is_some()),
             ("--topic", self.topic.is_some()),
             ("--instance", self.instance.is_some()),
@@ -204,10 +204,7 @@ impl ProtocolArgs {
             ("--raw-gyro-scale", self.raw_gyro_scale.is_some()),
             ("--raw-accel-scale", self.raw_accel_scale.is_some()),
             ("--ubx-raw-tick-us", self.ubx_raw_tick_us.is_some()),
-        ]
-        .into_iter()
-        .filter_map(|(name, set)| set.then_some(name))
-        .collect()
+        ])
     }
 
     /// Apply the flags given on top of `c`.

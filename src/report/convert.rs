@@ -65,7 +65,7 @@ pub struct ImportArgs {
 impl ImportArgs {
     /// The flags given, by name (`--gyro-unit`, …).
     pub fn given(&self) -> Vec<&'static str> {
-        [
+        crate::text::flags_set([
             ("--accel-file", self.accel_file.is_some()),
             ("--where", self.select.is_some()),
             ("--col", !self.cols.is_empty()),
@@ -77,10 +77,7 @@ impl ImportArgs {
             ("--rebase-time", self.rebase_time),
             ("--gyro-range-dps", self.gyro_range_dps != 0.0),
             ("--accel-range-g", self.accel_range_g != 0.0),
-        ]
-        .into_iter()
-        .filter_map(|(name, set)| set.then_some(name))
-        .collect()
+        ])
     }
 
     /// The importer's options these flags set (a malformed `--col`, `--columns` or `--where`
@@ -266,7 +263,7 @@ pub fn load(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Result<Load
 /// The flags set in `o` that only a text table's reader reads (its columns, units, rows and
 /// time column), by name.
 fn table_only_flags(o: &ImportOptions) -> Vec<&'static str> {
-    [
+    crate::text::flags_set([
         ("--col", o.columns.iter().any(Option::is_some)),
         ("--columns", !o.positions.is_empty()),
         ("--where", o.select.is_some()),
@@ -274,10 +271,7 @@ fn table_only_flags(o: &ImportOptions) -> Vec<&'static str> {
         ("--accel-unit", o.accel_unit.is_some()),
         ("--time-unit", o.time_unit.is_some()),
         ("--rate", o.time_from_index_hz.is_some()),
-    ]
-    .into_iter()
-    .filter_map(|(name, set)| set.then_some(name))
-    .collect()
+    ])
 }
 
 /// Refuses the table-only flags of `o` for `input`, a recording read as `label` (a protocol's,
