@@ -33,6 +33,14 @@ pub fn trim_decimals(v: f64, places: usize) -> String {
     }
 }
 
+/// The names of the flags set, in order: `(name, set)` pairs as a command's arguments give them.
+pub fn flags_set<const N: usize>(flags: [(&'static str, bool); N]) -> Vec<&'static str> {
+    flags
+        .into_iter()
+        .filter_map(|(name, set)| set.then_some(name))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -52,12 +60,4 @@ mod tests {
         assert_eq!(trim_decimals(248.5580, 3), "248.558");
         assert_eq!(trim_decimals(2.5, 2), "2.5");
     }
-}
-
-/// The names of the flags set, in order: `(name, set)` pairs as a command's arguments give them.
-pub fn flags_set<const N: usize>(flags: [(&'static str, bool); N]) -> Vec<&'static str> {
-    flags
-        .into_iter()
-        .filter_map(|(name, set)| set.then_some(name))
-        .collect()
 }
