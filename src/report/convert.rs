@@ -673,7 +673,8 @@ pub fn export(
     // Import flags given: the file is read as `import` reads it with them, whatever it is.
     let imports = !import.given().is_empty() || through_import(log, pc.protocol);
     let (descriptor, samples, stats) = if imports {
-        super::imported_log(log, &detecting(&pc), import)?
+        let flags = [proto.given(), import.given()].concat();
+        super::imported_log(log, &detecting(&pc), import, &flags)?
     } else {
         let f = read_any(log, &pc)?;
         check_input(log, f.samples.len() as u64, &f.stats)?;

@@ -78,9 +78,7 @@ impl Recording {
 
     /// The flags given, by name.
     pub fn flags(&self) -> Vec<&'static str> {
-        let mut f = self.proto.given();
-        f.extend(self.import.given());
-        f
+        [self.proto.given(), self.import.given()].concat()
     }
 }
 
@@ -156,8 +154,8 @@ pub fn load_span_to(
 }
 
 /// A recording that is not an imuprep log (a CSV, a sensor protocol's file, a bag) read as
-/// `imuprep import` reads it with no flags ([`imported_log`]); then the span, counted in
-/// samples at the found rate as for a log.
+/// `imuprep import` reads it with the recording's flags ([`imported_log`]); then the span,
+/// counted in samples at the found rate as for a log.
 fn imported_span(
     rec: &Recording,
     skip_s: f64,
@@ -165,7 +163,7 @@ fn imported_span(
 ) -> Result<(Option<crate::frame::Descriptor>, Vec<Sample>)> {
     let path = &rec.path;
     let pc = convert::protocol_config(&rec.proto);
-    let (desc, mut samples, _) = imported_log(path, &pc, &rec.import)?;
+    let (desc, mut samples, _) = imported_log(path, &pc, &rec.import, &rec.flags())?;
     let rate = desc.map_or(0.0, |d| d.sample_rate_hz);
     ensure!(
         rate > 0.0,
@@ -183,16 +181,17 @@ fn imported_span(
 }
 
 /// `path` read as `imuprep import` reads it with the protocol options `pc` and the import flags
-/// `import`, what the import found said ([`say_imported`]), and the samples encoded as a log in
-/// memory and decoded again: to the bit what the log `import` writes would give
-/// (single-precision values, the decoder's flags), with that decoder's counters.
+/// `import`, what the import found said ([`say_imported`], naming the `flags` given), and the
+/// samples encoded as a log in memory and decoded again: to the bit what the log `import` writes
+/// would give (single-precision values, the decoder's flags), with that decoder's counters.
 pub(crate) fn imported_log(
     path: &Path,
     pc: &ProtocolConfig,
     import: &ImportArgs,
+    flags: &[&str],
 ) -> Result<crate::io::log::LogContents> {
     let loaded = convert::load_as(path, pc, import)?;
-    say_imported(path, &loaded, &import.given());
+    say_imported(path, &loaded, flags);
     let mut bytes = bytes::BytesMut::new();
     crate::io::log::encode_log(&loaded.descriptor, &loaded.samples, &mut bytes);
     drop(loaded);
