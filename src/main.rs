@@ -220,19 +220,19 @@ enum Cmd {
         /// Recorded log for the bias-model comparison (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with the import flags given, none by default, what it found said on stderr).
         log: Option<PathBuf>,
         /// Compare gross-error detectors (needs --scenario: truth comes from the simulator).
-        #[arg(long)]
+        #[arg(long, conflicts_with_all = ["log", "channels", "skip_s", "temp_exo"])]
         detectors: bool,
         /// Scenario TOML to simulate (with --detectors).
-        #[arg(long)]
+        #[arg(long, conflicts_with = "log")]
         scenario: Option<PathBuf>,
         /// Override a scenario key, repeatable: --set errors.gross.rate_per_sample=2e-3
-        #[arg(long = "set", value_name = "KEY=VALUE")]
+        #[arg(long = "set", value_name = "KEY=VALUE", conflicts_with = "log")]
         sets: Vec<String>,
         /// Seed of the simulation (default: the scenario's `seed`, else 0).
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_negative_numbers = true, conflicts_with = "log")]
         seed: Option<u64>,
         /// Config whose [gross_error.settings] the online stage uses (default: embedded).
-        #[arg(long)]
+        #[arg(long, conflicts_with = "log")]
         config: Option<PathBuf>,
         /// Channels for the bias comparison (gx gy gz ax ay az); repeatable; default all.
         #[arg(long = "channel")]
@@ -563,6 +563,13 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             import,
         } => {
             if detectors {
+                // The simulator makes the recording: a flag that reads one would be ignored.
+                let flags = [proto.given(), import.given()].concat();
+                anyhow::ensure!(
+                    flags.is_empty(),
+                    "--detectors simulates its recording from --scenario: {} read a recording, for the bias-model comparison (compare LOG)",
+                    flags.join(", ")
+                );
                 let scenario = scenario.context(
                     "--detectors needs --scenario S.toml (the truth comes from the simulator)",
                 )?;

@@ -334,6 +334,45 @@ fn commands_take_import_flags_and_refuse_those_they_would_ignore() {
     assert_eq!(first_t("rebased.csv"), 0.0);
 }
 
+/// `compare` has two modes, and what one mode would ignore is refused, not taken in silence: a
+/// LOG, a channel or `--skip-s` beside `--detectors` (which simulates its data), an import flag
+/// there, and the simulation's `--seed`, `--set`, `--scenario`, `--config` beside a LOG.
+#[test]
+fn compare_refuses_what_its_mode_would_ignore() {
+    let scn = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.toml");
+    let log = concat!(env!("CARGO_MANIFEST_DIR"), "/replay/static_bench.log");
+    for (args, says) in [
+        (
+            &["compare", log, "--detectors", "--scenario", scn][..],
+            "cannot be used with",
+        ),
+        (
+            &["compare", "--detectors", "--scenario", scn, "--skip-s", "5"],
+            "cannot be used with",
+        ),
+        (&["compare", log, "--seed", "3"], "cannot be used with"),
+        (
+            &["compare", log, "--set", "motion.duration_s=60"],
+            "cannot be used with",
+        ),
+        (
+            &[
+                "compare",
+                "--detectors",
+                "--scenario",
+                scn,
+                "--gyro-unit",
+                "deg/s",
+            ],
+            "--detectors simulates its recording from --scenario: --gyro-unit read a recording",
+        ),
+    ] {
+        let (code, err) = run(args);
+        assert_ne!(code, 0, "{args:?}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+}
+
 /// What cannot be read as a recording is still said: a one-row CSV has no sample rate, text
 /// that is no table is an input problem (exit 3), a log from a newer imuprep is refused as
 /// that, not taken for another format, and a gzipped log is named as gzip with `gunzip` as the
