@@ -1,4 +1,12 @@
-//! `imuprep import`, `export` and `simulate`: recordings between formats, and simulated ones.
+//! `imuprep import`: a recording read as the importer reads it (a text table, a sensor
+//! protocol's file, a bag), in memory or written as a log; `export` and `simulate` in
+//! `export.rs`, the flags every reader takes in `args.rs`.
+
+mod args;
+mod export;
+
+pub use args::{ImportArgs, detecting, parse_columns, parse_positions, protocol_config};
+pub use export::{ExportReport, SimulateReport, export, simulate};
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -8,102 +16,9 @@ use serde::Serialize;
 
 use super::{InputProblem, check_input};
 use crate::frame::detect::{ProtocolArgs, ProtocolChoice, ProtocolConfig};
-use crate::io::convert::{ExportFormat, encode_stream, read_any, read_any_whole, read_files_whole};
+use crate::io::convert::{read_any_whole, read_files_whole};
 use crate::io::csv::{self as csvio, ImportOptions};
-use crate::io::sim_log::SimLogSummary;
 use crate::text::count;
-
-/// The flags of `imuprep import` that say how a recording it imports is read (a text table's
-/// columns and units, its rate, …). Every command that reads a recording takes them.
-#[derive(Clone, Debug, Default, clap::Args)]
-#[command(next_help_heading = "Reading a recording that is no imuprep log (import's flags)")]
-pub struct ImportArgs {
-    /// The accelerometer's own table, when each sensor has a file (phone sensor apps): the input
-    /// is then the gyro's. Bare x, y, z columns are each file's triad; the rows are merged onto
-    /// the file with more rows, the other interpolated between its rows on each side.
-    #[arg(long, value_name = "FILE")]
-    pub accel_file: Option<PathBuf>,
-    /// Only the rows whose COLUMN cell is VALUE: one sensor of several in one table (a
-    /// multi-IMU rig's id column, ArduPilot's IMU instance `I`).
-    #[arg(long = "where", value_name = "COLUMN=VALUE")]
-    pub select: Option<String>,
-    /// Column mapping by header name, repeatable: --col gx=gyro_x_dps (keys: t gx gy gz ax ay
-    /// az temp).
-    #[arg(long = "col")]
-    pub cols: Vec<String>,
-    /// Columns by position, for a file without a header (or to ignore its header): each
-    /// column's key in order, `_` to skip one, later columns skipped: --columns
-    /// t,gx,gy,gz,ax,ay,az (keys as --col; units from the flags, else the data).
-    #[arg(long, value_name = "KEYS", conflicts_with = "cols")]
-    pub columns: Option<String>,
-    /// Unit of the gyro columns (default: the column name's; else checked against the data:
-    /// range, and the turning of gravity's direction; canonical names = rad/s when they cannot tell).
-    #[arg(long, value_enum)]
-    pub gyro_unit: Option<csvio::GyroUnit>,
-    /// Unit of the accel columns (default: the column name's; else the data's median |f|:
-    /// ≈ 1 is g, ≈ 9.8 m/s2).
-    #[arg(long, value_enum)]
-    pub accel_unit: Option<csvio::AccelUnit>,
-    /// Unit of the time column (default: the column name's; else s, or the first of ms, us, ns
-    /// giving 2 Hz–100 kHz).
-    #[arg(long, value_enum)]
-    pub time_unit: Option<csvio::TimeUnit>,
-    /// Ignore the time column; time = row index / RATE (Hz).
-    #[arg(long, allow_negative_numbers = true)]
-    pub rate: Option<f64>,
-    /// Start the log at t = 0 (subtract the first time stamp).
-    #[arg(long)]
-    pub rebase_time: bool,
-    /// Gyro full-scale range, deg/s (enables saturation flags on replay).
-    #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
-    pub gyro_range_dps: f64,
-    /// Accelerometer full-scale range, g.
-    #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
-    pub accel_range_g: f64,
-}
-
-impl ImportArgs {
-    /// The flags given, by name (`--gyro-unit`, …).
-    pub fn given(&self) -> Vec<&'static str> {
-        crate::text::flags_set([
-            ("--accel-file", self.accel_file.is_some()),
-            ("--where", self.select.is_some()),
-            ("--col", !self.cols.is_empty()),
-            ("--columns", self.columns.is_some()),
-            ("--gyro-unit", self.gyro_unit.is_some()),
-            ("--accel-unit", self.accel_unit.is_some()),
-            ("--time-unit", self.time_unit.is_some()),
-            ("--rate", self.rate.is_some()),
-            ("--rebase-time", self.rebase_time),
-            ("--gyro-range-dps", self.gyro_range_dps != 0.0),
-            ("--accel-range-g", self.accel_range_g != 0.0),
-        ])
-    }
-
-    /// The importer's options these flags set (a malformed `--col`, `--columns` or `--where`
-    /// said).
-    pub fn options(&self) -> Result<ImportOptions> {
-        let mut o = ImportOptions {
-            gyro_unit: self.gyro_unit,
-            accel_unit: self.accel_unit,
-            time_unit: self.time_unit,
-            time_from_index_hz: self.rate,
-            rebase_time: self.rebase_time,
-            gyro_range_rad_s: self.gyro_range_dps.to_radians() as f32,
-            accel_range_m_s2: (self.accel_range_g * csvio::G0) as f32,
-            ..Default::default()
-        };
-        parse_columns(&self.cols, &mut o)?;
-        if let Some(w) = &self.select {
-            let (c, v) = w
-                .split_once('=')
-                .with_context(|| format!("--where {w:?}: expected COLUMN=VALUE"))?;
-            o.select = Some((c.trim().to_string(), v.trim().to_string()));
-        }
-        parse_positions(self.columns.as_deref(), &mut o)?;
-        Ok(o)
-    }
-}
 
 /// `input` read as `imuprep import` reads it with the protocol flags `proto` and the import
 /// flags `a`.
@@ -128,21 +43,6 @@ pub fn load_as(input: &Path, pc: &ProtocolConfig, a: &ImportArgs) -> Result<Load
         }
         None => load(input, pc, &o),
     }
-}
-
-/// `--col KEY=COLUMN` mappings → the importer's column names (keys: t gx gy gz ax ay az temp).
-pub fn parse_columns(cols: &[String], o: &mut ImportOptions) -> Result<()> {
-    for c in cols {
-        let (k, v) = c
-            .split_once('=')
-            .with_context(|| format!("--col {c:?}: expected KEY=COLUMN"))?;
-        let i = ["t", "gx", "gy", "gz", "ax", "ay", "az", "temp"]
-            .iter()
-            .position(|x| *x == k)
-            .with_context(|| format!("--col {c:?}: key must be one of t gx gy gz ax ay az temp"))?;
-        o.columns[i] = Some(v.to_string());
-    }
-    Ok(())
 }
 
 /// `.csv` or `.csv.gz`: read as a table whatever the content.
@@ -172,24 +72,6 @@ pub fn through_import(log: &Path, choice: ProtocolChoice) -> bool {
             crate::io::csv::sniff_file(log),
             crate::io::csv::Sniffed::Binary
         )
-}
-
-/// The options a file [`through_import`] says goes to `import` is read with: `pc`'s (a bag's
-/// topic, …) with no protocol named, as `import` without `--protocol` reads it (a table as one,
-/// any other file detected).
-pub fn detecting(pc: &ProtocolConfig) -> ProtocolConfig {
-    ProtocolConfig {
-        protocol: ProtocolChoice::Auto,
-        ..pc.clone()
-    }
-}
-
-/// `--columns t,gx,gy,gz,ax,ay,az` → the importer's columns by position.
-pub fn parse_positions(spec: Option<&str>, o: &mut ImportOptions) -> Result<()> {
-    if let Some(spec) = spec {
-        o.positions = csvio::parse_positions(spec).map_err(anyhow::Error::msg)?;
-    }
-    Ok(())
 }
 
 /// What `import` wrote.
@@ -427,14 +309,6 @@ fn names(files: &[PathBuf]) -> String {
         .join(", ")
 }
 
-/// The protocol options as the flags set them on the detecting default (`Auto`: no protocol
-/// named, a text table read as one).
-pub fn protocol_config(proto: &ProtocolArgs) -> ProtocolConfig {
-    let mut pc = ProtocolConfig::auto();
-    proto.apply(&mut pc);
-    pc
-}
-
 /// A bag read whole ([`crate::io::bag`]): its Imu topic's samples, with time faults and the
 /// rate derived over the whole file as for every other import. `what` says the input's
 /// error, `label` names it on the import's first line.
@@ -647,117 +521,5 @@ impl fmt::Display for ImportReport {
                 .map_or(String::new(), |a| format!(" and {}", a.display())),
             self.output.display()
         )
-    }
-}
-
-/// What `export` wrote.
-#[derive(Debug, Clone, Serialize)]
-pub struct ExportReport {
-    pub output: PathBuf,
-    pub samples: usize,
-    pub crc_errors: u64,
-    pub resyncs: u64,
-}
-
-/// Write the samples of `log` (any protocol, or any recording `import` reads, with the import
-/// flags `import`) to `output` as `to`.
-pub fn export(
-    log: &Path,
-    output: &Path,
-    to: ExportFormat,
-    proto: &ProtocolArgs,
-    import: &ImportArgs,
-) -> Result<ExportReport> {
-    let pc = protocol_config(proto);
-    super::no_import_flags_on_a_log(log, &import.given())?;
-    // Import flags given: the file is read as `import` reads it with them, whatever it is.
-    let imports = !import.given().is_empty() || through_import(log, pc.protocol);
-    let (descriptor, samples, stats) = if imports {
-        let flags = [proto.given(), import.given()].concat();
-        super::imported_log(log, &detecting(&pc), import, &flags)?
-    } else {
-        let f = read_any(log, &pc)?;
-        check_input(log, f.samples.len() as u64, &f.stats)?;
-        (f.descriptor, f.samples, f.stats)
-    };
-    if to == ExportFormat::Csv {
-        csvio::write_csv(output, &samples)?;
-    } else {
-        let d = descriptor.unwrap_or_default();
-        let b = encode_stream(to, &d, &samples)?;
-        std::fs::write(output, &b).with_context(|| format!("writing {}", output.display()))?;
-    }
-    Ok(ExportReport {
-        output: output.to_path_buf(),
-        samples: samples.len(),
-        crc_errors: stats.crc_errors,
-        resyncs: stats.resyncs,
-    })
-}
-
-impl fmt::Display for ExportReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(
-            f,
-            "exported {} to {} ({}, {} in the log)",
-            count(self.samples as u64, "sample", "samples"),
-            self.output.display(),
-            count(self.crc_errors, "CRC error", "CRC errors"),
-            count(self.resyncs, "resync", "resyncs")
-        )
-    }
-}
-
-/// What `simulate` wrote.
-#[derive(Debug, Clone, Serialize)]
-pub struct SimulateReport {
-    pub output: PathBuf,
-    pub seed: u64,
-    /// What the run wrote (its fields stand beside `output` and `seed` in the JSON).
-    #[serde(flatten)]
-    pub written: SimLogSummary,
-}
-
-/// Simulate `scenario` (with `--set` overrides) into a replay log and an optional truth sidecar.
-pub fn simulate(
-    scenario: &Path,
-    sets: &[String],
-    seed: Option<u64>,
-    output: &Path,
-    truth: Option<&Path>,
-) -> Result<SimulateReport> {
-    let scn = super::read_scenario(scenario, sets)?;
-    let seed = crate::sim::log::effective_seed(&scn, seed);
-    let written = crate::io::sim_log::write_sim_log(&scn, seed, output, truth)?;
-    Ok(SimulateReport {
-        output: output.to_path_buf(),
-        seed,
-        written,
-    })
-}
-
-impl fmt::Display for SimulateReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let w = &self.written;
-        writeln!(
-            f,
-            "simulated {} (seed {}): {} ({} dropped, {} duplicated), {} → {}",
-            count(w.instants, "instant", "instants"),
-            self.seed,
-            count(w.frames, "frame", "frames"),
-            w.dropped,
-            w.duplicated,
-            count(w.bytes, "byte", "bytes"),
-            self.output.display()
-        )?;
-        if w.clipped > 0 {
-            writeln!(
-                f,
-                "clipped at the sensor's range: {} of {} (flagged saturated)",
-                count(w.clipped, "channel-sample", "channel-samples"),
-                6 * w.instants
-            )?;
-        }
-        Ok(())
     }
 }
