@@ -38,10 +38,13 @@ enum Cmd {
         #[arg(long)]
         summary_json: Option<PathBuf>,
     },
-    /// Run the daemon's pipeline on a recorded log and print a health summary.
+    /// Run the daemon's pipeline on a recorded log and print a health summary. A native log, UBX,
+    /// MAVLink, ULog or MCAP is streamed (a protocol detected when no --protocol names one); a
+    /// CSV or a bag, or with an import flag any file that is no imuprep log, is imported into a
+    /// temporary log and that replayed.
     Replay {
-        /// Recorded log: native, or a UBX, MAVLink, ULog or MCAP recording (detected when no --protocol names one), or any recording `import` reads (a CSV, a bag: imported into a temporary log, replayed; with an import flag, any file that is no imuprep log).
-        log: PathBuf,
+        #[command(flatten)]
+        log: report::Recording,
         /// Config file (default: the embedded config/default.toml).
         #[arg(long)]
         config: Option<PathBuf>,
@@ -56,10 +59,6 @@ enum Cmd {
         /// Also write the final health summary as JSON to this file.
         #[arg(long)]
         summary_json: Option<PathBuf>,
-        #[command(flatten)]
-        proto: imuprep::frame::detect::ProtocolArgs,
-        #[command(flatten)]
-        import: report::convert::ImportArgs,
     },
     /// Convert a recording into a replay log: a text table (CSV in a canonical or vendor layout;
     /// semicolon, tab or whitespace separated, decimal commas, comment lines, no header with
@@ -98,8 +97,8 @@ enum Cmd {
     /// the AR bias model per channel (bias stage; Burg, Yule-Walker, covariance or linear FOS)
     /// → DIR/bias.toml.
     Fit {
-        /// Recorded log to fit on (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with the import flags given, none by default, what it found said on stderr).
-        log: PathBuf,
+        #[command(flatten)]
+        log: report::Recording,
         /// Directory for the model files (created if needed).
         #[arg(long, default_value = "models")]
         out_dir: PathBuf,
@@ -126,10 +125,6 @@ enum Cmd {
         /// holds no channel models and the stage learns each gyro's bias at warm-up.
         #[arg(long, allow_negative_numbers = true, default_value_t = 60.0)]
         min_still_s: f64,
-        #[command(flatten)]
-        proto: imuprep::frame::detect::ProtocolArgs,
-        #[command(flatten)]
-        import: report::convert::ImportArgs,
     },
     /// Score the configured pipeline against a calibration-only baseline on a simulated scenario
     /// (truth known): RMS of 1-s mean error, 60-s heading drift, manoeuvre integrals (gyros).
@@ -156,8 +151,8 @@ enum Cmd {
     /// more than its noise; one report, plots, and one bias model (DIR/bias.toml) that the
     /// daemon's [bias] model can load.
     Diagnose {
-        /// Recorded log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with the import flags given, none by default, what it found said on stderr).
-        log: PathBuf,
+        #[command(flatten)]
+        log: report::Recording,
         /// Channels (gx gy gz ax ay az); repeatable; default all.
         #[arg(long = "channel")]
         channels: Vec<String>,
@@ -178,10 +173,6 @@ enum Cmd {
         /// then: its effects would be fitted to the motion and subtract it from real motion).
         #[arg(long)]
         allow_motion: bool,
-        #[command(flatten)]
-        proto: imuprep::frame::detect::ProtocolArgs,
-        #[command(flatten)]
-        import: report::convert::ImportArgs,
     },
     /// Accelerometer bias, scale factor and misalignment from the still stretches of a moving
     /// recording (multi-position calibration without a turntable), each kept only if it
@@ -191,8 +182,8 @@ enum Cmd {
     /// directions. Writes DIR/report.txt, DIR/report.json and, when something is kept,
     /// DIR/calibration.toml ([bias.settings.accel], [bias.settings.gyro], usable as --config).
     Calibrate {
-        /// Recorded log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with the import flags given, none by default, what it found said on stderr).
-        log: PathBuf,
+        #[command(flatten)]
+        log: report::Recording,
         /// Analyse only from this time, s from the start of the log...
         #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
         from_s: f64,
@@ -209,10 +200,6 @@ enum Cmd {
         /// about the vertical from the turns of a drive.
         #[arg(long)]
         gnss: Option<PathBuf>,
-        #[command(flatten)]
-        proto: imuprep::frame::detect::ProtocolArgs,
-        #[command(flatten)]
-        import: report::convert::ImportArgs,
     },
     /// Compare methods on the same data. `--detectors --scenario S.toml`: gross-error detectors
     /// against the simulator's truth. `LOG --channel C`: the bias models of the FOS paper.
@@ -272,12 +259,13 @@ enum Cmd {
         #[arg(long)]
         json: Option<PathBuf>,
     },
-    /// Noise parameters: overlapping Allan deviation per channel with confidence bands, the
-    /// IEEE-952 terms fitted to it, a plot, and exports (Kalibr imu.yaml, GNSS_IMU config lines,
-    /// bias model TOML) in OUT_DIR.
+    /// Noise parameters of a static recording: overlapping Allan deviation per channel with
+    /// confidence bands, the IEEE-952 terms fitted to it, a plot, and exports (Kalibr imu.yaml,
+    /// GNSS_IMU config lines, bias model TOML) in OUT_DIR. The samples are taken as equally
+    /// spaced at the recording's rate.
     Allan {
-        /// Static recording (replay log (or any recording `import` reads: a CSV, UBX, MAVLink, ULog or MCAP file, a bag; read as `import` reads it with the import flags given, none by default, what it found said on stderr)); the samples are taken as equally spaced at its rate.
-        log: PathBuf,
+        #[command(flatten)]
+        log: report::Recording,
         /// Channels (gx gy gz in rad/s, ax ay az in m/s^2); repeatable; default all.
         #[arg(long = "channel")]
         channels: Vec<String>,
@@ -292,10 +280,6 @@ enum Cmd {
         /// Also write the report as JSON here (tau in s, deviations in the channel's unit).
         #[arg(long)]
         json: Option<PathBuf>,
-        #[command(flatten)]
-        proto: imuprep::frame::detect::ProtocolArgs,
-        #[command(flatten)]
-        import: report::convert::ImportArgs,
     },
     /// Navigation test: imuprep's GNSS/INS filter on the rtklibexplorer drive and walk with
     /// simulated 10/30/60-s GNSS outages, fed the raw IMU, the cleaned IMU, and the raw IMU with
@@ -317,18 +301,14 @@ enum Cmd {
     /// Write a recording's samples as canonical CSV plus seq and flags, or (--to) as a native
     /// log, UBX ESF-RAW, MAVLink HIGHRES_IMU or ULog sensor_combined stream.
     Export {
-        /// Recording to export (native log or a protocol file, detected; or any recording `import` reads, a CSV or a bag, read as `import` reads it; with an import flag, any file that is no imuprep log).
-        log: PathBuf,
+        #[command(flatten)]
+        log: report::Recording,
         /// Output file.
         #[arg(short, long)]
         output: PathBuf,
         /// Output format.
         #[arg(long, value_enum, default_value = "csv")]
         to: imuprep::io::convert::ExportFormat,
-        #[command(flatten)]
-        proto: imuprep::frame::detect::ProtocolArgs,
-        #[command(flatten)]
-        import: report::convert::ImportArgs,
     },
 }
 
@@ -421,14 +401,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             out,
             speed,
             summary_json,
-            proto,
-            import,
         } => {
-            let log = report::Recording {
-                path: log,
-                proto,
-                import,
-            };
             let mut replay = report::daemon::replay_config(load_config(&config)?, &log, speed)?;
             report::daemon::add_outs(&mut replay.cfg, &out)?;
             // `replay.imported` (a CSV's or bag's log) lives until the run has ended.
@@ -463,14 +436,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             bias_method,
             bias_order,
             min_still_s,
-            proto,
-            import,
         } => {
-            let log = report::Recording {
-                path: log,
-                proto,
-                import,
-            };
             let o = report::fit::FitOptions {
                 train_s,
                 skip_s,
@@ -503,14 +469,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             out_dir,
             paper_split,
             allow_motion,
-            proto,
-            import,
         } => {
-            let log = report::Recording {
-                path: log,
-                proto,
-                import,
-            };
             let mut stdout = std::io::stdout();
             report::diagnose::diagnose(
                 &log,
@@ -529,14 +488,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             gravity,
             out_dir,
             gnss,
-            proto,
-            import,
         } => {
-            let log = report::Recording {
-                path: log,
-                proto,
-                import,
-            };
             let o = report::calibrate::CalibrateOptions {
                 from_s,
                 to_s,
@@ -602,14 +554,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             skip_s,
             out_dir,
             json,
-            proto,
-            import,
         } => {
-            let log = report::Recording {
-                path: log,
-                proto,
-                import,
-            };
             let r = report::allan::allan(&log, &channels, skip_s, &out_dir)?;
             maybe_json(json, &r.report)?;
             print!("{r}");
@@ -631,17 +576,8 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 ExitCode::SUCCESS
             })
         }
-        Cmd::Export {
-            log,
-            output,
-            to,
-            proto,
-            import,
-        } => {
-            eprint!(
-                "{}",
-                report::convert::export(&log, &output, to, &proto, &import)?
-            );
+        Cmd::Export { log, output, to } => {
+            eprint!("{}", report::convert::export(&log, &output, to)?);
             Ok(ExitCode::SUCCESS)
         }
     }

@@ -60,10 +60,16 @@ pub fn check_input(what: &Path, samples: u64, stats: &crate::frame::DecoderStats
 /// A recording as a command is asked to read it: its path, and the flags that say how a file
 /// imuprep imports is read (none given: as `imuprep import` reads it with no flags). It is its
 /// path where a path is wanted.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, clap::Args)]
 pub struct Recording {
+    /// The recording: an imuprep log, or any recording `import` reads (a CSV or other text
+    /// table, UBX, MAVLink, ULog, MCAP, a bag), read as `import` reads it with the import flags
+    /// given, none by default (what the import found is said on stderr).
+    #[arg(value_name = "LOG")]
     pub path: PathBuf,
+    #[command(flatten)]
     pub proto: ProtocolArgs,
+    #[command(flatten)]
     pub import: ImportArgs,
 }
 

@@ -6,8 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use super::{ImportArgs, detecting, protocol_config, through_import};
-use crate::frame::detect::ProtocolArgs;
+use super::{detecting, protocol_config, through_import};
 use crate::io::convert::{ExportFormat, encode_stream, read_any};
 use crate::io::csv as csvio;
 use crate::io::sim_log::SimLogSummary;
@@ -23,22 +22,20 @@ pub struct ExportReport {
     pub resyncs: u64,
 }
 
-/// Write the samples of `log` (any protocol, or any recording `import` reads, with the import
-/// flags `import`) to `output` as `to`.
+/// Write the samples of `log` (any protocol, or any recording `import` reads, with the
+/// recording's import flags) to `output` as `to`.
 pub fn export(
-    log: &Path,
+    log: &crate::report::Recording,
     output: &Path,
     to: ExportFormat,
-    proto: &ProtocolArgs,
-    import: &ImportArgs,
 ) -> Result<ExportReport> {
-    let pc = protocol_config(proto);
-    crate::report::no_import_flags_on_a_log(log, &import.given())?;
+    let pc = protocol_config(&log.proto);
+    let import_flags = log.import.given();
+    crate::report::no_import_flags_on_a_log(log, &import_flags)?;
     // Import flags given: the file is read as `import` reads it with them, whatever it is.
-    let imports = !import.given().is_empty() || through_import(log, pc.protocol);
+    let imports = !import_flags.is_empty() || through_import(log, pc.protocol);
     let (descriptor, samples, stats) = if imports {
-        let flags = [proto.given(), import.given()].concat();
-        crate::report::imported_log(log, &detecting(&pc), import, &flags)?
+        crate::report::imported_log(log, &detecting(&pc), &log.import, &log.flags())?
     } else {
         let f = read_any(log, &pc)?;
         check_input(log, f.samples.len() as u64, &f.stats)?;
