@@ -306,6 +306,20 @@ fn commands_take_import_flags_and_refuse_those_they_would_ignore() {
             "{head:?}: {err}"
         );
     }
+    // A protocol named with import flags is honoured: the table is read as that protocol (and
+    // decodes to nothing, exit 3), not quietly read as a table instead.
+    let (table, out) = (p("deg.txt"), p("z.csv"));
+    for cmd in ["replay", "export"] {
+        let mut args = vec![cmd, table.as_str()];
+        args.extend(flags);
+        args.extend(["--protocol", "ulog"]);
+        if cmd == "export" {
+            args.extend(["-o", out.as_str()]);
+        }
+        let (code, err) = run(&args);
+        assert_eq!(code, 3, "{args:?}: {err}");
+        assert!(err.contains("no samples decoded"), "{args:?}: {err}");
+    }
     let first_t = |csv: &str| -> f64 {
         let text = std::fs::read_to_string(p(csv)).unwrap();
         text.lines()

@@ -86,7 +86,7 @@ pub fn replay_source(
     let (log, imported) = if imports {
         let dir = tempfile::tempdir()?;
         let path = dir.path().join("imported.log");
-        let pc = super::convert::detecting(&cfg.protocol);
+        let pc = super::convert::for_import(&cfg.protocol, protocol_named);
         let loaded = super::convert::load_as(&log, &pc, import)?;
         super::say_imported(&log, &loaded, &flags);
         loaded.write(&path)?;

@@ -115,10 +115,14 @@ pub fn parse_columns(cols: &[String], o: &mut ImportOptions) -> Result<()> {
     Ok(())
 }
 
-/// The options a file [`super::through_import`] says goes to `import` is read with: `pc`'s (a bag's
-/// topic, …) with no protocol named, as `import` without `--protocol` reads it (a table as one,
-/// any other file detected).
-pub fn detecting(pc: &ProtocolConfig) -> ProtocolConfig {
+/// The protocol options a streaming command (`replay`, `export`) reads a file through `import`
+/// with (one [`super::through_import`] sends there, or any with import flags): `pc` as it is
+/// when its protocol was `named`; else `pc`'s options (a bag's topic, …) with no protocol named,
+/// as `import` without `--protocol` reads it (a table as one, any other file detected).
+pub fn for_import(pc: &ProtocolConfig, named: bool) -> ProtocolConfig {
+    if named {
+        return pc.clone();
+    }
     ProtocolConfig {
         protocol: ProtocolChoice::Auto,
         ..pc.clone()

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use super::{detecting, protocol_config, through_import};
+use super::{for_import, protocol_config, through_import};
 use crate::io::convert::{ExportFormat, encode_stream, read_any};
 use crate::io::csv as csvio;
 use crate::io::sim_log::SimLogSummary;
@@ -35,7 +35,8 @@ pub fn export(
     // Import flags given: the file is read as `import` reads it with them, whatever it is.
     let imports = !import_flags.is_empty() || through_import(log, pc.protocol);
     let (descriptor, samples, stats) = if imports {
-        crate::report::imported_log(log, &detecting(&pc), &log.import, &log.flags())?
+        let pc = for_import(&pc, log.proto.protocol.is_some());
+        crate::report::imported_log(log, &pc, &log.import, &log.flags())?
     } else {
         let f = read_any(log, &pc)?;
         check_input(log, f.samples.len() as u64, &f.stats)?;

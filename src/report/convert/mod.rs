@@ -5,7 +5,7 @@
 mod args;
 mod export;
 
-pub use args::{ImportArgs, detecting, parse_columns, parse_positions, protocol_config};
+pub use args::{ImportArgs, for_import, parse_columns, parse_positions, protocol_config};
 pub use export::{ExportReport, SimulateReport, export, simulate};
 
 use std::fmt;
