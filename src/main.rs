@@ -384,7 +384,8 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             summary_json,
         } => {
             // A replay source is read as `imuprep replay` reads its file; the config's
-            // `protocol` counts as named only when it names a sensor protocol.
+            // `protocol` counts as named unless it is the default, "native" (as `replay`
+            // without --protocol, a file that decodes as a sensor protocol is then detected).
             let cfg = load_daemon_config(&config)?;
             let named = !matches!(
                 cfg.protocol.protocol,
