@@ -232,7 +232,7 @@ pub struct ChannelGate {
 
 /// Warm-up samples before the grid is trusted: with fewer, the smallest difference seen may
 /// still be a multiple of the LSB (a floor too high).
-const GRID_MIN_SAMPLES: usize = 100;
+pub const GRID_MIN_SAMPLES: usize = 100;
 
 /// `E[min(Z², c²)]` for Z ~ N(0, 1).
 pub fn huber_beta(c: f64) -> f64 {

@@ -25,7 +25,9 @@ pub struct JumpGuard {
     sum: f64,
     last: f64,
     run: u32,
-    /// Floor of the mean squared increment (2 × the gate's σ floor²).
+    /// Floor of the mean squared increment (2 × the gate's σ floor²), and that floor raised to
+    /// the channel's quantisation noise (see [`JumpGuard::set_quantum`]).
+    base_floor2: f64,
     floor2: f64,
 }
 
@@ -38,8 +40,17 @@ impl JumpGuard {
             sum: 0.0,
             last: f64::NAN,
             run: 0,
+            base_floor2: 2.0 * min_sigma * min_sigma,
             floor2: 2.0 * min_sigma * min_sigma,
         }
+    }
+
+    /// The channel's quantisation step `lsb` (0: none seen): the increments' floor becomes at
+    /// least that of two independent quantisation errors, 2 · LSB²/12. A channel whose noise is
+    /// below one LSB sits on one code for many samples, its recent increments are all 0, and
+    /// without this every one-LSB toggle would jump "infinitely many σ".
+    pub fn set_quantum(&mut self, lsb: f64) {
+        self.floor2 = self.base_floor2.max(lsb * lsb / 6.0);
     }
 
     /// Would `v` be a candidate (|v − last accepted| > k · RMS of recent increments)? Not after

@@ -504,7 +504,7 @@ impl GrossErrorStage {
         if !candidate && ch.guard.run() > 0 {
             ch.gate.ended = Some(gate::EventEnd { motion: false });
         }
-        ch.gate.warm_push(
+        let activated = ch.gate.warm_push(
             &self.p,
             usable.then_some(v),
             s.t_ns,
@@ -512,6 +512,11 @@ impl GrossErrorStage {
             &self.identifier,
             CHANNEL_NAMES[c],
         );
+        // The guard learns the channel's LSB once the warm-up can tell it, and again from the
+        // whole window at activation.
+        if activated || (usable && ch.gate.warm_len() == gate::GRID_MIN_SAMPLES) {
+            ch.guard.set_quantum(ch.gate.resolution());
+        }
         if candidate {
             Outcome::Candidate {
                 pred: ch.guard.last(),
@@ -648,9 +653,13 @@ impl Stage for GrossErrorStage {
             s.flags |= flags::REPEATED;
             self.repeats += 1;
             match self.held.back() {
-                // Its measurement is still being judged: it gets the same verdict.
+                // Its measurement is still being judged: it takes what the measurement carries
+                // now (its warm-up flag, a verdict of a channel already judged) and gets the
+                // verdicts still to come with it.
                 Some(h) => {
                     let idx = h.idx;
+                    s.set_channels(&h.out.channels());
+                    s.flags |= h.out.flags & VERDICT_FLAGS;
                     self.held.push_back(Held { idx, out: s });
                 }
                 None => {

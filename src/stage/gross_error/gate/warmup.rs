@@ -219,6 +219,11 @@ impl ChannelGate {
         }
     }
 
+    /// Warm-up samples kept so far (0 once active).
+    pub fn warm_len(&self) -> usize {
+        self.warm.len()
+    }
+
     /// Warm-up time counted so far, s (see [`WarmupLimits`]).
     pub fn warmup_span_s(&self) -> f64 {
         self.warm_span_ns as f64 * 1e-9
@@ -318,6 +323,10 @@ impl ChannelGate {
     /// Activate on an identified (and seeded) window.
     fn finish(&mut self, p: &GateParams, r: Identified, name: &str) {
         self.resolution = r.resolution;
+        // The tracked scales never fall below the channel's quantisation noise, LSB/√12: on a
+        // channel whose noise is below one LSB most samples repeat one code, the scales shrink
+        // towards `min_sigma`, and every one-LSB toggle would make a candidate.
+        self.min_var = self.min_var.max(self.resolution * self.resolution / 12.0);
         self.counters.fallback_models += r.fallbacks;
         if self.activate_seeded(p, r.model, r.seed).is_err() {
             // Cannot happen: an unseeded model was seeded once already. Fall back regardless.
