@@ -513,6 +513,69 @@ fn a_channel_quieter_than_its_lsb_is_not_flagged_at_every_toggle() {
 }
 
 #[test]
+fn whole_samples_repeating_by_chance_are_measurements_and_stale_copies_are_not() {
+    // Six quantised channels. (a) Noise 0.2 LSB on each: a whole sample repeats its
+    // predecessor by chance about 3 times in 10, and each is a new measurement. (b) Noise 3
+    // LSB, every measurement written twice (a logger at twice the sensor's rate): each copy is
+    // stale. Before the chance rule every chance repeat of (a) was flagged REPEATED (and
+    // learned from by no stage); the copies of (b) must all still be.
+    let lsb = 1e-3;
+    let quantised = |rng: &mut Rng, sd: f64, i: u32| {
+        let mut s = Sample {
+            seq: i,
+            t_ns: u64::from(i) * 5_000_000,
+            ..Sample::default()
+        };
+        for c in 0..6 {
+            let level = [9.3, -18.8, 4.6, 20.2, -10.1, 2043.7][c];
+            s.set_channel(c, (level + sd * rng.normal()).round() * lsb);
+        }
+        s
+    };
+    let mut rng = Rng::new(26);
+    let quiet: Vec<Sample> = (0..6000).map(|i| quantised(&mut rng, 0.2, i)).collect();
+    let chance = quiet
+        .windows(2)
+        .filter(|w| w[0].channels() == w[1].channels())
+        .count();
+    assert!(chance > 1000, "the test needs chance repeats: {chance}");
+    let mut st = GrossErrorStage::new(GrossErrorSettings::default(), None).unwrap();
+    let out = run_through(&mut st, &quiet);
+    let flagged: Vec<usize> = (0..out.len())
+        .filter(|&i| out[i].has(flags::REPEATED))
+        .collect();
+    // The shares are trusted from the 100th pair on; before, every copy counts as stale (the
+    // old rule). After that, none may be flagged.
+    eprintln!("{} of {chance} chance repeats flagged", flagged.len());
+    assert!(
+        flagged.iter().all(|&i| i <= 100),
+        "{} of {chance} chance repeats flagged, after the 100th sample: {:?}",
+        flagged.len(),
+        flagged
+            .iter()
+            .filter(|&&i| i > 100)
+            .take(20)
+            .collect::<Vec<_>>()
+    );
+
+    let mut rng = Rng::new(27);
+    let mut doubled = Vec::new();
+    for i in 0..3000 {
+        let s = quantised(&mut rng, 3.0, 2 * i);
+        let mut copy = s;
+        copy.seq = 2 * i + 1;
+        copy.t_ns += 2_500_000;
+        doubled.push(s);
+        doubled.push(copy);
+    }
+    let mut st = GrossErrorStage::new(GrossErrorSettings::default(), None).unwrap();
+    let out = run_through(&mut st, &doubled);
+    for (i, o) in out.iter().enumerate() {
+        assert_eq!(o.has(flags::REPEATED), i % 2 == 1, "sample {i}");
+    }
+}
+
+#[test]
 fn warm_up_is_guarded() {
     // No model: the channel warms up for 2000 samples. Bad values in that time are replaced
     // and flagged, and an isolated 30σ spike is caught by the jump guard and confirmed.

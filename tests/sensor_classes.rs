@@ -353,28 +353,16 @@ const KNOWN_MISSES: &[(&str, &[&str], &str, &str, f64)] = &[
     ),
     // Coarse LSB on the walk: with the confirmation's scale floored at the learned LSB/√12
     // (was: only min_sigma_accel_m_s2 = 1e-3 m/s²; ax 5.77e-3, ay 1.22e-3, az 2.59e-3 then),
-    // 2-LSB jumps of its accelerometers (noise ≈ 0.5 new LSB) at rest are still replaced.
-    // Measured ax 3.422e-4, ay 4.889e-4, az 3.422e-4.
-    (
-        "rtklibexplorer_drive_walk/walk",
-        &["lsb×4"],
-        "ax",
-        "replaced per channel-sample",
-        3.5e-4,
-    ),
+    // 2-LSB jumps of its accelerometers (noise ≈ 0.5 new LSB) at rest were still replaced: ax
+    // 3.422e-4, ay 4.889e-4, az 3.422e-4. With the LSB read from the warm-up's 10th sample on
+    // (was the 100th) and the gate's and guard's scales floored at it too, ax and az are met and
+    // ay measures 2.933e-4 (3 of 10227).
     (
         "rtklibexplorer_drive_walk/walk",
         &["lsb×4"],
         "ay",
         "replaced per channel-sample",
-        4.9e-4,
-    ),
-    (
-        "rtklibexplorer_drive_walk/walk",
-        &["lsb×4"],
-        "az",
-        "replaced per channel-sample",
-        3.5e-4,
+        3.0e-4,
     ),
 ];
 

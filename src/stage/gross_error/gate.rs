@@ -230,9 +230,15 @@ pub struct ChannelGate {
     resolution: f64,
 }
 
-/// Warm-up samples before the grid is trusted: with fewer, the smallest difference seen may
-/// still be a multiple of the LSB (a floor too high).
-pub const GRID_MIN_SAMPLES: usize = 100;
+/// Warm-up samples before the grid is read. With few, the smallest difference seen may still be
+/// a multiple of the LSB (a floor too high: fewer candidates, never more); but a channel quiet
+/// enough for the floor to matter steps by one LSB at nearly every change, and until the grid is
+/// read every toggle of such a channel is a break (σ = 0.2 LSB: 5 toggles replaced in the first
+/// second when this was 100). The grid is re-read at every warm-up sample up to
+/// [`GRID_SETTLED_SAMPLES`], and from the whole window at activation.
+pub const GRID_MIN_SAMPLES: usize = 10;
+/// Warm-up samples after which the grid is re-read only at activation.
+pub const GRID_SETTLED_SAMPLES: usize = 100;
 
 /// `E[min(Z², c²)]` for Z ~ N(0, 1).
 pub fn huber_beta(c: f64) -> f64 {

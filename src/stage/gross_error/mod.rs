@@ -80,6 +80,14 @@ const VERDICT_FLAGS: u32 = flags::REPLACED
 /// stale repeat: one triad (three quantised values all unchanged is rare in real data; one
 /// channel unchanged is common at rest).
 const MIN_REPEAT_CHANNELS: usize = 3;
+/// Samples over which the shares of unchanged values are averaged.
+const CHANCE_WINDOW: u64 = 1000;
+/// Pairs of samples before the shares are trusted: until then every bit-identical copy is
+/// stale (the rule before there were shares).
+const CHANCE_MIN_PAIRS: u64 = 100;
+/// Whole-sample repeats beyond this many times the product of the channels' shares of unchanged
+/// values are stale copies (chance repeats come at about that product).
+const STALE_EXCESS: f64 = 4.0;
 /// Raw history kept per channel (samples): context + look-ahead + post context fit in it.
 const RING: usize = 2048;
 /// Events per channel awaiting a verdict at once; one more forces the oldest's verdict.
@@ -180,6 +188,12 @@ pub struct GrossErrorStage {
     n_in: u64,
     /// Raw channels of the last sample, to recognise a stale repeat.
     last_raw: Option<[f64; N_CHANNELS]>,
+    /// Each channel's share of samples that kept the previous one's value bit for bit, the share
+    /// of whole samples that did (running means over the last [`CHANCE_WINDOW`]), and the pairs
+    /// counted.
+    unchanged: [f64; N_CHANNELS],
+    whole: f64,
+    pairs: u64,
     /// The last sample emitted and its measurement index (a repeat of it copies its verdicts).
     last_out: Option<(u64, Sample)>,
     /// Stale repeats seen.
@@ -258,6 +272,9 @@ impl GrossErrorStage {
             gaps_reset: 0,
             n_in: 0,
             last_raw: None,
+            unchanged: [0.0; N_CHANNELS],
+            whole: 0.0,
+            pairs: 0,
             last_out: None,
             repeats: 0,
             delayed: 0,
@@ -327,15 +344,38 @@ impl GrossErrorStage {
     /// sample. Remembers `s` as the previous sample otherwise. Absent channels take no part;
     /// with fewer than [`MIN_REPEAT_CHANNELS`] present a bit-identical sample is ordinary for a
     /// quantised sensor at rest, so nothing is called a repeat.
+    ///
+    /// Nor is it one where whole samples repeat by chance: a sensor whose noise is below its LSB on
+    /// every channel does that (σ = 0.2 LSB: 31 % of its samples), and those are measurements. A
+    /// logger writing faster than its sensor repeats whole samples far more often than its
+    /// channels' own shares of unchanged values predict; chance repeats come as often as their
+    /// product. So a copy is stale while the share of whole-sample repeats (over the last
+    /// [`CHANCE_WINDOW`] samples) exceeds [`STALE_EXCESS`] times the product of the channels'
+    /// shares: on the rtklibexplorer walk (34 % stale copies) it is 100 times that and more.
     fn is_repeat(&mut self, s: &Sample) -> bool {
         let v = s.channels();
         let present = N_CHANNELS - s.absent.count_ones() as usize;
+        let Some(l) = self.last_raw else {
+            self.last_raw = Some(v);
+            return false;
+        };
+        let same = |c: usize| l[c].to_bits() == v[c].to_bits() && l[c].is_finite();
+        let identical = (0..N_CHANNELS).all(|c| s.is_absent(c) || same(c));
+        // The shares count every pair of successive samples, stale or not, this one included.
+        self.pairs = self.pairs.saturating_add(1);
+        let w = 1.0 / (self.pairs.min(CHANCE_WINDOW) as f64);
+        for c in (0..N_CHANNELS).filter(|&c| !s.is_absent(c)) {
+            self.unchanged[c] += w * (f64::from(u8::from(same(c))) - self.unchanged[c]);
+        }
+        self.whole += w * (f64::from(u8::from(identical)) - self.whole);
+        let chance: f64 = (0..N_CHANNELS)
+            .filter(|&c| !s.is_absent(c))
+            .map(|c| self.unchanged[c])
+            .product();
+        let learned = self.pairs >= CHANCE_MIN_PAIRS;
         let repeat = present >= MIN_REPEAT_CHANNELS
-            && self.last_raw.is_some_and(|l| {
-                l.iter().zip(&v).enumerate().all(|(c, (a, b))| {
-                    s.is_absent(c) || (a.to_bits() == b.to_bits() && a.is_finite())
-                })
-            });
+            && identical
+            && (!learned || self.whole > STALE_EXCESS * chance);
         if !repeat {
             self.last_raw = Some(v);
         }
@@ -512,9 +552,12 @@ impl GrossErrorStage {
             &self.identifier,
             CHANNEL_NAMES[c],
         );
-        // The guard learns the channel's LSB once the warm-up can tell it, and again from the
-        // whole window at activation.
-        if activated || (usable && ch.gate.warm_len() == gate::GRID_MIN_SAMPLES) {
+        // The guard learns the channel's LSB as the warm-up tells it, and again from the whole
+        // window at activation.
+        let n = ch.gate.warm_len();
+        if activated
+            || (usable && (gate::GRID_MIN_SAMPLES..=gate::GRID_SETTLED_SAMPLES).contains(&n))
+        {
             ch.guard.set_quantum(ch.gate.resolution());
         }
         if candidate {
