@@ -4,7 +4,7 @@
 //!   [`student_t`], with the measurement that says why).
 //! * [`acf`]: sample ACF and PACF with their white-noise bounds, the Ljung–Box test.
 //! * [`adf`]: the augmented Dickey–Fuller unit-root test with MacKinnon's p-values.
-//! * [`grid`]: the LSB a quantised channel's values lie on.
+//! * [`grid`]: the LSB a quantised channel's values lie on, and the rails a clipped one held.
 //! * [`robust`]: median, MAD-based σ, the Hampel filter.
 //! * [`ar_poly`]: the AR polynomial — stability (Schur–Cohn step-down), Durbin–Levinson and its
 //!   inverse, exact AR autocovariances. It sits here rather than in `model/` because the PACF

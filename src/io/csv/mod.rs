@@ -24,6 +24,7 @@ mod instance;
 mod layout;
 mod options;
 mod per_sensor;
+mod rails;
 mod read;
 mod report;
 mod scale;

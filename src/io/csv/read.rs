@@ -83,7 +83,10 @@ pub(super) fn conclude(
             rows.instances.said()
         )
     });
-    let (d, out, mut report) = finish(t, rows, missing, units);
+    let (mut d, mut out, mut report) = finish(t, rows, missing, units);
+    report
+        .notes
+        .extend(super::rails::infer_ranges(&mut out, &mut d));
     report.streams = streams;
     report.selected = selected;
     if wraps > 0 {

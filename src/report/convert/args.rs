@@ -49,10 +49,12 @@ pub struct ImportArgs {
     /// Start the log at t = 0 (subtract the first time stamp).
     #[arg(long)]
     pub rebase_time: bool,
-    /// Gyro full-scale range, deg/s (enables saturation flags on replay).
+    /// Gyro full-scale range, deg/s: values at or beyond it are flagged saturated. Without it a
+    /// text table's range is read from the rails its data hold (a channel holding its extreme
+    /// value, piled up, far from its median), if any, and the import says so.
     #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
     pub gyro_range_dps: f64,
-    /// Accelerometer full-scale range, g.
+    /// Accelerometer full-scale range, g (as --gyro-range-dps).
     #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
     pub accel_range_g: f64,
 }
