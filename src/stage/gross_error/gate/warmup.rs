@@ -205,8 +205,9 @@ impl ChannelGate {
     }
 
     /// The channel's quantisation step: the warm-up's [`grid_step`], and during the warm-up that
-    /// of the samples so far (from `GRID_MIN_SAMPLES` on; before, 0). Called only when an event
-    /// is judged.
+    /// of the samples so far (from `GRID_MIN_SAMPLES` on; before, 0). Called when an event is
+    /// judged, and for the jump guard at each of the warm-up's first `GRID_SETTLED_SAMPLES`
+    /// samples (a pass over at most that many values) and at activation.
     pub fn resolution(&self) -> f64 {
         if self.mode == Mode::WarmingUp {
             if self.warm.len() >= GRID_MIN_SAMPLES {
