@@ -65,7 +65,8 @@ pub struct Rail {
 }
 
 /// The rails of `x` (finite values; others ignored), top and bottom: its largest (smallest)
-/// value, when the channel held it for at least [`RAIL_RUN`] samples in a row, more samples lie
+/// value, when it lies beyond zero on its side, the channel came to it and held it for at least
+/// [`RAIL_RUN`] samples in a row before leaving it (a run inside the record), more samples lie
 /// on it than on the code next to it (a pile-up at a clip, not the end of a tail; a channel
 /// with no LSB has no next code), and it lies [`RAIL_FAR`] noise scales beyond the median.
 pub fn rails(x: &[f64]) -> [Option<Rail>; 2] {
@@ -80,7 +81,9 @@ pub fn rails(x: &[f64]) -> [Option<Rail>; 2] {
     let top = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let bottom = v.iter().copied().fold(f64::INFINITY, f64::min);
     let rail = |edge: f64, inward: f64| -> Option<Rail> {
-        if (edge - median).abs() <= RAIL_FAR * scale {
+        // A full scale lies beyond zero on its side (a constant pre-roll of zeros below a
+        // gyro's bias is the smallest value, held, but no rail), and far from the median.
+        if edge * inward >= 0.0 || (edge - median).abs() <= RAIL_FAR * scale {
             return None;
         }
         let samples = v.iter().filter(|&&y| y == edge).count();
@@ -90,14 +93,16 @@ pub fn rails(x: &[f64]) -> [Option<Rail>; 2] {
         } else {
             0
         };
+        // Runs the signal came to and left: a value a logger writes before the sensor starts
+        // (or after it stops) is held at the file's edge, not reached.
         let (mut runs, mut len) = (0, 0);
-        for &y in &v {
+        for (i, &y) in v.iter().enumerate() {
             if y == edge {
                 len += 1;
-                if len == RAIL_RUN {
+            } else {
+                if len >= RAIL_RUN && len < i {
                     runs += 1;
                 }
-            } else {
                 len = 0;
             }
         }
@@ -168,6 +173,16 @@ mod tests {
         // A constant channel has no rail; nor has unquantised motion that reaches its extreme
         // once.
         assert_eq!(rails(&[0.25; 100]), [None, None]);
+        // A logger's pre-roll, held before the sensor starts: zeros below a gyro whose bias
+        // (0.5) is 40 times its noise, or a sentinel beyond its values, at the file's start.
+        let mut pre: Vec<f64> = noise
+            .iter()
+            .map(|n| ((0.5 + 0.013 * n) / lsb).round() * lsb)
+            .collect();
+        pre[..200].fill(0.0);
+        assert_eq!(rails(&pre), [None, None]);
+        pre[..200].fill(-1.0);
+        assert_eq!(rails(&pre), [None, None]);
         let smooth: Vec<f64> = (0..5000).map(|i| (i as f64 * 0.01).sin() * 3.0).collect();
         assert_eq!(rails(&smooth), [None, None]);
     }
