@@ -59,7 +59,7 @@ const RAIL_FAR: f64 = 10.0;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rail {
     pub value: f64,
-    /// Samples on it, and runs of at least [`RAIL_RUN`] of them.
+    /// Samples on it, and runs of at least [`RAIL_RUN`] of them that the signal came to and left.
     pub samples: usize,
     pub runs: usize,
 }
