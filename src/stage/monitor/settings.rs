@@ -11,9 +11,11 @@ pub struct MonitorSettings {
     /// Window whose mean output is tested for an offset the model lacks, s (a multiple of
     /// `block_s`; about the bias model's time constant is where a step shows most).
     pub window_s: f64,
-    /// Offset alarm threshold, in the channel's own learned RMS of a window mean (on an
-    /// accelerometer, of the change of its median level from a reference level before it, which
-    /// must hold for half a window of tests: docs/model-health.md).
+    /// Offset alarm threshold, in the channel's own learned RMS of a window mean: on a gyro the
+    /// bar is the Student-t quantile at the normal's tail beyond this many σ, with the degrees of
+    /// freedom that RMS is learned from (11.2 σ at 10, 5.3 at 100 for 5); on an accelerometer,
+    /// this many σ of the change of its median level from a reference level before it, which
+    /// must hold for half a window of tests (docs/model-health.md).
     pub offset_k: f64,
     /// Still time a channel needs before its offset test is armed, s.
     pub learn_s: f64,

@@ -26,6 +26,8 @@
 
 use super::learn::{Bridge, Delayed};
 use crate::stats::robust::median;
+use crate::stats::special::normal_sf;
+use crate::stats::student_t::student_t_quantile;
 use std::collections::VecDeque;
 
 /// One alarm of the level detector.
@@ -122,6 +124,9 @@ pub struct LevelDetector {
     confirm: usize,
     // Learned tests arming needs.
     arm_tests: usize,
+    // Whether the bar follows the learned scale's degrees of freedom ([`LevelDetector::bar`]);
+    // against a reference it is `k` (the medians and the confirmation guard that test).
+    dof_bar: bool,
     over: usize,
     over_since_ns: u64,
     active: bool,
@@ -157,6 +162,7 @@ impl LevelDetector {
             scratch: Vec::new(),
             confirm: 1,
             arm_tests: window_blocks.max(1),
+            dof_bar: true,
             over: 0,
             over_since_ns: 0,
             active: false,
@@ -189,7 +195,25 @@ impl LevelDetector {
         // that span). With `W` (a quarter of it) a 20-min clean bench armed on a scale learned
         // from one minute of tests and alarmed at 6.1 σ (docs/model-health.md).
         self.arm_tests = 4 * w;
+        self.dof_bar = false;
         self
+    }
+
+    /// The alarm bar, in learned RMS of a window mean. Against zero: the Student-t quantile at
+    /// the normal's tail beyond `k`, with the degrees of freedom of the learned scale — `n`
+    /// overlapping windows of `W` blocks, one a block, carry `1.5 n/W` for white noise (the
+    /// overlapping estimator's equivalent degrees of freedom; fewer for a wander correlated over
+    /// more than a window). A bar of `k` on a scale from a few windows is crossed by chance far
+    /// more often than `k` says: restarted at the bias stage's engagement, the plain 5-σ bar
+    /// raised 2 alarms in 24 clean 20-min benches, both within a minute of arming
+    /// (docs/model-health.md). At `k` = 5: 31.9 at ν = 5, 11.2 at 10, 7.2 at 20, 5.7 at 50,
+    /// 5.3 at 100 (about 70 min of still data). Against a reference: `k`.
+    pub fn bar(&self) -> f64 {
+        if !self.dof_bar {
+            return self.k;
+        }
+        let nu = (1.5 * self.m2_n as f64 / self.window_blocks as f64).max(1.0);
+        -student_t_quantile(normal_sf(self.k), nu)
     }
 
     /// Blocks of unbroken still data one test needs.
@@ -287,12 +311,13 @@ impl LevelDetector {
             )
         };
         let armed = self.armed();
+        let bar = self.bar();
         let sd = self.window_sd().unwrap_or(0.0);
         let z = if sd > 0.0 { m.abs() / sd } else { 0.0 };
         // Learn from windows that raised no alarm, two windows late (see `pending`), and not
         // while an alarm holds.
         if !self.active
-            && (!armed || z < self.k)
+            && (!armed || z < bar)
             && let Some((m2, b2)) = self.pending.offer((m * m, mean * mean))
         {
             self.m2_sum += m2;
@@ -303,12 +328,12 @@ impl LevelDetector {
             return None;
         }
         if self.active {
-            if z < 0.5 * self.k {
+            if z < 0.5 * bar {
                 self.active = false;
             }
             return None;
         }
-        if z < self.k {
+        if z < bar {
             self.over = 0;
             return None;
         }
@@ -378,6 +403,22 @@ mod tests {
             "{:?}",
             ev[0]
         );
+    }
+
+    #[test]
+    fn the_bar_follows_the_learned_scales_degrees_of_freedom() {
+        // Windows of 12 blocks: n learned tests carry ν = 1.5 n/12. The quantiles at the normal's
+        // tail beyond 5 σ (2.87e-7), from statrs 0.19.1's `StudentsT::inverse_cdf` (an
+        // implementation this crate did not write): 11.17 at ν = 10, 7.20 at 20, 5.34 at 100.
+        let mut det = LevelDetector::new(500, 12, 5.0, 60, 100);
+        for (n, want) in [(80, 11.17), (160, 7.20), (800, 5.34)] {
+            det.m2_n = n;
+            assert!((det.bar() - want).abs() < 0.01, "n {n}: {}", det.bar());
+        }
+        // Against a reference the bar is k.
+        let mut det = det.against_reference();
+        det.m2_n = 80;
+        assert_eq!(det.bar(), 5.0);
     }
 
     #[test]
