@@ -201,3 +201,36 @@ fn kf_loses_nothing_against_a_short_fitted_models_own_predictor() {
         "KF {kf} vs the fitted model's own predictor {ar}"
     );
 }
+
+#[test]
+fn a_gyro_channel_that_reads_one_value_is_counted_and_the_others_engage() {
+    // A stuck gz (0.0 on every sample) beside two noisy gyros with a turn-on bias, 60 s at rest,
+    // the embedded default settings. A constant stretch cannot be fitted (no noise to measure):
+    // the stage counts it per channel (the health a user reads, with a `WARN` line once) and
+    // keeps gz warming up; gx and gy warm up on their own stretch and estimate. Before the
+    // counter, the only trace was the stage-wide `warmup_fit_failures` beside every sample's
+    // `WARMING_UP` flag.
+    let mut stage = BiasStage::new(BiasSettings::default(), None).unwrap();
+    let mut noise = Rng::new(5);
+    let bias = [0.5_f64.to_radians(), -0.3_f64.to_radians()];
+    for k in 0..6_000 {
+        let g = [
+            bias[0] + GYRO_WHITE_SD * noise.normal(),
+            bias[1] + GYRO_WHITE_SD * noise.normal(),
+            0.0,
+        ];
+        let a = [
+            ACCEL_WHITE_SD * noise.normal(),
+            ACCEL_WHITE_SD * noise.normal(),
+            G + ACCEL_WHITE_SD * noise.normal(),
+        ];
+        stage.process(sample(k, g, a, None));
+    }
+    let h = stage.health();
+    assert!(h.channels[2].constant_stretches >= 1, "{:?}", h.channels[2]);
+    assert!(h.channels[2].state.warming_up(), "{:?}", h.channels[2]);
+    for c in 0..2 {
+        assert_eq!(h.channels[c].constant_stretches, 0, "{:?}", h.channels[c]);
+        assert!(!h.channels[c].state.warming_up(), "{:?}", h.channels[c]);
+    }
+}

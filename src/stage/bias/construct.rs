@@ -51,6 +51,7 @@ impl BiasStage {
             bias_sd: 0.0,
             engaged: false,
             diag: ChannelDiagnostics::default(),
+            constant_stretches: 0,
             origin: BiasModelOrigin::None,
         };
         let mut ch: [ChannelState; N_CHANNELS] = std::array::from_fn(|_| empty.clone());

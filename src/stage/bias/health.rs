@@ -96,6 +96,9 @@ pub struct BiasChannelHealth {
     pub engaged: bool,
     /// Step alarms of this channel.
     pub step_alarms: u64,
+    /// Warm-up stretches of this channel that held one value and were started again: a stuck
+    /// axis, or noise below one LSB (said once as a `WARN` line; the channel stays warming up).
+    pub constant_stretches: u64,
 }
 
 /// Health of the bias stage: counters since the run started, the detector and each channel now.
@@ -146,6 +149,7 @@ impl BiasStage {
                     bias_sd: st.bias_sd,
                     engaged: st.engaged,
                     step_alarms: st.diag.step_alarms,
+                    constant_stretches: st.constant_stretches,
                 }
             }),
         }

@@ -71,6 +71,9 @@
 //! class. It starts at the stretch's mean with that mean's standard error. Until then, once the
 //! still stretch holds one second of samples, its running mean is subtracted as a *provisional*
 //! bias (published with its standard error; flags `WARMING_UP` and `BIAS_REMOVED`).
+//! A stretch that holds one value (a stuck axis, or noise below one LSB) has no noise to
+//! measure: it is started again, counted per channel (`constant_stretches` in the health) and
+//! said once in a `WARN` line, and the channel stays warming up until it varies at rest.
 //!
 //! **Guarded updates.** A still measurement whose innovation lies beyond `GUARD_K` σ of its
 //! predicted spread is not used (counted `rejected_updates`): a slow rotation the stillness
@@ -200,6 +203,8 @@ struct ChannelState {
     diag: ChannelDiagnostics,
     /// Where the channel's model came from.
     origin: BiasModelOrigin,
+    /// Warm-up stretches that held one value (a stuck axis, or noise below one LSB).
+    constant_stretches: u64,
 }
 
 /// The bias stage (6 channels). See the module docs for what it does.
@@ -371,8 +376,21 @@ impl BiasStage {
             / (n - 2.0).max(1.0);
         if !(r.is_finite() && r > 0.0) {
             // A constant stretch (a stuck or coarsely quantised channel): nothing to learn yet.
+            // Said once a channel, so a user whose samples stay `WARMING_UP` learns why.
             self.counters.warmup_fit_failures += 1;
-            if let Some(b) = self.ch[c].warm.as_mut() {
+            let st = &mut self.ch[c];
+            st.constant_stretches += 1;
+            if st.constant_stretches == 1 {
+                tracing::warn!(
+                    "bias: {} read one value ({:.6} rad/s, {:.4} °/s) over a whole still stretch of {:.0} samples ({:.1} s): a stuck axis, or noise below one LSB. Its bias is not identified and samples stay flagged WARMING_UP until it varies at rest (health: `constant_stretches`)",
+                    CHANNEL_NAMES[c],
+                    zm,
+                    zm.to_degrees(),
+                    n,
+                    n / self.fs
+                );
+            }
+            if let Some(b) = st.warm.as_mut() {
                 b.clear();
             }
             return;
