@@ -80,16 +80,20 @@ impl FittedModels {
 
 /// Run `imuprep fit`'s library function on the record's fit stretch
 /// (`spec.fit_skip_s`, `spec.fit_train_s`; Burg AR(64), as the command's defaults) with
-/// `--min-still-s min_still_s`. The samples are written to a temporary native log for it
-/// (removed afterwards).
+/// `--min-still-s min_still_s`. The samples are written to a temporary native log for it (in a
+/// directory of its own, removed afterwards).
 pub fn fit_models(
     spec: &RecordSpec,
     desc: &Descriptor,
     raw: &[Sample],
     min_still_s: f64,
 ) -> Result<FittedModels, String> {
+    // One directory per call: two calls in one process (tests run in threads) on the same record
+    // shared a name, and one removed it while the other wrote its models there.
+    static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let dir: PathBuf = std::env::temp_dir().join(format!(
-        "imuprep-navtest-{}-{}-{}",
+        "imuprep-navtest-{}-{call}-{}-{}",
         std::process::id(),
         spec.name,
         min_still_s
