@@ -41,12 +41,18 @@
 //! After an event judged motion the gate continues from the raw values, not from the
 //! predictions it fed itself during the event, so one real manoeuvre does not cascade into a
 //! string of events.
+//!
+//! A sample that copies the previous one bit for bit where whole samples rarely repeat by
+//! chance is a stale repeat (`repeat.rs`): flagged `REPEATED`, given the output of the sample it
+//! repeats, and no measurement for any stage.
 
 pub mod confirm;
 pub mod gate;
 pub mod guard;
 pub mod health;
 pub mod identify;
+mod repeat;
+use repeat::RepeatDetector;
 pub mod settings;
 mod verdict;
 
@@ -76,18 +82,6 @@ const VERDICT_FLAGS: u32 = flags::REPLACED
     | flags::SAT_ANY
     | flags::WARMING_UP;
 
-/// Present channels a sample needs before a bit-identical copy of the previous one counts as a
-/// stale repeat: one triad (three quantised values all unchanged is rare in real data; one
-/// channel unchanged is common at rest).
-const MIN_REPEAT_CHANNELS: usize = 3;
-/// Samples over which the shares of unchanged values are averaged.
-const CHANCE_WINDOW: u64 = 1000;
-/// Pairs of samples before the shares are trusted: until then every bit-identical copy is
-/// stale (the rule before there were shares).
-const CHANCE_MIN_PAIRS: u64 = 100;
-/// Whole-sample repeats beyond this many times the product of the channels' shares of unchanged
-/// values are stale copies (chance repeats come at about that product).
-const STALE_EXCESS: f64 = 4.0;
 /// Raw history kept per channel (samples): context + look-ahead + post context fit in it.
 const RING: usize = 2048;
 /// Events per channel awaiting a verdict at once; one more forces the oldest's verdict.
@@ -186,14 +180,8 @@ pub struct GrossErrorStage {
     gaps_reset: u64,
     /// Index of the measurement being processed (repeats share their original's).
     n_in: u64,
-    /// Raw channels of the last sample, to recognise a stale repeat.
-    last_raw: Option<[f64; N_CHANNELS]>,
-    /// Each channel's share of samples that kept the previous one's value bit for bit, the share
-    /// of whole samples that did (running means over the last [`CHANCE_WINDOW`]), and the pairs
-    /// counted.
-    unchanged: [f64; N_CHANNELS],
-    whole: f64,
-    pairs: u64,
+    /// Tells a stale repeat of the last sample from a chance one.
+    repeat: RepeatDetector,
     /// The last sample emitted and its measurement index (a repeat of it copies its verdicts).
     last_out: Option<(u64, Sample)>,
     /// Stale repeats seen.
@@ -271,10 +259,7 @@ impl GrossErrorStage {
             gaps_bridged: 0,
             gaps_reset: 0,
             n_in: 0,
-            last_raw: None,
-            unchanged: [0.0; N_CHANNELS],
-            whole: 0.0,
-            pairs: 0,
+            repeat: RepeatDetector::default(),
             last_out: None,
             repeats: 0,
             delayed: 0,
@@ -340,48 +325,6 @@ impl GrossErrorStage {
         (self.delayed, self.max_delay)
     }
 
-    /// `s` repeats the previous sample bit for bit (every present channel finite): a stale
-    /// sample. Remembers `s` as the previous sample otherwise. Absent channels take no part;
-    /// with fewer than [`MIN_REPEAT_CHANNELS`] present a bit-identical sample is ordinary for a
-    /// quantised sensor at rest, so nothing is called a repeat.
-    ///
-    /// Nor is it one where whole samples repeat by chance: a sensor whose noise is below its LSB on
-    /// every channel does that (σ = 0.2 LSB: 31 % of its samples), and those are measurements. A
-    /// logger writing faster than its sensor repeats whole samples far more often than its
-    /// channels' own shares of unchanged values predict; chance repeats come as often as their
-    /// product. So a copy is stale while the share of whole-sample repeats (over the last
-    /// [`CHANCE_WINDOW`] samples) exceeds [`STALE_EXCESS`] times the product of the channels'
-    /// shares: on the rtklibexplorer walk (34 % stale copies) it is 100 times that and more.
-    fn is_repeat(&mut self, s: &Sample) -> bool {
-        let v = s.channels();
-        let present = N_CHANNELS - s.absent.count_ones() as usize;
-        let Some(l) = self.last_raw else {
-            self.last_raw = Some(v);
-            return false;
-        };
-        let same = |c: usize| l[c].to_bits() == v[c].to_bits() && l[c].is_finite();
-        let identical = (0..N_CHANNELS).all(|c| s.is_absent(c) || same(c));
-        // The shares count every pair of successive samples, stale or not, this one included.
-        self.pairs = self.pairs.saturating_add(1);
-        let w = 1.0 / (self.pairs.min(CHANCE_WINDOW) as f64);
-        for c in (0..N_CHANNELS).filter(|&c| !s.is_absent(c)) {
-            self.unchanged[c] += w * (f64::from(u8::from(same(c))) - self.unchanged[c]);
-        }
-        self.whole += w * (f64::from(u8::from(identical)) - self.whole);
-        let chance: f64 = (0..N_CHANNELS)
-            .filter(|&c| !s.is_absent(c))
-            .map(|c| self.unchanged[c])
-            .product();
-        let learned = self.pairs >= CHANCE_MIN_PAIRS;
-        let repeat = present >= MIN_REPEAT_CHANNELS
-            && identical
-            && (!learned || self.whole > STALE_EXCESS * chance);
-        if !repeat {
-            self.last_raw = Some(v);
-        }
-        repeat
-    }
-
     /// Give repeat `s` the output values and verdict flags of the sample it repeats.
     fn copy_verdicts(&self, s: &mut Sample) {
         if let Some((_, prev)) = &self.last_out {
@@ -392,7 +335,7 @@ impl GrossErrorStage {
 
     /// The causal path's repeat handling: true (and `s` completed) if `s` is a repeat.
     fn take_repeat(&mut self, s: &mut Sample) -> bool {
-        if !self.is_repeat(s) {
+        if !self.repeat.is_repeat(s) {
             return false;
         }
         s.flags |= flags::REPEATED;
@@ -692,7 +635,7 @@ impl Stage for GrossErrorStage {
             out.push(self.process(s));
             return;
         }
-        if self.is_repeat(&s) {
+        if self.repeat.is_repeat(&s) {
             s.flags |= flags::REPEATED;
             self.repeats += 1;
             match self.held.back() {
