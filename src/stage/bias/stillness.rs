@@ -50,13 +50,21 @@ use crate::stats::grid::grid_step_counted;
 
 /// Longest window, samples (fixed-size ring buffer; 0.5 s up to 1 kHz).
 pub const MAX_WINDOW: usize = 512;
+/// Shortest window, samples (the default 0.5 s at 50 Hz). The floors are the quietest windows'
+/// sds, and a window's three-axis sd of `n` samples has `3(n − 1)` degrees of freedom: with 5
+/// samples (the default 0.5 s at 10 Hz: 12 of them) the quietest windows fall so far below the
+/// typical one that ordinary rest windows often exceed `noise_factor` = 2 times the floor; with
+/// 25 (72) they rarely do. A 10-Hz bench of 5 min at rest (white noise, replayed as a CSV) was
+/// still for 3 s of it and its gyros never warmed up; with 25 samples, 98 % (docs/real-data.md).
+pub const MIN_WINDOW: usize = 25;
 
 /// Stillness detector settings (units in names; each test explained in the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StillnessSettings {
-    /// Window length, s (at least 2 samples, at most `MAX_WINDOW`). Default 0.5. In time, not
-    /// samples, so a 250 Hz sensor's detector sees a motion onset as soon as a 100 Hz one's.
+    /// Window length, s (at least `MIN_WINDOW` = 25 samples, at most `MAX_WINDOW`). Default 0.5.
+    /// In time, not samples, so a 250 Hz sensor's detector sees a motion onset as soon as a
+    /// 100 Hz one's; below 50 Hz the window is 25 samples (1 s at 25 Hz, 2.5 s at 10 Hz).
     pub window_s: f64,
     /// Candidate time required before entering STILL, s (T_in). Default 1.0.
     pub enter_after_s: f64,
@@ -226,10 +234,10 @@ pub struct StillnessDetector {
     quant_a: f64,
 }
 
-/// The window of `window_s` at `sample_rate_hz`, in samples (2..=`MAX_WINDOW`).
+/// The window of `window_s` at `sample_rate_hz`, in samples (`MIN_WINDOW..=MAX_WINDOW`).
 pub fn window_samples(window_s: f64, sample_rate_hz: f64) -> usize {
     let n = (window_s.max(0.0) * sample_rate_hz.max(0.0)).round();
-    (n.min(MAX_WINDOW as f64) as usize).clamp(2, MAX_WINDOW)
+    (n.min(MAX_WINDOW as f64) as usize).clamp(MIN_WINDOW, MAX_WINDOW)
 }
 
 impl StillnessDetector {
