@@ -39,7 +39,7 @@ mod test_signals;
 pub mod wander;
 pub mod whiteness;
 
-use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample, flags};
+use crate::sample::{ALL_CHANNELS, CHANNEL_NAMES, N_CHANNELS, Sample, flags};
 use crate::stage::Stage;
 use crate::stage::health::StageHealth;
 use line::{LineDetector, LineEvent};
@@ -178,6 +178,8 @@ pub struct MonitorStage {
     line_events: Vec<LineEvent>,
     /// Whether the bias stage subtracted a bias from each channel in the last sample.
     subtracting: [bool; N_CHANNELS],
+    /// Channels present in any sample so far (bit c; a gyro-only table has 3).
+    present: u8,
 }
 
 impl MonitorStage {
@@ -199,6 +201,7 @@ impl MonitorStage {
             still_samples: 0,
             line_events: Vec::new(),
             subtracting: [false; N_CHANNELS],
+            present: 0,
         };
         if let Some(fs) = rate_hz.filter(|f| f.is_finite() && *f > 0.0) {
             m.start(fs);
@@ -251,7 +254,12 @@ impl MonitorStage {
         }
         let armed = self.armed_channels();
         if armed > 0 {
-            return format!("model fits ({armed} of {N_CHANNELS} channels armed)");
+            // Of the channels the sensor has: a gyro-only table's 3 of 3, not 3 of 6.
+            let of = match self.present.count_ones() {
+                0 => N_CHANNELS,
+                n => n as usize,
+            };
+            return format!("model fits ({armed} of {of} channels armed)");
         }
         let Some(fs) = self.fs else {
             return "learning the sample rate".into();
@@ -403,6 +411,7 @@ impl MonitorStage {
     }
 
     fn watch(&mut self, s: &Sample) {
+        self.present |= !s.absent & ALL_CHANNELS;
         if self.fs.is_none() {
             self.learn_rate(s.t_ns);
             self.last_t_ns = Some(s.t_ns);
@@ -561,6 +570,25 @@ mod tests {
             panic!()
         };
         assert_eq!((h.offset_alarms, h.line_alarms), (1, 0));
+    }
+
+    #[test]
+    fn a_gyro_only_sensor_is_armed_on_all_of_its_channels() {
+        // A table with gyro columns only (the accelerometer channels absent on every sample):
+        // 20 min at rest arms its three offset tests, and the status counts the channels the
+        // sensor has (it said "3 of 6", as if half the sensor were not yet learned).
+        let fs = 100.0;
+        let mut m = MonitorStage::new(MonitorSettings::default(), None).unwrap();
+        let mut r = Rng::new(22);
+        let mut out = Vec::new();
+        for i in 0..120_000u32 {
+            let g = [0.006 * r.normal(), 0.006 * r.normal(), 0.006 * r.normal()];
+            let mut s = still(i, fs, g, [f64::NAN; 3]);
+            s.absent = 0b111_000;
+            m.push(s, &mut out);
+            out.clear();
+        }
+        assert_eq!(m.status(), "model fits (3 of 3 channels armed)");
     }
 
     #[test]
