@@ -336,9 +336,6 @@ impl MonitorStage {
     /// Channel `c`'s detectors, learning from nothing, at `fs` Hz.
     fn channel(&self, c: usize, fs: f64) -> Channel {
         let st = &self.settings;
-        let block_n = (st.block_s * fs).round().max(1.0) as usize;
-        let window_blocks = (st.window_s / st.block_s).round().max(1.0) as usize;
-        let learn_blocks = (st.learn_s / st.block_s).ceil() as usize;
         let seg_n = (st.line_segment_s * fs).round() as usize;
         let wb_n = (st.wander_block_s * fs).round().max(1.0) as usize;
         let wb_s = wb_n as f64 / fs;
@@ -348,22 +345,9 @@ impl MonitorStage {
         let wh_n = (st.whiteness_block_s * fs).round().max(1.0) as usize;
         let wh_blocks = (st.whiteness_window_s / st.whiteness_block_s).round() as usize;
         let wh_learn = (st.learn_s * fs).ceil() as u64;
-        // Skipped samples bridged by the offset, wander and whiteness tests: up to a second (the
-        // bias stage's stillness drops out for 10–90 ms now and then at rest, and a replaced
-        // sample is one).
-        let bridge = fs.round().max(1.0) as usize;
+        let bridge = bridge_samples(fs);
         Channel {
-            level: {
-                let level =
-                    LevelDetector::new(block_n, window_blocks, st.offset_k, learn_blocks, bridge);
-                // An accelerometer's output at rest holds gravity's projection: its level
-                // is tested against a reference level before it, not against zero.
-                if c >= 3 {
-                    level.against_reference()
-                } else {
-                    level
-                }
-            },
+            level: self.level_detector(c, fs),
             line: LineDetector::new(seg_n, st.line_averages, st.line_k, fs),
             wander: WanderDetector::new(wb_n, wb_s, w_blocks, w_m, st.wander_p, w_learn)
                 .with_statistic(st.wander_statistic),
@@ -376,6 +360,28 @@ impl MonitorStage {
                 wh_learn,
                 bridge,
             ),
+        }
+    }
+
+    /// Channel `c`'s offset (level) detector, learning from nothing, at `fs` Hz.
+    fn level_detector(&self, c: usize, fs: f64) -> LevelDetector {
+        let st = &self.settings;
+        let block_n = (st.block_s * fs).round().max(1.0) as usize;
+        let window_blocks = (st.window_s / st.block_s).round().max(1.0) as usize;
+        let learn_blocks = (st.learn_s / st.block_s).ceil() as usize;
+        let level = LevelDetector::new(
+            block_n,
+            window_blocks,
+            st.offset_k,
+            learn_blocks,
+            bridge_samples(fs),
+        );
+        // An accelerometer's output at rest holds gravity's projection: its level is tested
+        // against a reference level before it, not against zero.
+        if c >= 3 {
+            level.against_reference()
+        } else {
+            level
         }
     }
 
@@ -401,7 +407,7 @@ impl MonitorStage {
         for c in 0..N_CHANNELS {
             let subtracting = s.bias[c] != 0.0;
             if subtracting && !self.subtracting[c] {
-                let fresh = self.channel(c, fs).level;
+                let fresh = self.level_detector(c, fs);
                 let ch = &mut self.ch[c];
                 ch.line.interrupt();
                 ch.level = fresh;
@@ -476,6 +482,13 @@ impl MonitorStage {
             self.record(a);
         }
     }
+}
+
+/// Skipped samples bridged by the offset, wander and whiteness tests at `fs` Hz: up to a second
+/// (the bias stage's stillness drops out for 10–90 ms now and then at rest, and a replaced sample
+/// is one).
+fn bridge_samples(fs: f64) -> usize {
+    fs.round().max(1.0) as usize
 }
 
 impl Stage for MonitorStage {
