@@ -124,9 +124,6 @@ pub struct LevelDetector {
     confirm: usize,
     // Learned tests arming needs.
     arm_tests: usize,
-    // Whether the bar follows the learned scale's degrees of freedom ([`LevelDetector::bar`]);
-    // against a reference it is `k` (the medians and the confirmation guard that test).
-    dof_bar: bool,
     over: usize,
     over_since_ns: u64,
     active: bool,
@@ -162,7 +159,6 @@ impl LevelDetector {
             scratch: Vec::new(),
             confirm: 1,
             arm_tests: window_blocks.max(1),
-            dof_bar: true,
             over: 0,
             over_since_ns: 0,
             active: false,
@@ -195,7 +191,6 @@ impl LevelDetector {
         // that span). With `W` (a quarter of it) a 20-min clean bench armed on a scale learned
         // from one minute of tests and alarmed at 6.1 σ (docs/model-health.md).
         self.arm_tests = 4 * w;
-        self.dof_bar = false;
         self
     }
 
@@ -207,9 +202,10 @@ impl LevelDetector {
     /// more often than `k` says: restarted at the bias stage's engagement, the plain 5-σ bar
     /// raised 2 alarms in 24 clean 20-min benches, both within a minute of arming
     /// (docs/model-health.md). At `k` = 5: 31.9 at ν = 5, 11.2 at 10, 7.2 at 20, 5.7 at 50,
-    /// 5.3 at 100 (about 70 min of still data). Against a reference: `k`.
+    /// 5.3 at 100 (about 70 min of still data). Against a reference: `k` (the medians and the
+    /// confirmation over half a window of tests guard that test).
     pub fn bar(&self) -> f64 {
-        if !self.dof_bar {
+        if self.reference_blocks > 0 {
             return self.k;
         }
         let nu = (1.5 * self.m2_n as f64 / self.window_blocks as f64).max(1.0);
