@@ -57,11 +57,11 @@ const BIAS_K: f64 = 4.0;
 /// on the next two or three, each a one- or two-sample break; the several-axes test cannot
 /// tell them from a corrupted frame (all six channels off on one sample only) or from a
 /// glitch riding on a shock (the other axes still ring, but less than a quarter as sharply
-/// as the event on their own scale). Measured: gx 1, ax 3, ay 10, az 15 of 9281 samples.
+/// as the event on their own scale). Measured: gx 1, ax 3, ay 9, az 15 of 9281 samples.
 const KNOWN_MISSES: &[(&str, &str, &str, f64)] = &[
     ("100", "gx", "replaced per channel-sample", 1.1e-4),
     ("100", "ax", "replaced per channel-sample", 3.3e-4),
-    ("100", "ay", "replaced per channel-sample", 1.1e-3),
+    ("100", "ay", "replaced per channel-sample", 9.7e-4),
     ("100", "az", "replaced per channel-sample", 1.7e-3),
 ];
 

@@ -82,6 +82,8 @@ impl BiasStage {
             default_rrw_q_per_s: settings.default_rate_random_walk_q_per_s,
             apply_k: settings.apply_k,
             counters,
+            in_steady_turn: false,
+            nis_weight: 1.0 / (super::NIS_WINDOW_S * fs).max(1.0),
         };
         for (c, state) in ch.iter_mut().enumerate() {
             let name = CHANNEL_NAMES[c];
@@ -209,6 +211,8 @@ impl BiasStage {
             cusum,
             step_size: if has_step { step_size } else { 0.0 },
             rejected_run: 0,
+            anchored: false,
+            nis: 1.0,
         }
     }
 }

@@ -34,6 +34,11 @@ crate::stage::health::counters! {
         rejected_updates,
         /// Times a gyro estimate re-anchored after 2 s of disagreeing still measurements.
         reanchors,
+        /// Quiet stretches not taken for rest because the gyro stayed off its bias about gravity
+        /// past `mean_veto_s` by more than that bias: steady turns (stillness docs, "Steady
+        /// turns"), and their samples.
+        steady_turns,
+        steady_turn_samples,
         /// Stale repeats (`REPEATED`): given the current bias, no measurement.
         repeats,
         /// Gyro channels that started subtracting their estimate (a model file's at once, the

@@ -80,7 +80,10 @@
 //! tests could not see must not move the estimate, so across a motion onset the estimate stays
 //! within its own published σ. A bias that really moved (a shock) is still taken up: when every
 //! still measurement has disagreed for `REANCHOR_S` seconds, the estimate's variance is
-//! inflated to the disagreement and it re-anchors (counted `reanchors`).
+//! inflated to the disagreement and it re-anchors (counted `reanchors`). A quiet offset about
+//! gravity larger than the bias it departs from is a steady turn, not rest (stillness docs,
+//! "Steady turns"): counted `steady_turns` / `steady_turn_samples`, the first few said in a
+//! `WARN` line, and never re-anchored onto.
 //!
 //! **Repeats.** A stale repeat (`REPEATED`) is no new measurement: it neither feeds the
 //! stillness detector nor updates a filter, and it gets the current bias.
@@ -125,6 +128,17 @@ const BIG_GAP_STEPS: u32 = 100;
 const GUARD_K: f64 = 4.0;
 /// Still time during which every measurement disagreed before the estimate re-anchors, s.
 const REANCHOR_S: f64 = 2.0;
+/// Steady turns said in a `WARN` line; later ones are counted only.
+const STEADY_TURNS_SAID: u64 = 3;
+/// Cap of one still measurement's ν²/S in the running mean (one wild sample moves it by at
+/// most `NIS_CAP` × its weight).
+const NIS_CAP: f64 = 100.0;
+/// Time constant of that running mean, s.
+const NIS_WINDOW_S: f64 = 10.0;
+/// An estimate whose still measurements' mean ν²/S exceeds this is no measured rest (χ²₁ has
+/// mean 1; the running mean of 10 s of samples at 100 Hz has sd ≈ 0.1 on white noise, 0.45 at
+/// 10 Hz).
+const NIS_TRUSTED: f64 = 2.0;
 
 /// Why the stage cannot be built.
 #[derive(Debug, thiserror::Error)]
@@ -177,6 +191,11 @@ struct ChannelKf {
     step_size: f64,
     /// Successive still measurements the guard rejected.
     rejected_run: u32,
+    /// A still measurement has updated the estimate (a warm-up's is measured from the start).
+    anchored: bool,
+    /// Running mean of the still measurements' ν²/S (each capped at `NIS_CAP`), ≈ 1 while the
+    /// model describes the sensor at rest.
+    nis: f64,
 }
 
 #[derive(Debug, Clone)]
@@ -229,6 +248,10 @@ pub struct BiasStage {
     default_rrw_q_per_s: f64,
     apply_k: f64,
     counters: BiasCounters,
+    /// The last sample was held off as a steady turn (stillness docs).
+    in_steady_turn: bool,
+    /// Weight of one still measurement in a channel's running mean of ν²/S.
+    nis_weight: f64,
 }
 
 impl BiasStage {
@@ -250,6 +273,11 @@ impl BiasStage {
             .get(i)?
             .as_ref()
             .map(|l| l.amplitude_phase())
+    }
+
+    /// The stillness detector's window features of the last sample.
+    pub fn stillness_features(&self) -> stillness::StillnessFeatures {
+        self.detector.features()
     }
 
     /// True while the stillness detector reports rest.
@@ -301,6 +329,9 @@ impl BiasStage {
                         *alarm_fired = true;
                     }
                     let (nu0, s0) = est.kf.innovation(z);
+                    if s0 > 0.0 {
+                        est.nis += self.nis_weight * ((nu0 * nu0 / s0).min(NIS_CAP) - est.nis);
+                    }
                     let consistent = nu0 * nu0 <= GUARD_K * GUARD_K * s0;
                     if !consistent {
                         self.counters.rejected_updates += 1;
@@ -319,6 +350,7 @@ impl BiasStage {
                         if consistent {
                             est.rejected_run = 0;
                         }
+                        est.anchored = true;
                         st.diag.updated = true;
                         st.diag.innovation = nu;
                         st.diag.innovation_var = s;
@@ -418,10 +450,44 @@ impl BiasStage {
             cusum: None,
             step_size: 0.0,
             rejected_run: 0,
+            anchored: true,
+            nis: 1.0,
         });
         self.ch[c].warm = None;
         self.ch[c].origin = BiasModelOrigin::WarmUp;
         self.counters.warmup_fits += 1;
+    }
+
+    /// Counts a quiet sample the detector held off as a steady turn about gravity, and says the
+    /// first few turns (stillness docs, "Steady turns").
+    fn count_steady_turn(&mut self, t_s: f64) {
+        let f = self.detector.features();
+        let was = self.in_steady_turn;
+        self.in_steady_turn = f.turn_held;
+        if !f.turn_held {
+            return;
+        }
+        self.counters.steady_turn_samples += 1;
+        if was {
+            return;
+        }
+        self.counters.steady_turns += 1;
+        if self.counters.steady_turns <= STEADY_TURNS_SAID {
+            tracing::warn!(
+                "bias: at {t_s:.2} s the gyro is quiet but {:.3} °/s off its bias ({}): taken for a steady turn (a turntable, a slow pan), not for rest, while it lasts; a bias that moved so is not learned (a model that declares a step re-anchors){}",
+                f.gyro_turn_rad_s.to_degrees(),
+                if f.turn_tilts {
+                    "gravity turns with it in the accelerometer"
+                } else {
+                    "about gravity, more than the bias itself"
+                },
+                if self.counters.steady_turns == STEADY_TURNS_SAID {
+                    " — further ones are counted in the health only (`steady_turns`)"
+                } else {
+                    ""
+                }
+            );
+        }
     }
 
     fn push_entry(&mut self, e: DelayEntry) {
@@ -540,6 +606,19 @@ impl BiasStage {
             let st = &self.ch[c];
             st.est.is_some().then_some((st.bias, st.bias_sd))
         });
+        // Only an estimate that is a measured rest frees nothing: a declared step, an estimate no
+        // still measurement has anchored, or one whose still measurements do not fit its model
+        // (an unmodelled line, a wrong noise level) frees its axis of the steady-turn rule
+        // (stillness docs).
+        let free = (0..3)
+            .filter(|&c| {
+                self.ch[c]
+                    .est
+                    .as_ref()
+                    .is_some_and(|e| e.cusum.is_some() || !e.anchored || e.nis > NIS_TRUSTED)
+            })
+            .fold(0u8, |m, c| m | 1 << c);
+        self.detector.set_free_axes(free);
         let still = if repeat {
             self.detector.is_still()
         } else {
@@ -554,6 +633,7 @@ impl BiasStage {
             s.flags |= flags::STILL;
             self.counters.still_samples += 1;
         }
+        self.count_steady_turn(t_s);
 
         // 5. Delayed measurement updates of the gyro filters.
         for st in self.ch.iter_mut().take(3) {

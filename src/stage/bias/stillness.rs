@@ -38,6 +38,31 @@
 //! `accel_sd_max_m_s2`: a moving car's road vibration does), which keep a recording that never
 //! rests from calling its quietest motion "still".
 //!
+//! **Steady turns.** A constant rate has no variance: after the onset, a turntable at 10 °/s is
+//! as quiet as rest, and only the mean test (against a confident bias) tells them apart. For
+//! `mean_veto_s` it vetoes rest; after that a quiet offset may be a bias that moved (a shock)
+//! or a turn that goes on (a turntable, a robot turning in place, a slow pan). The detector
+//! splits the disagreement d = mean − bias along and across the window's mean specific force
+//! (gravity at rest, to within the accelerometer's offsets, `accel_norm_dev_max_m_s2` of g):
+//! - *across* gravity a turn turns gravity in the accelerometer: by the integral of the offsets
+//!   since the veto began. Whichever the window's mean specific force is nearer to — where it
+//!   was then, or where that turn would have taken it — decides: a tilt held (a slow pan about
+//!   a horizontal axis, too slow to raise the accelerometer's window sd), or the bias's;
+//! - *along* gravity it is ambiguous. It is taken for the bias only when no larger than the
+//!   bias it departs from (|d∥| ≤ |b∥|): were it a turn, erasing it would leave an error no
+//!   larger than the raw data's own bias — never worse than no preprocessing. A larger one is
+//!   held off as a turn (`features().turn_held`; not still) for as long as it lasts, unless the
+//!   axis is free ([`StillnessDetector::set_free_axes`]: its model declares a step, no still
+//!   measurement has anchored its estimate yet — a model file's prior —, or its still
+//!   measurements do not fit its model, so that the estimate is no measured rest). Without all three
+//!   accelerometer axes no direction is across gravity, and the same bound holds per axis.
+//!
+//! The price: a bias that moves about the vertical by more than its own size without a
+//! declared step is not re-learned (the estimate keeps its value; the raw data would carry the
+//! whole bias). A turn slower than about `mean_k` σ of a window's mean (≈ 0.2 °/s for a gyro
+//! of 0.3 °/s per-sample noise at 100 Hz) is within the mean test's noise, and the bias filter
+//! takes it up at its own pace, as a bias.
+//!
 //! Hysteresis: the detector enters STILL after `enter_after_s` of consecutive candidates and
 //! leaves at the first non-candidate (or non-finite) sample. This is the generalised-likelihood-
 //! ratio ZUPT family (Skog et al., "Zero-velocity detection — an algorithm evaluation", IEEE
@@ -81,10 +106,10 @@ pub struct StillnessSettings {
     /// The window's gyro mean may differ from a confident bias estimate by this many σ (the
     /// mean's noise and the estimate's σ combined). Default 4.
     pub mean_k: f64,
-    /// The mean test vetoes an otherwise quiet stretch for at most this long, s. Default 2: a
-    /// slow rotation shows itself in that time (its mean stays off while the estimate's σ is
-    /// small), while a gyro bias that stepped (a shock) would otherwise keep the detector from
-    /// ever seeing rest again; the bias stage's consistency guard then re-anchors.
+    /// The mean test vetoes an otherwise quiet stretch for this long, s, before its offset may
+    /// be taken for a bias that moved (a shock; the bias stage's consistency guard then
+    /// re-anchors). Default 2. A steady turn about gravity larger than the bias stays vetoed
+    /// for as long as it lasts (module docs, "Steady turns").
     pub mean_veto_s: f64,
     /// The noise floors may rise by at most a factor 2 per this many seconds. Default 600.
     pub floor_rise_s: f64,
@@ -171,6 +196,15 @@ pub struct StillnessFeatures {
     pub gyro_sd_rad_s: f64,
     /// Largest per-axis |mean − bias| in σ (NaN when no confident estimate was given).
     pub gyro_mean_sigma: f64,
+    /// The rate of the steady turn held (the norm of the window's mean gyro minus the bias),
+    /// rad/s; NaN when none is held.
+    pub gyro_turn_rad_s: f64,
+    /// A quiet window past `mean_veto_s` not taken for rest because its offset is a steady turn
+    /// (module docs, "Steady turns").
+    pub turn_held: bool,
+    /// That turn turns gravity: the accelerometer saw it (else it is about gravity, or no
+    /// gravity direction is known).
+    pub turn_tilts: bool,
     /// Largest per-axis |sample − window mean| in the window's own per-axis σ (no lower than the
     /// floor's share).
     pub gyro_instant_sigma: f64,
@@ -225,6 +259,15 @@ pub struct StillnessDetector {
     /// Quiet samples so far on which the mean test disagreed, and how many lift its veto.
     vetoed: u64,
     veto_samples: u64,
+    /// Gyro axes free of the steady-turn rule ([`StillnessDetector::set_free_axes`]).
+    free_axes: u8,
+    /// The window's mean specific force when the current veto began, and the rotation vector
+    /// (rad) the mean test's offsets have turned through since: where a turn would have taken
+    /// gravity.
+    veto_f0: [f64; 3],
+    veto_rot: [f64; 3],
+    /// Sample interval, s.
+    dt_s: f64,
     /// Window length, samples.
     window: usize,
     /// Each channel's LSB (gx gy gz ax ay az; 0 while none is known) and the quantisation noise
@@ -232,6 +275,37 @@ pub struct StillnessDetector {
     lsb: [f64; 6],
     quant_g: f64,
     quant_a: f64,
+}
+
+/// A steady turn the mean test's disagreement is taken for (module docs, "Steady turns").
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Turn {
+    /// Its rate: the norm of the disagreement, rad/s.
+    rate_rad_s: f64,
+    /// It turns gravity: the accelerometer saw gravity turn with it.
+    tilts: bool,
+}
+
+/// `v` rotated by the rotation vector `r` (axis × angle, rad; Rodrigues).
+fn rotate(v: &[f64; 3], r: &[f64; 3]) -> [f64; 3] {
+    let th = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+    if th == 0.0 {
+        return *v;
+    }
+    let k = [r[0] / th, r[1] / th, r[2] / th];
+    let (c, s) = (th.cos(), th.sin());
+    let kxv = [
+        k[1] * v[2] - k[2] * v[1],
+        k[2] * v[0] - k[0] * v[2],
+        k[0] * v[1] - k[1] * v[0],
+    ];
+    let kv = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+    std::array::from_fn(|i| v[i] * c + kxv[i] * s + k[i] * kv * (1.0 - c))
+}
+
+/// Euclidean distance of two 3-vectors.
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
 /// The window of `window_s` at `sample_rate_hz`, in samples (`MIN_WINDOW..=MAX_WINDOW`).
@@ -266,6 +340,10 @@ impl StillnessDetector {
             prev_g: [f64::NAN; 3],
             vetoed: 0,
             veto_samples: ((s.mean_veto_s.max(0.0) * sample_rate_hz.max(0.0)).ceil() as u64).max(1),
+            free_axes: 0,
+            veto_f0: [0.0; 3],
+            veto_rot: [0.0; 3],
+            dt_s: 1.0 / sample_rate_hz.max(1e-6),
             lsb: [0.0; 6],
             quant_g: 0.0,
             quant_a: 0.0,
@@ -276,6 +354,80 @@ impl StillnessDetector {
     /// first full window.
     pub fn floors(&self) -> (f64, f64) {
         (self.floor_g, self.floor_a)
+    }
+
+    /// Gyro axes (bit `a` for axis `a`) whose steady offset is taken for the bias after
+    /// `mean_veto_s` whatever its size, even about gravity: the bias stage frees an axis whose
+    /// model declares a step, whose estimate no still measurement has anchored yet (a model
+    /// file's prior mean is no rest the sensor was seen at), or whose still measurements do not
+    /// fit its model (mean ν²/S above 2: an unmodelled vibration line, a wrong noise level).
+    pub fn set_free_axes(&mut self, mask: u8) {
+        self.free_axes = mask & 0b111;
+    }
+
+    /// Whether the mean test's disagreement `d` (per axis, 0 where `dv` is 0: no reference;
+    /// `dv` its variance, `b` the bias it departs from), vetoed for `mean_veto_s` already, is a
+    /// steady turn (module docs, "Steady turns"), judged with the window's mean specific force
+    /// `f` now (gravity at rest) and `veto_f0` when the veto began. Across gravity a turn would
+    /// have turned `f` by the offsets' integral since then (`veto_rot`); along it, only the
+    /// sizes can tell.
+    /// Without all three accelerometer axes (`norm_on` false) every axis is judged by the sizes.
+    fn turn_test(
+        &self,
+        b: &[f64; 3],
+        d: &[f64; 3],
+        dv: &[f64; 3],
+        f: &[f64],
+        norm_on: bool,
+    ) -> Option<Turn> {
+        let k = self.s.mean_k;
+        let has = |a: usize| dv[a] > 0.0;
+        let off = |a: usize| has(a) && d[a].abs() > k * dv[a].sqrt();
+        if (0..3).any(|a| off(a) && self.free_axes & (1 << a) != 0) {
+            return None;
+        }
+        let rate_rad_s = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let g = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+        if !norm_on || g <= 0.0 {
+            // No gravity direction: any axis may be turning.
+            let turn = (0..3).any(|a| off(a) && d[a].abs() > b[a].abs());
+            return turn.then_some(Turn {
+                rate_rad_s,
+                tilts: false,
+            });
+        }
+        let u = [f[0] / g, f[1] / g, f[2] / g];
+        let (mut along, mut var, mut bias_along) = (0.0, 0.0, 0.0);
+        for a in (0..3).filter(|a| has(*a)) {
+            along += u[a] * d[a];
+            var += u[a] * u[a] * dv[a];
+            bias_along += u[a] * b[a];
+        }
+        // Gravity's direction is known to within the accelerometer's offsets (up to
+        // `accel_norm_dev_max_m_s2` of g: `tilt`), and a turn about it reaches the other axes
+        // by that much.
+        let tilt = self.s.accel_norm_dev_max_m_s2 / self.s.gravity_m_s2;
+        let across = (0..3)
+            .filter(|a| has(*a))
+            .any(|a| (d[a] - along * u[a]).abs() > k * dv[a].sqrt() + tilt * along.abs());
+        if across {
+            // Did gravity turn as the offsets since the veto began would have turned it, or
+            // stay? The nearer prediction wins (a tilt of any size keeps being predicted).
+            let f1 = [f[0], f[1], f[2]];
+            let r = self.veto_rot;
+            let turned = rotate(&self.veto_f0, &[-r[0], -r[1], -r[2]]);
+            let tilts = dist(&f1, &turned) < dist(&f1, &self.veto_f0);
+            return tilts.then_some(Turn {
+                rate_rad_s,
+                tilts: true,
+            });
+        }
+        let about_gravity =
+            var > 0.0 && along.abs() > k * var.sqrt() && along.abs() > bias_along.abs();
+        about_gravity.then_some(Turn {
+            rate_rad_s,
+            tilts: false,
+        })
     }
 
     /// Each channel's learned LSB (gx gy gz ax ay az; 0 while none is known).
@@ -482,12 +634,19 @@ impl StillnessDetector {
         // autocorrelation ρ of the window (a sensor's own low-pass filter makes its noise
         // correlated, and σ²/N would then call rest a slow turn).
         let mut mean_sigma = f64::NAN;
+        // Per axis: the disagreement d and its variance (0 and 1 for an axis without a reference).
+        let mut b_ref = [0.0; 3];
+        let mut d = [0.0; 3];
+        let mut dv = [0.0; 3];
         for (a, r) in gyro_ref.iter().enumerate() {
             if let Some((b, sd)) = r {
                 let v = var[a].max(ax_floor_g);
                 let rho = ((mean[7 + a] - mean[a] * mean[a]) / v).clamp(0.0, 0.95);
                 let mean_var = v * (1.0 + rho) / (1.0 - rho) / n as f64;
-                let z = (mean[a] - b).abs() / (mean_var + sd * sd).sqrt();
+                b_ref[a] = *b;
+                d[a] = mean[a] - b;
+                dv[a] = mean_var + sd * sd;
+                let z = d[a].abs() / dv[a].sqrt();
                 mean_sigma = if mean_sigma.is_nan() {
                     z
                 } else {
@@ -498,6 +657,9 @@ impl StillnessDetector {
         let f = StillnessFeatures {
             gyro_sd_rad_s: gyro_sd,
             gyro_mean_sigma: mean_sigma,
+            gyro_turn_rad_s: f64::NAN,
+            turn_held: false,
+            turn_tilts: false,
             gyro_instant_sigma: dev(0, 3, ax_floor_g),
             accel_sd_m_s2: accel_sd,
             accel_norm_dev_m_s2: (mean[6] - self.s.gravity_m_s2).abs(),
@@ -522,16 +684,38 @@ impl StillnessDetector {
         if quiet {
             self.run = self.run.saturating_add(1);
             if !mean_ok {
+                if self.vetoed == 0 {
+                    self.veto_f0 = [mean[3], mean[4], mean[5]];
+                    self.veto_rot = [0.0; 3];
+                }
                 self.vetoed = self.vetoed.saturating_add(1);
+            }
+            if self.vetoed > 0 {
+                for (r, da) in self.veto_rot.iter_mut().zip(d) {
+                    *r += da * self.dt_s;
+                }
             }
         } else {
             self.run = 0;
             self.vetoed = 0;
         }
-        // The mean test vetoes rest only for `mean_veto_s` of otherwise perfect quiet: a slow
-        // rotation shows itself in that time; a bias that stepped does not go away.
-        let candidate = quiet && (mean_ok || self.vetoed >= self.veto_samples);
-        self.features = StillnessFeatures { candidate, ..f };
+        // The mean test vetoes rest for `mean_veto_s` of otherwise perfect quiet; after that the
+        // offset is taken for a bias that moved — unless it is a steady turn, held off for as
+        // long as it lasts (module docs, "Steady turns").
+        let expired = self.vetoed >= self.veto_samples;
+        let turn = if quiet && !mean_ok && expired {
+            self.turn_test(&b_ref, &d, &dv, &mean[3..6], norm_on)
+        } else {
+            None
+        };
+        let candidate = quiet && (mean_ok || (expired && turn.is_none()));
+        self.features = StillnessFeatures {
+            candidate,
+            turn_held: turn.is_some(),
+            turn_tilts: turn.is_some_and(|t| t.tilts),
+            gyro_turn_rad_s: turn.map_or(f64::NAN, |t| t.rate_rad_s),
+            ..f
+        };
         self.still = candidate && self.run >= self.enter_samples;
         self.still
     }

@@ -130,15 +130,84 @@ fn a_moving_car_is_not_still_however_quiet_its_ride() {
 
 #[test]
 fn constant_turn_is_rejected_once_a_bias_reference_exists() {
-    // 0.05 rad/s constant yaw rate, no translation: invisible to the variance tests, caught by
-    // the mean test against a confident bias reference — for `mean_veto_s` (2 s) of it: after
-    // that, a constant offset of a quiet sensor is taken for a bias that moved.
+    // 0.05 rad/s constant yaw rate (about gravity), no translation: invisible to the variance
+    // tests, caught by the mean test against a confident bias reference, and — larger than the
+    // bias it departs from — held off as a steady turn for as long as it lasts (60 s here).
     let mut d = StillnessDetector::new(&StillnessSettings::default(), 100.0);
     let mut r = Rng::new(6);
-    for _ in 0..200 {
+    for k in 0..6000 {
         let (mut g, a) = still_sample(&mut r, 0.0, 0.1, 0.04);
         g[2] += 0.05;
-        assert!(!d.update(&g, &a, &[Some((0.0, 1e-3)); 3]));
+        assert!(!d.update(&g, &a, &[Some((0.0, 1e-3)); 3]), "sample {k}");
+        // The veto's 2 s over, the turn is said (rate about the measured gravity, ≈ +z).
+        let f = d.features();
+        // The first full window is sample 49; 200 vetoed samples later (2 s), sample 248.
+        assert_eq!(f.turn_held, k >= 248, "sample {k}: {f:?}");
+        if k >= 248 {
+            assert!((f.gyro_turn_rad_s - 0.05).abs() < 0.002, "{f:?}");
+        }
+    }
+}
+
+#[test]
+fn a_slow_tilt_turns_gravity_and_is_held_off_as_a_turn() {
+    // 0.02 rad/s (1.15 °/s) about x, the accelerometer's gravity turning with it: too slow to
+    // raise the accelerometer's window sd past the floor (a 0.1-m/s² ramp per window against
+    // 0.04 m/s² noise per axis), so the window is quiet and only the mean test sees it. Across
+    // gravity, the accelerometer decides: gravity moved as the offset predicts, so it is a
+    // turn, held off for as long as it lasts (60 s) — not a bias that moved.
+    let mut d = StillnessDetector::new(&StillnessSettings::default(), 100.0);
+    let mut r = Rng::new(9);
+    let (w, mut held) = (0.02, 0);
+    for k in 0..6000 {
+        let (mut g, mut a) = still_sample(&mut r, 0.0, 0.1, 0.04);
+        g[0] += w;
+        let th = w * k as f64 / 100.0;
+        a[1] += G * th.sin();
+        a[2] += G * (th.cos() - 1.0);
+        assert!(!d.update(&g, &a, &[Some((0.0, 1e-3)); 3]), "sample {k}");
+        let f = d.features();
+        if f.turn_held {
+            assert!(f.turn_tilts, "{f:?}");
+            assert!((f.gyro_turn_rad_s - w).abs() < 0.002, "{f:?}");
+            held += 1;
+        }
+    }
+    // Held from the veto's end (sample 248) on, but where a window is not quiet.
+    assert!(held >= 5000, "held on {held} samples");
+}
+
+#[test]
+fn an_offset_the_accelerometer_or_the_bias_explains_is_rest_after_the_veto() {
+    // After `mean_veto_s` (2 s) a quiet offset is taken for a bias that moved when (a) it lies
+    // across gravity and gravity stayed put (a turn about x would have turned it), (b) about
+    // gravity it is no larger than the bias it departs from (were it a turn, erasing it would
+    // leave less error than the raw data's bias), or (c) its axis's model declares a step.
+    let cases: [(&str, [f64; 3], f64, u8); 3] = [
+        ("across gravity", [0.05, 0.0, 0.0], 0.0, 0),
+        ("back towards zero", [0.0, 0.0, 0.05], 0.08, 0),
+        ("declared step", [0.0, 0.0, 0.05], 0.0, 0b100),
+    ];
+    for (name, offset, bias_z, steps) in cases {
+        let mut d = StillnessDetector::new(&StillnessSettings::default(), 100.0);
+        d.set_free_axes(steps);
+        let mut r = Rng::new(7);
+        let mut first_still = None;
+        for k in 0..1000 {
+            let (mut g, a) = still_sample(&mut r, 0.0, 0.1, 0.04);
+            for (v, o) in g.iter_mut().zip(offset) {
+                *v += o;
+            }
+            let refs = [Some((0.0, 1e-3)), Some((0.0, 1e-3)), Some((bias_z, 1e-3))];
+            if d.update(&g, &a, &refs) && first_still.is_none() {
+                first_still = Some(k);
+            }
+            assert!(!d.features().turn_held, "{name}: sample {k}");
+        }
+        // The veto (2 s) counts from the first full window (sample 49) and lifts at sample 248;
+        // T_in (1 s) has passed by then (quiet samples count towards it while vetoed).
+        let k = first_still.unwrap_or_else(|| panic!("{name}: never still"));
+        assert_eq!(k, 248, "{name}");
     }
 }
 
