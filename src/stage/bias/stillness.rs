@@ -69,6 +69,7 @@
 //! Trans. Biomed. Eng. 57(11), 2010) with separate, interpretable tests, and its noise level
 //! learned instead of configured.
 
+use nalgebra::{Rotation3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::stats::grid::grid_step_counted;
@@ -286,28 +287,6 @@ struct Turn {
     tilts: bool,
 }
 
-/// `v` rotated by the rotation vector `r` (axis × angle, rad; Rodrigues).
-fn rotate(v: &[f64; 3], r: &[f64; 3]) -> [f64; 3] {
-    let th = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
-    if th == 0.0 {
-        return *v;
-    }
-    let k = [r[0] / th, r[1] / th, r[2] / th];
-    let (c, s) = (th.cos(), th.sin());
-    let kxv = [
-        k[1] * v[2] - k[2] * v[1],
-        k[2] * v[0] - k[0] * v[2],
-        k[0] * v[1] - k[1] * v[0],
-    ];
-    let kv = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
-    std::array::from_fn(|i| v[i] * c + kxv[i] * s + k[i] * kv * (1.0 - c))
-}
-
-/// Euclidean distance of two 3-vectors.
-fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
 /// The window of `window_s` at `sample_rate_hz`, in samples (`MIN_WINDOW..=MAX_WINDOW`).
 pub fn window_samples(window_s: f64, sample_rate_hz: f64) -> usize {
     let n = (window_s.max(0.0) * sample_rate_hz.max(0.0)).round();
@@ -413,10 +392,9 @@ impl StillnessDetector {
         if across {
             // Did gravity turn as the offsets since the veto began would have turned it, or
             // stay? The nearer prediction wins (a tilt of any size keeps being predicted).
-            let f1 = [f[0], f[1], f[2]];
-            let r = self.veto_rot;
-            let turned = rotate(&self.veto_f0, &[-r[0], -r[1], -r[2]]);
-            let tilts = dist(&f1, &turned) < dist(&f1, &self.veto_f0);
+            let (f0, f1) = (Vector3::from(self.veto_f0), Vector3::new(f[0], f[1], f[2]));
+            let turned = Rotation3::new(-Vector3::from(self.veto_rot)) * f0;
+            let tilts = (f1 - turned).norm() < (f1 - f0).norm();
             return tilts.then_some(Turn {
                 rate_rad_s,
                 tilts: true,
