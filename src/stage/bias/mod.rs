@@ -80,10 +80,11 @@
 //! tests could not see must not move the estimate, so across a motion onset the estimate stays
 //! within its own published σ. A bias that really moved (a shock) is still taken up: when every
 //! still measurement has disagreed for `REANCHOR_S` seconds, the estimate's variance is
-//! inflated to the disagreement and it re-anchors (counted `reanchors`). A quiet offset about
-//! gravity larger than the bias it departs from is a steady turn, not rest (stillness docs,
-//! "Steady turns"): counted `steady_turns` / `steady_turn_samples`, the first few said in a
-//! `WARN` line, and never re-anchored onto.
+//! inflated to the disagreement and it re-anchors (counted `reanchors`). A steady turn is not
+//! rest: a quiet offset that turned gravity in the accelerometer, or one about gravity larger
+//! than the bias it departs from (stillness docs, "Steady turns"). It is counted
+//! (`steady_turns` / `steady_turn_samples`), the first few said in a `WARN` line, and never
+//! re-anchored onto.
 //!
 //! **Repeats.** A stale repeat (`REPEATED`) is no new measurement: it neither feeds the
 //! stillness detector nor updates a filter, and it gets the current bias.
@@ -136,8 +137,8 @@ const NIS_CAP: f64 = 100.0;
 /// Time constant of that running mean, s.
 const NIS_WINDOW_S: f64 = 10.0;
 /// An estimate whose still measurements' mean ν²/S exceeds this is no measured rest (χ²₁ has
-/// mean 1; the running mean of 10 s of samples at 100 Hz has sd ≈ 0.1 on white noise, 0.45 at
-/// 10 Hz).
+/// mean 1 and variance 2; its running mean over 10 s of independent samples has sd ≈ 0.03 at
+/// 100 Hz, 0.1 at 10 Hz).
 const NIS_TRUSTED: f64 = 2.0;
 
 /// Why the stage cannot be built.
@@ -273,11 +274,6 @@ impl BiasStage {
             .get(i)?
             .as_ref()
             .map(|l| l.amplitude_phase())
-    }
-
-    /// The stillness detector's window features of the last sample.
-    pub fn stillness_features(&self) -> stillness::StillnessFeatures {
-        self.detector.features()
     }
 
     /// True while the stillness detector reports rest.
@@ -458,8 +454,8 @@ impl BiasStage {
         self.counters.warmup_fits += 1;
     }
 
-    /// Counts a quiet sample the detector held off as a steady turn about gravity, and says the
-    /// first few turns (stillness docs, "Steady turns").
+    /// Counts a quiet sample the detector held off as a steady turn, and says the first few
+    /// turns (stillness docs, "Steady turns").
     fn count_steady_turn(&mut self, t_s: f64) {
         let f = self.detector.features();
         let was = self.in_steady_turn;

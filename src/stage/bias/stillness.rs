@@ -50,12 +50,14 @@
 //!   a horizontal axis, too slow to raise the accelerometer's window sd), or the bias's;
 //! - *along* gravity it is ambiguous. It is taken for the bias only when no larger than the
 //!   bias it departs from (|d∥| ≤ |b∥|): were it a turn, erasing it would leave an error no
-//!   larger than the raw data's own bias — never worse than no preprocessing. A larger one is
-//!   held off as a turn (`features().turn_held`; not still) for as long as it lasts, unless the
-//!   axis is free ([`StillnessDetector::set_free_axes`]: its model declares a step, no still
-//!   measurement has anchored its estimate yet — a model file's prior —, or its still
-//!   measurements do not fit its model, so that the estimate is no measured rest). Without all three
-//!   accelerometer axes no direction is across gravity, and the same bound holds per axis.
+//!   larger than the raw data's own bias — never worse than no preprocessing.
+//!
+//! A turn is held off (`features().turn_held`; not still) for as long as it lasts. Without all
+//! three accelerometer axes no direction is across gravity, and the size bound holds per axis.
+//! An offset on a *free* axis is the bias's whatever it is
+//! ([`StillnessDetector::set_free_axes`]: the axis's model declares a step, no still measurement
+//! has anchored its estimate yet — a model file's prior —, or its still measurements do not fit
+//! its model, so that the estimate is no measured rest).
 //!
 //! The price: a bias that moves about the vertical by more than its own size without a
 //! declared step is not re-learned (the estimate keeps its value; the raw data would carry the
@@ -109,8 +111,8 @@ pub struct StillnessSettings {
     pub mean_k: f64,
     /// The mean test vetoes an otherwise quiet stretch for this long, s, before its offset may
     /// be taken for a bias that moved (a shock; the bias stage's consistency guard then
-    /// re-anchors). Default 2. A steady turn about gravity larger than the bias stays vetoed
-    /// for as long as it lasts (module docs, "Steady turns").
+    /// re-anchors). Default 2. A steady turn stays vetoed for as long as it lasts (module docs,
+    /// "Steady turns").
     pub mean_veto_s: f64,
     /// The noise floors may rise by at most a factor 2 per this many seconds. Default 600.
     pub floor_rise_s: f64,
