@@ -45,9 +45,12 @@
 //! splits the disagreement d = mean − bias along and across the window's mean specific force
 //! (gravity at rest, to within the accelerometer's offsets, `accel_norm_dev_max_m_s2` of g):
 //! - *across* gravity a turn turns gravity in the accelerometer: by the integral of the offsets
-//!   since the veto began. Whichever the window's mean specific force is nearer to — where it
-//!   was then, or where that turn would have taken it — decides: a tilt held (a slow pan about
-//!   a horizontal axis, too slow to raise the accelerometer's window sd), or the bias's;
+//!   since the veto began. Whichever path the window's mean specific force has followed more
+//!   closely since then (summed squared distances, the last `PATH_MEMORY_S` = 10 s weighing
+//!   most) — staying where it was, or turning as that integral turned — decides: a tilt held
+//!   (a slow pan about a horizontal axis, too slow to raise the accelerometer's window sd), or
+//!   the bias's. The path, not where gravity is now: a sway (a ship's roll) brings gravity back
+//!   to where the veto began, and there the two predictions meet;
 //! - *along* gravity it is ambiguous. It is taken for the bias only when no larger than the
 //!   bias it departs from (|d∥| ≤ |b∥|): were it a turn, erasing it would leave an error no
 //!   larger than the raw data's own bias — never worse than no preprocessing.
@@ -221,6 +224,11 @@ pub struct StillnessFeatures {
     pub candidate: bool,
 }
 
+/// Memory of the steady-turn test's path evidence, s: long enough that a sway bringing gravity
+/// back to where a veto began was seen moving (a ship's 10-s roll, a 60-s one), short enough
+/// that minutes of rest before a tilt do not outvote it.
+const PATH_MEMORY_S: f64 = 10.0;
+
 /// Number of window columns: gyro xyz, accel xyz, |accel|, gyro xyz lag-1 products.
 const COLS: usize = 10;
 
@@ -269,6 +277,13 @@ pub struct StillnessDetector {
     /// gravity.
     veto_f0: [f64; 3],
     veto_rot: [f64; 3],
+    /// Summed squared distances (m²/s⁴) of the window's mean specific force since the veto
+    /// began from `veto_f0` (rest: a bias that moved) and from `veto_f0` turned by `veto_rot`
+    /// (a turn), each sample's weight falling by 1/e in `PATH_MEMORY_S` (`path_keep` per
+    /// sample).
+    veto_sse_rest: f64,
+    veto_sse_turn: f64,
+    path_keep: f64,
     /// Sample interval, s.
     dt_s: f64,
     /// Window length, samples.
@@ -324,6 +339,9 @@ impl StillnessDetector {
             free_axes: 0,
             veto_f0: [0.0; 3],
             veto_rot: [0.0; 3],
+            veto_sse_rest: 0.0,
+            veto_sse_turn: 0.0,
+            path_keep: (-1.0 / (PATH_MEMORY_S * sample_rate_hz.max(1e-6))).exp(),
             dt_s: 1.0 / sample_rate_hz.max(1e-6),
             lsb: [0.0; 6],
             quant_g: 0.0,
@@ -341,7 +359,8 @@ impl StillnessDetector {
     /// `mean_veto_s` whatever its size, even about gravity: the bias stage frees an axis whose
     /// model declares a step, whose estimate no still measurement has anchored yet (a model
     /// file's prior mean is no rest the sensor was seen at), or whose still measurements do not
-    /// fit its model (mean ν²/S above 2: an unmodelled vibration line, a wrong noise level).
+    /// fit its model (mean ν²/S above 2 over rest that lasts 3 s: an unmodelled vibration
+    /// line, a wrong noise level).
     pub fn set_free_axes(&mut self, mask: u8) {
         self.free_axes = mask & 0b111;
     }
@@ -349,9 +368,9 @@ impl StillnessDetector {
     /// Whether the mean test's disagreement `d` (per axis, 0 where `dv` is 0: no reference;
     /// `dv` its variance, `b` the bias it departs from), vetoed for `mean_veto_s` already, is a
     /// steady turn (module docs, "Steady turns"), judged with the window's mean specific force
-    /// `f` now (gravity at rest) and `veto_f0` when the veto began. Across gravity a turn would
-    /// have turned `f` by the offsets' integral since then (`veto_rot`); along it, only the
-    /// sizes can tell.
+    /// `f` now (gravity at rest). Across gravity a turn would have turned it along the path of
+    /// the offsets' integral since the veto began (`veto_sse_turn` against `veto_sse_rest`);
+    /// along it, only the sizes can tell.
     /// Without all three accelerometer axes (`norm_on` false) every axis is judged by the sizes.
     fn turn_test(
         &self,
@@ -393,10 +412,9 @@ impl StillnessDetector {
             .any(|a| (d[a] - along * u[a]).abs() > k * dv[a].sqrt() + tilt * along.abs());
         if across {
             // Did gravity turn as the offsets since the veto began would have turned it, or
-            // stay? The nearer prediction wins (a tilt of any size keeps being predicted).
-            let (f0, f1) = (Vector3::from(self.veto_f0), Vector3::new(f[0], f[1], f[2]));
-            let turned = Rotation3::new(-Vector3::from(self.veto_rot)) * f0;
-            let tilts = (f1 - turned).norm() < (f1 - f0).norm();
+            // stay? The prediction it followed more closely wins (a tilt of any size keeps
+            // being predicted).
+            let tilts = self.veto_sse_turn < self.veto_sse_rest;
             return tilts.then_some(Turn {
                 rate_rad_s,
                 tilts: true,
@@ -667,12 +685,22 @@ impl StillnessDetector {
                 if self.vetoed == 0 {
                     self.veto_f0 = [mean[3], mean[4], mean[5]];
                     self.veto_rot = [0.0; 3];
+                    self.veto_sse_rest = 0.0;
+                    self.veto_sse_turn = 0.0;
                 }
                 self.vetoed = self.vetoed.saturating_add(1);
             }
             if self.vetoed > 0 {
                 for (r, da) in self.veto_rot.iter_mut().zip(d) {
                     *r += da * self.dt_s;
+                }
+                if norm_on {
+                    let f0 = Vector3::from(self.veto_f0);
+                    let f1 = Vector3::new(mean[3], mean[4], mean[5]);
+                    let turned = Rotation3::new(-Vector3::from(self.veto_rot)) * f0;
+                    let keep = self.path_keep;
+                    self.veto_sse_rest = keep * self.veto_sse_rest + (f1 - f0).norm_squared();
+                    self.veto_sse_turn = keep * self.veto_sse_turn + (f1 - turned).norm_squared();
                 }
             }
         } else {

@@ -212,6 +212,52 @@ fn an_offset_the_accelerometer_or_the_bias_explains_is_rest_after_the_veto() {
 }
 
 #[test]
+fn a_roll_that_brings_gravity_back_is_still_a_turn() {
+    // A slow roll about x, 3 °/s amplitude, 60-s period: ±29° of gravity turning, too slowly
+    // for the accelerometer's window sd. Half a period after a zero crossing gravity is back
+    // where the veto began; at that instant "gravity stayed" and "gravity turned as the
+    // offsets say" predict the same, and the offset (2–3 °/s) was taken for a bias that moved
+    // when the test looked only at where gravity is now (here: still at t = 49.97 s, rolling at
+    // 2.6 °/s). The path it followed since decides:
+    // no sample is still while the rate is more than 0.5 °/s, and every held turn tilts.
+    let mut d = StillnessDetector::new(&StillnessSettings::default(), 100.0);
+    let mut r = Rng::new(23);
+    let (w, period) = (3f64.to_radians(), 60.0);
+    let mut th = 0.0;
+    let mut held = 0;
+    for k in 0..15_000 {
+        let t = k as f64 / 100.0;
+        let rate = if t >= 10.0 {
+            w * (std::f64::consts::TAU * (t - 10.0) / period).sin()
+        } else {
+            0.0
+        };
+        th += rate / 100.0;
+        let (mut g, mut a) = still_sample(&mut r, 0.0, 0.1, 0.04);
+        g[0] += rate;
+        if k == 3000 {
+            // A jolt (a wave slapping the hull) at t = 30 s, 43° into the roll: the veto
+            // starts again there, and gravity comes back to 43° at t = 50 s, rolling at 2.6 °/s.
+            g[1] += 0.5;
+        }
+        a[1] += G * th.sin();
+        a[2] += G * (th.cos() - 1.0);
+        let still = d.update(&g, &a, &[Some((0.0, 1e-3)); 3]);
+        assert!(
+            !(still && rate.abs() > 0.5f64.to_radians()),
+            "t = {t}: {:?}",
+            d.features()
+        );
+        let f = d.features();
+        if f.turn_held {
+            assert!(f.turn_tilts, "t = {t}: {f:?}");
+            held += 1;
+        }
+    }
+    assert!(held >= 8000, "held on {held} samples");
+}
+
+#[test]
 fn a_quantised_rest_toggling_one_lsb_is_still_and_a_few_lsb_of_motion_is_not() {
     // The walk rounded to 4× its LSB (gyro 0.0304 °/s, accel 4 mg); gyro noise 1 LSB per
     // axis, accel 0.1 LSB. For 10 s the accelerometer's true values lie mid-code: it sits on
