@@ -84,6 +84,7 @@ impl BiasStage {
             counters,
             in_steady_turn: false,
             nis_weight: 1.0 / (super::NIS_WINDOW_S * fs).max(1.0),
+            still_run: 0,
         };
         for (c, state) in ch.iter_mut().enumerate() {
             let name = CHANNEL_NAMES[c];

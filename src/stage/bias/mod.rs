@@ -136,6 +136,10 @@ const STEADY_TURNS_SAID: u64 = 3;
 const NIS_CAP: f64 = 100.0;
 /// Time constant of that running mean, s.
 const NIS_WINDOW_S: f64 = 10.0;
+/// Still time before still measurements enter that mean, s: a sway may be called still for a
+/// moment at each zero crossing of its rate (its window as quiet as rest, its mean within the
+/// mean test), and those measurements, taken on a ramp, misfit any model of rest.
+const NIS_SETTLED_S: f64 = 3.0;
 /// An estimate whose still measurements' mean ν²/S exceeds this is no measured rest (χ²₁ has
 /// mean 1 and variance 2; its running mean over 10 s of independent samples has sd ≈ 0.03 at
 /// 100 Hz, 0.1 at 10 Hz).
@@ -253,6 +257,8 @@ pub struct BiasStage {
     in_steady_turn: bool,
     /// Weight of one still measurement in a channel's running mean of ν²/S.
     nis_weight: f64,
+    /// Consecutive samples the detector has called still, up to the last.
+    still_run: u64,
 }
 
 impl BiasStage {
@@ -305,6 +311,9 @@ impl BiasStage {
 
     /// Consume the oldest delay-line entry into the gyro filters (`still` = detector state now).
     fn consume(&mut self, e: DelayEntry, still: bool, alarm_fired: &mut bool) {
+        // Only a rest that lasts is evidence that the model misfits it: a sway is "still" for a
+        // moment at each zero crossing of its rate.
+        let settled = self.still_run as f64 >= NIS_SETTLED_S * self.fs;
         for c in 0..3 {
             let st = &mut self.ch[c];
             if let Some(est) = st.est.as_mut() {
@@ -325,7 +334,7 @@ impl BiasStage {
                         *alarm_fired = true;
                     }
                     let (nu0, s0) = est.kf.innovation(z);
-                    if s0 > 0.0 {
+                    if s0 > 0.0 && settled {
                         est.nis += self.nis_weight * ((nu0 * nu0 / s0).min(NIS_CAP) - est.nis);
                     }
                     let consistent = nu0 * nu0 <= GUARD_K * GUARD_K * s0;
@@ -628,6 +637,9 @@ impl BiasStage {
         if still {
             s.flags |= flags::STILL;
             self.counters.still_samples += 1;
+            self.still_run = self.still_run.saturating_add(1);
+        } else {
+            self.still_run = 0;
         }
         self.count_steady_turn(t_s);
 
