@@ -366,21 +366,22 @@ impl StillnessDetector {
     }
 
     /// Whether the mean test's disagreement `d` (per axis, 0 where `dv` is 0: no reference;
-    /// `dv` its variance, `b` the bias it departs from), vetoed for `mean_veto_s` already, is a
-    /// steady turn (module docs, "Steady turns"), judged with the window's mean specific force
-    /// `f` now (gravity at rest). Across gravity a turn would have turned it along the path of
-    /// the offsets' integral since the veto began (`veto_sse_turn` against `veto_sse_rest`);
-    /// along it, only the sizes can tell.
+    /// `dv` its variance; `gyro_ref` the bias it departs from), vetoed for `mean_veto_s`
+    /// already, is a steady turn (module docs, "Steady turns"), judged with the window's mean
+    /// specific force `f` now (gravity at rest). Across gravity a turn would have turned it
+    /// along the path of the offsets' integral since the veto began (`veto_sse_turn` against
+    /// `veto_sse_rest`); along it, only the sizes can tell.
     /// Without all three accelerometer axes (`norm_on` false) every axis is judged by the sizes.
     fn turn_test(
         &self,
-        b: &[f64; 3],
+        gyro_ref: &[Option<(f64, f64)>; 3],
         d: &[f64; 3],
         dv: &[f64; 3],
         f: &[f64],
         norm_on: bool,
     ) -> Option<Turn> {
         let k = self.s.mean_k;
+        let b = |a: usize| gyro_ref[a].map_or(0.0, |r| r.0);
         let has = |a: usize| dv[a] > 0.0;
         let off = |a: usize| has(a) && d[a].abs() > k * dv[a].sqrt();
         if (0..3).any(|a| off(a) && self.free_axes & (1 << a) != 0) {
@@ -390,7 +391,7 @@ impl StillnessDetector {
         let g = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
         if !norm_on || g <= 0.0 {
             // No gravity direction: any axis may be turning.
-            let turn = (0..3).any(|a| off(a) && d[a].abs() > b[a].abs());
+            let turn = (0..3).any(|a| off(a) && d[a].abs() > b(a).abs());
             return turn.then_some(Turn {
                 rate_rad_s,
                 tilts: false,
@@ -401,7 +402,7 @@ impl StillnessDetector {
         for a in (0..3).filter(|a| has(*a)) {
             along += u[a] * d[a];
             var += u[a] * u[a] * dv[a];
-            bias_along += u[a] * b[a];
+            bias_along += u[a] * b(a);
         }
         // Gravity's direction is known to within the accelerometer's offsets (up to
         // `accel_norm_dev_max_m_s2` of g: `tilt`), and a turn about it reaches the other axes
@@ -632,8 +633,7 @@ impl StillnessDetector {
         // autocorrelation ρ of the window (a sensor's own low-pass filter makes its noise
         // correlated, and σ²/N would then call rest a slow turn).
         let mut mean_sigma = f64::NAN;
-        // Per axis: the disagreement d and its variance (0 and 1 for an axis without a reference).
-        let mut b_ref = [0.0; 3];
+        // Per axis: the disagreement d and its variance (both 0 for an axis without a reference).
         let mut d = [0.0; 3];
         let mut dv = [0.0; 3];
         for (a, r) in gyro_ref.iter().enumerate() {
@@ -641,7 +641,6 @@ impl StillnessDetector {
                 let v = var[a].max(ax_floor_g);
                 let rho = ((mean[7 + a] - mean[a] * mean[a]) / v).clamp(0.0, 0.95);
                 let mean_var = v * (1.0 + rho) / (1.0 - rho) / n as f64;
-                b_ref[a] = *b;
                 d[a] = mean[a] - b;
                 dv[a] = mean_var + sd * sd;
                 let z = d[a].abs() / dv[a].sqrt();
@@ -712,7 +711,7 @@ impl StillnessDetector {
         // long as it lasts (module docs, "Steady turns").
         let expired = self.vetoed >= self.veto_samples;
         let turn = if quiet && !mean_ok && expired {
-            self.turn_test(&b_ref, &d, &dv, &mean[3..6], norm_on)
+            self.turn_test(gyro_ref, &d, &dv, &mean[3..6], norm_on)
         } else {
             None
         };
