@@ -68,8 +68,14 @@
 //! of 0.3 °/s per-sample noise at 100 Hz) is within the mean test's noise, and the bias filter
 //! takes it up at its own pace, as a bias.
 //!
-//! Hysteresis: the detector enters STILL after `enter_after_s` of consecutive candidates and
-//! leaves at the first non-candidate (or non-finite) sample. This is the generalised-likelihood-
+//! Hysteresis: the detector enters STILL after `enter_after_s` of quiet windows free of motion
+//! whose last is a candidate, and leaves at the first non-candidate (or non-finite) sample.
+//! Motion is a held turn, or an offset beyond three times the mean test's bound that went away
+//! before the veto lifted. A mean-test veto alone does not restart the run: a near-threshold
+//! offset of coloured rest noise flickers, and an offset that outlasts the veto is the bias's (a
+//! shock) and STILL at once. Motion does: a sway's zero crossings pass the mean test for a
+//! moment, and with a run of quiet samples alone they were STILL at once (docs/real-data.md, "A
+//! sway is neither rest nor bias"). This is the generalised-likelihood-
 //! ratio ZUPT family (Skog et al., "Zero-velocity detection — an algorithm evaluation", IEEE
 //! Trans. Biomed. Eng. 57(11), 2010) with separate, interpretable tests, and its noise level
 //! learned instead of configured.
@@ -229,6 +235,25 @@ pub struct StillnessFeatures {
 /// that minutes of rest before a tilt do not outvote it.
 const PATH_MEMORY_S: f64 = 10.0;
 
+/// Lag of the steady-turn test's path comparison, s: each window's mean specific force is
+/// compared with where it was between `PATH_LAG_S` and twice that earlier (staying there, or
+/// turned by the offsets' integral over the lag). Long enough that a turn at the mean test's
+/// threshold (≈ 0.2 °/s) moves gravity by 0.4–0.8° (0.07–0.14 m/s², many times a window mean's
+/// noise); short enough that the bias estimate's own error, integrated over the lag, stays a
+/// small fraction of a degree (0.05 °/s × 4 s = 0.2°). Integrated from the start of a long veto
+/// instead, that error grew without bound: after 150 s of a ±1.2° roll the predicted turn had
+/// drifted further than the roll itself, the roll was taken for rest and its rate learned as
+/// bias (docs/real-data.md, "A sway is neither rest nor bias").
+const PATH_LAG_S: f64 = 2.0;
+
+/// A quiet window whose gyro mean is beyond this many times `mean_k` σ from the bias, and whose
+/// offset goes away before the mean test's veto lifts, was motion, not a near-threshold flicker
+/// of coloured rest noise: the run towards STILL starts again when it goes. PX4's filtered gyro
+/// at rest (`px4_sensor_combined_sample`) has 1,770 vetoed windows beyond `mean_k` σ, one
+/// beyond twice it and none beyond three times (at twice, that one cost the drive 0.1 % of its
+/// still share); a sway's peak rate is tens of σ.
+const MOTION_MEAN_FACTOR: f64 = 3.0;
+
 /// Number of window columns: gyro xyz, accel xyz, |accel|, gyro xyz lag-1 products.
 const COLS: usize = 10;
 
@@ -237,6 +262,14 @@ const COLS: usize = 10;
 /// smallest happen by chance with probability ~0.02^7 ≈ 1e-12; a quantised channel at rest
 /// toggling its LSB shows 8 in a 0.5-s window or in a later one.
 const GRID_MIN_DIFFS: usize = 8;
+
+/// A point of the steady-turn test's path: the window's mean specific force (m/s²) and the
+/// offsets' integral (rad) then.
+#[derive(Debug, Clone, Copy, Default)]
+struct PathPoint {
+    f: [f64; 3],
+    rot: [f64; 3],
+}
 
 /// Add (`sign = 1`) or remove (`sign = -1`) one window row to the running sums.
 #[inline]
@@ -270,16 +303,22 @@ pub struct StillnessDetector {
     /// Quiet samples so far on which the mean test disagreed, and how many lift its veto.
     vetoed: u64,
     veto_samples: u64,
+    /// The current veto has seen an offset beyond `MOTION_MEAN_FACTOR` × `mean_k` σ.
+    moved: bool,
     /// Gyro axes free of the steady-turn rule ([`StillnessDetector::set_free_axes`]).
     free_axes: u8,
-    /// The window's mean specific force when the current veto began, and the rotation vector
-    /// (rad) the mean test's offsets have turned through since: where a turn would have taken
-    /// gravity.
-    veto_f0: [f64; 3],
+    /// The rotation vector (rad) the mean test's offsets have turned through since the current
+    /// veto began, and the samples since then.
     veto_rot: [f64; 3],
-    /// Summed squared distances (m²/s⁴) of the window's mean specific force since the veto
-    /// began from `veto_f0` (rest: a bias that moved) and from `veto_f0` turned by `veto_rot`
-    /// (a turn), each sample's weight falling by 1/e in `PATH_MEMORY_S` (`path_keep` per
+    veto_n: u64,
+    /// Path points `PATH_LAG_S` apart: `path_from` is compared with now, `path_next` takes its
+    /// place at the next step (`path_lag` samples).
+    path_from: PathPoint,
+    path_next: PathPoint,
+    path_lag: u64,
+    /// Summed squared distances (m²/s⁴) of the window's mean specific force from
+    /// `path_from.f` (rest: a bias that moved) and from it turned by the offsets' integral
+    /// since (a turn), each sample's weight falling by 1/e in `PATH_MEMORY_S` (`path_keep` per
     /// sample).
     veto_sse_rest: f64,
     veto_sse_turn: f64,
@@ -335,10 +374,14 @@ impl StillnessDetector {
             rise: (std::f64::consts::LN_2 / (s.floor_rise_s * sample_rate_hz.max(1e-6))).exp(),
             prev_g: [f64::NAN; 3],
             vetoed: 0,
+            moved: false,
             veto_samples: ((s.mean_veto_s.max(0.0) * sample_rate_hz.max(0.0)).ceil() as u64).max(1),
             free_axes: 0,
-            veto_f0: [0.0; 3],
             veto_rot: [0.0; 3],
+            veto_n: 0,
+            path_from: PathPoint::default(),
+            path_next: PathPoint::default(),
+            path_lag: ((PATH_LAG_S * sample_rate_hz.max(0.0)).ceil() as u64).max(1),
             veto_sse_rest: 0.0,
             veto_sse_turn: 0.0,
             path_keep: (-1.0 / (PATH_MEMORY_S * sample_rate_hz.max(1e-6))).exp(),
@@ -453,6 +496,7 @@ impl StillnessDetector {
         self.since_recompute = 0;
         self.run = 0;
         self.vetoed = 0;
+        self.moved = false;
         self.still = false;
     }
 
@@ -682,8 +726,13 @@ impl StillnessDetector {
             self.run = self.run.saturating_add(1);
             if !mean_ok {
                 if self.vetoed == 0 {
-                    self.veto_f0 = [mean[3], mean[4], mean[5]];
                     self.veto_rot = [0.0; 3];
+                    self.veto_n = 0;
+                    self.path_from = PathPoint {
+                        f: [mean[3], mean[4], mean[5]],
+                        rot: [0.0; 3],
+                    };
+                    self.path_next = self.path_from;
                     self.veto_sse_rest = 0.0;
                     self.veto_sse_turn = 0.0;
                 }
@@ -693,10 +742,19 @@ impl StillnessDetector {
                 for (r, da) in self.veto_rot.iter_mut().zip(d) {
                     *r += da * self.dt_s;
                 }
+                self.veto_n += 1;
+                if self.veto_n.is_multiple_of(self.path_lag) {
+                    self.path_from = self.path_next;
+                    self.path_next = PathPoint {
+                        f: [mean[3], mean[4], mean[5]],
+                        rot: self.veto_rot,
+                    };
+                }
                 if norm_on {
-                    let f0 = Vector3::from(self.veto_f0);
+                    let f0 = Vector3::from(self.path_from.f);
                     let f1 = Vector3::new(mean[3], mean[4], mean[5]);
-                    let turned = Rotation3::new(-Vector3::from(self.veto_rot)) * f0;
+                    let since = Vector3::from(self.veto_rot) - Vector3::from(self.path_from.rot);
+                    let turned = Rotation3::new(-since) * f0;
                     let keep = self.path_keep;
                     self.veto_sse_rest = keep * self.veto_sse_rest + (f1 - f0).norm_squared();
                     self.veto_sse_turn = keep * self.veto_sse_turn + (f1 - turned).norm_squared();
@@ -716,6 +774,19 @@ impl StillnessDetector {
             None
         };
         let candidate = quiet && (mean_ok || (expired && turn.is_none()));
+        // Motion within a quiet stretch starts the run towards STILL again: a held turn, or an
+        // offset beyond doubt that went away before the veto lifted (a bias that moved stays).
+        // A sway's zero crossings pass the mean test for a moment, and were STILL at once while
+        // the run counted quiet samples only.
+        if quiet && !mean_ok && !expired && f.gyro_mean_sigma > MOTION_MEAN_FACTOR * self.s.mean_k {
+            self.moved = true;
+        }
+        if turn.is_some() || (mean_ok && self.moved) {
+            self.run = 0;
+        }
+        if !quiet || mean_ok || (expired && turn.is_none()) {
+            self.moved = false;
+        }
         self.features = StillnessFeatures {
             candidate,
             turn_held: turn.is_some(),
