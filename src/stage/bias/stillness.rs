@@ -44,13 +44,15 @@
 //! or a turn that goes on (a turntable, a robot turning in place, a slow pan). The detector
 //! splits the disagreement d = mean − bias along and across the window's mean specific force
 //! (gravity at rest, to within the accelerometer's offsets, `accel_norm_dev_max_m_s2` of g):
-//! - *across* gravity a turn turns gravity in the accelerometer: by the integral of the offsets
-//!   since the veto began. Whichever path the window's mean specific force has followed more
-//!   closely since then (summed squared distances, the last `PATH_MEMORY_S` = 10 s weighing
-//!   most) — staying where it was, or turning as that integral turned — decides: a tilt held
-//!   (a slow pan about a horizontal axis, too slow to raise the accelerometer's window sd), or
-//!   the bias's. The path, not where gravity is now: a sway (a ship's roll) brings gravity back
-//!   to where the veto began, and there the two predictions meet;
+//! - *across* gravity a turn turns gravity in the accelerometer: by the integral of the
+//!   offsets. Each window's mean specific force is compared with where it was 2–4 s earlier
+//!   (`PATH_LAG_S`): staying there, or turned by the offsets' integral over that lag. Whichever
+//!   prediction it has followed more closely (summed squared distances, the last
+//!   `PATH_MEMORY_S` = 10 s weighing most) decides: a tilt held (a slow pan about a horizontal
+//!   axis, too slow to raise the accelerometer's window sd), or the bias's. The path, not where
+//!   gravity is now: a sway (a ship's roll) brings gravity back to where the veto began, and
+//!   there the two predictions meet; and over a lag, not since the veto began: the integral
+//!   carries the bias estimate's own error, which over minutes outgrows a small roll;
 //! - *along* gravity it is ambiguous. It is taken for the bias only when no larger than the
 //!   bias it departs from (|d∥| ≤ |b∥|): were it a turn, erasing it would leave an error no
 //!   larger than the raw data's own bias — never worse than no preprocessing.
@@ -412,7 +414,7 @@ impl StillnessDetector {
     /// `dv` its variance; `gyro_ref` the bias it departs from), vetoed for `mean_veto_s`
     /// already, is a steady turn (module docs, "Steady turns"), judged with the window's mean
     /// specific force `f` now (gravity at rest). Across gravity a turn would have turned it
-    /// along the path of the offsets' integral since the veto began (`veto_sse_turn` against
+    /// along the path of the offsets' integral over `PATH_LAG_S` (`veto_sse_turn` against
     /// `veto_sse_rest`); along it, only the sizes can tell.
     /// Without all three accelerometer axes (`norm_on` false) every axis is judged by the sizes.
     fn turn_test(
@@ -455,7 +457,7 @@ impl StillnessDetector {
             .filter(|a| has(*a))
             .any(|a| (d[a] - along * u[a]).abs() > k * dv[a].sqrt() + tilt * along.abs());
         if across {
-            // Did gravity turn as the offsets since the veto began would have turned it, or
+            // Did gravity turn as the offsets over the lag would have turned it, or
             // stay? The prediction it followed more closely wins (a tilt of any size keeps
             // being predicted).
             let tilts = self.veto_sse_turn < self.veto_sse_rest;
