@@ -68,7 +68,11 @@
 //! declared step is not re-learned (the estimate keeps its value; the raw data would carry the
 //! whole bias). A turn slower than about `mean_k` σ of a window's mean (≈ 0.2 °/s for a gyro
 //! of 0.3 °/s per-sample noise at 100 Hz) is within the mean test's noise, and the bias filter
-//! takes it up at its own pace, as a bias.
+//! takes it up at its own pace, as a bias. The veto counts over a quiet stretch, not per
+//! offset: a sway's offsets use it up within seconds, and each later one is judged at once, so
+//! a sway about gravity a few times the mean test's bound and no larger than the bias is
+//! learned unevenly (docs/real-data.md, "A sway is neither rest nor bias", stop 42: why, and
+//! the per-offset vetoes tried, which hid a wandering bias from the model-health monitor).
 //!
 //! Hysteresis: the detector enters STILL after `enter_after_s` of quiet windows free of motion
 //! whose last is a candidate, and leaves at the first non-candidate (or non-finite) sample.
