@@ -3,8 +3,9 @@
 # python3 summary.py results.txt. Benches are written into WORKDIR once and reused.
 set -e
 here=$(cd "$(dirname "$0")" && pwd); bin=$1; work=$2; mkdir -p "$work"
-cases=""
-for ax in x z; do
+# CASES (A,P,axis,seed ...) replaces the 76 (seeds.sh).
+cases="$CASES"
+[ -n "$cases" ] || for ax in x z; do
   for A in 0.3 1 3 10 20; do for P in 5 20 60; do cases="$cases $A,$P,$ax,1"; done; done
   for c in 2,5 5,20 6,20 3,10 1.5,5 1,120 3,120 10,120 10,2 30,20 0.5,120; do cases="$cases $c,$ax,1"; done
   for seed in 2 3; do for A in 3 10; do for P in 10 20 60; do cases="$cases $A,$P,$ax,$seed"; done; done; done
