@@ -219,3 +219,114 @@ impl Sample {
         self.has(flags::BIAS_REMOVED) && self.bias.iter().any(|b| *b != 0.0)
     }
 }
+
+/// Where a reader puts the samples it keeps, in order: a `Vec<Sample>`, or [`Channels`], which
+/// holds only what the whole-log analyses read.
+pub trait SampleSink {
+    /// At most `n` more samples will come (reserve once instead of growing by doubling).
+    fn expect(&mut self, n: usize);
+    fn push(&mut self, s: Sample);
+}
+
+impl SampleSink for Vec<Sample> {
+    fn expect(&mut self, n: usize) {
+        self.reserve(n);
+    }
+    fn push(&mut self, s: Sample) {
+        Vec::push(self, s);
+    }
+}
+
+/// A recording held by channel: the time stamps, each channel's values, the temperature while
+/// every sample has one, and in how many samples each channel is absent. 64 bytes per sample
+/// with the temperature where a [`Sample`] takes 136: what the whole-log analyses (`diagnose`,
+/// `allan`, `compare`) hold of a log instead of its samples.
+#[derive(Debug, Clone, Default)]
+pub struct Channels {
+    /// Each sample's sensor time, ns ([`Sample::t_ns`]).
+    pub t_ns: Vec<u64>,
+    /// Channel `c`'s values (0..6: gx gy gz ax ay az), one per sample.
+    pub values: [Vec<f64>; N_CHANNELS],
+    /// The temperature of every sample, °C; `None` once a sample has none.
+    pub temp_c: Option<Vec<f64>>,
+    /// The samples in which channel `c` is absent ([`Sample::absent`]).
+    pub absent_in: [usize; N_CHANNELS],
+    len: usize,
+    /// Samples announced by [`SampleSink::expect`]: the temperature's reserve.
+    expected: usize,
+}
+
+impl Channels {
+    /// Samples held.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The channels absent in any sample (bit `c` for channel `c`).
+    pub fn absent(&self) -> u8 {
+        (0..N_CHANNELS)
+            .filter(|&c| self.absent_in[c] > 0)
+            .fold(0, |m, c| m | 1 << c)
+    }
+
+    /// The first `n` samples only.
+    pub fn truncate(&mut self, n: usize) {
+        self.t_ns.truncate(n);
+        for v in &mut self.values {
+            v.truncate(n);
+        }
+        if let Some(t) = &mut self.temp_c {
+            t.truncate(n);
+        }
+        self.len = self.len.min(n);
+    }
+}
+
+impl SampleSink for Channels {
+    fn expect(&mut self, n: usize) {
+        self.t_ns.reserve(n);
+        for v in &mut self.values {
+            v.reserve(n);
+        }
+        if let Some(t) = &mut self.temp_c {
+            t.reserve(n);
+        }
+        self.expected = self.len + n;
+    }
+
+    fn push(&mut self, s: Sample) {
+        self.t_ns.push(s.t_ns);
+        for (c, v) in s.channels().into_iter().enumerate() {
+            self.values[c].push(v);
+            self.absent_in[c] += usize::from(s.is_absent(c));
+        }
+        match (s.temp_c, self.len) {
+            (Some(t), 0) => {
+                let mut v = Vec::with_capacity(self.expected.max(1));
+                v.push(t);
+                self.temp_c = Some(v);
+            }
+            (Some(t), _) => {
+                if let Some(v) = &mut self.temp_c {
+                    v.push(t);
+                }
+            }
+            (None, _) => self.temp_c = None,
+        }
+        self.len += 1;
+    }
+}
+
+impl<'a> FromIterator<&'a Sample> for Channels {
+    fn from_iter<I: IntoIterator<Item = &'a Sample>>(it: I) -> Self {
+        let mut c = Channels::default();
+        for s in it {
+            c.push(*s);
+        }
+        c
+    }
+}

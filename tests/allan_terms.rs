@@ -476,3 +476,29 @@ fn timing_irregularities_are_counted() {
     );
     assert_eq!(r.timing.non_increasing, 0);
 }
+
+/// `allan` reads a log held by channel (`allan_report_of`): the same report as from the
+/// samples, field for field, time-stamp gaps included.
+#[test]
+fn the_report_of_channels_is_the_report_of_samples() {
+    use imuprep::analysis::allan::report::allan_report_of;
+    use imuprep::sample::Channels;
+    let mut samples = six_channel_samples(1 << 16);
+    // a gap and a repeated time stamp, so the timing counts are not all zero
+    for s in &mut samples[30_000..] {
+        s.t_ns += 50_000_000;
+    }
+    samples[40_000].t_ns = samples[39_999].t_ns;
+    let all: Vec<usize> = (0..6).collect();
+    let set = FitSettings::default();
+    let want = allan_report("x", &samples, FS, &all, &set).unwrap();
+    let ch: Channels = samples.iter().collect();
+    let got = allan_report_of("x", &ch, FS, &all, &set).unwrap();
+    // the gap, and the interval after the repeated stamp (two periods)
+    assert_eq!(want.timing.long_intervals, 2);
+    assert_eq!(want.timing.non_increasing, 1);
+    assert_eq!(
+        serde_json::to_string(&got).unwrap(),
+        serde_json::to_string(&want).unwrap()
+    );
+}

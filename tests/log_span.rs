@@ -81,3 +81,57 @@ fn streamed_read_equals_whole_file_decode_and_spans_cut_by_time() {
         want.1[15_000..].to_vec()
     );
 }
+
+/// The columns a log is streamed into (`diagnose` holds these, not the samples) are the
+/// samples' own values: channel by channel, the temperature only while every sample has one,
+/// the absent channels counted.
+#[test]
+fn a_log_streamed_into_channels_holds_what_its_samples_hold() {
+    use imuprep::io::log::read_log_span_into;
+    use imuprep::sample::Channels;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("c.log");
+    let d = Descriptor {
+        sample_rate_hz: 100.0,
+        absent: 0b100000, // no az: a partial sensor
+        ..Default::default()
+    };
+    let mut all = samples(3_000);
+    for (i, s) in all.iter_mut().enumerate() {
+        s.temp_c = Some(20.0 + i as f64 * 1e-3);
+        s.accel[2] = f64::NAN;
+        s.absent = 0b100000;
+    }
+    write_log(&path, &d, &all).unwrap();
+    let (_, want, _) = read_log_span(&path, 5.0, Some(20.0)).unwrap();
+    let mut got = Channels::default();
+    let (desc, _) = read_log_span_into(&path, 5.0, Some(20.0), &mut got).unwrap();
+    assert_eq!(desc.unwrap().absent, 0b100000);
+    assert_eq!(got.len(), want.len());
+    assert_eq!(want.len(), 2_000);
+    for c in 0..5 {
+        let col: Vec<f64> = want.iter().map(|s| s.channel(c)).collect();
+        assert_eq!(got.values[c], col, "channel {c}");
+    }
+    assert_eq!(got.absent_in, [0, 0, 0, 0, 0, 2_000]);
+    assert_eq!(got.absent(), 0b100000);
+    let temps: Vec<f64> = want.iter().map(|s| s.temp_c.unwrap()).collect();
+    assert_eq!(got.temp_c.as_ref(), Some(&temps));
+    // the same columns as collected from the samples (az is NaN: no measurement)
+    let from_samples: Channels = want.iter().collect();
+    assert_eq!(from_samples.values[..5], got.values[..5]);
+    assert!(from_samples.values[5].iter().all(|v| v.is_nan()));
+    assert_eq!(from_samples.temp_c, got.temp_c);
+    assert_eq!(from_samples.absent_in, got.absent_in);
+
+    // one sample without a temperature: no temperature series at all (a partial one would
+    // misalign with the channels)
+    let mut some = want.clone();
+    some[1_500].temp_c = None;
+    let ch: Channels = some.iter().collect();
+    assert_eq!(ch.temp_c, None);
+    let mut cut = ch.clone();
+    cut.truncate(10);
+    assert_eq!(cut.len(), 10);
+    assert!(cut.values.iter().all(|v| v.len() == 10));
+}

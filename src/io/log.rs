@@ -11,7 +11,7 @@ use crate::frame::{
     DecoderStats, Descriptor, FrameDecoder, LOG_HEADER_LEN, LogHeaderError, Message,
     check_log_header, encode_log_header, encode_sample,
 };
-use crate::sample::Sample;
+use crate::sample::{Sample, SampleSink};
 use bytes::BytesMut;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -166,6 +166,19 @@ pub fn read_log_span(
     skip_s: f64,
     span_s: Option<f64>,
 ) -> Result<LogContents, LogError> {
+    let mut out = Vec::new();
+    let (desc, stats) = read_log_span_into(path, skip_s, span_s, &mut out)?;
+    Ok((desc, out, stats))
+}
+
+/// [`read_log_span`] into `out`: the same samples in the same order, never held as a
+/// `Vec<Sample>` unless `out` is one; the first descriptor and the decoder statistics.
+pub fn read_log_span_into(
+    path: &Path,
+    skip_s: f64,
+    span_s: Option<f64>,
+    out: &mut impl SampleSink,
+) -> Result<(Option<Descriptor>, DecoderStats), LogError> {
     let io = |err| LogError::Io {
         path: path.into(),
         err,
@@ -182,8 +195,8 @@ pub fn read_log_span(
     // Before the descriptor: held samples. After: (to skip, to keep).
     let mut held: Vec<Sample> = Vec::new();
     let mut window: Option<(usize, usize)> = None;
-    let mut out: Vec<Sample> = Vec::new();
-    let keep = |out: &mut Vec<Sample>, w: &mut (usize, usize), s: Sample| -> bool {
+    /// Skip, then keep, then stop: whether more are wanted.
+    fn keep(out: &mut impl SampleSink, w: &mut (usize, usize), s: Sample) -> bool {
         if w.0 > 0 {
             w.0 -= 1;
         } else if w.1 > 0 {
@@ -191,7 +204,7 @@ pub fn read_log_span(
             w.1 -= 1;
         }
         w.1 > 0
-    };
+    }
     let mut eof = false;
     'read: loop {
         let m = if eof {
@@ -207,13 +220,13 @@ pub fn read_log_span(
                     let to_samples = |t: f64| (t * rate).round().max(0.0) as usize;
                     let skip = to_samples(skip_s);
                     let take = span_s.map_or(usize::MAX, to_samples);
-                    // Reserve once instead of doubling: at most this many plain sample frames.
+                    // At most this many plain sample frames.
                     let frames = (file_len / crate::frame::SAMPLE_FRAME_LEN as u64) as usize;
-                    out.reserve(take.min(frames.saturating_sub(skip)) + held.len());
+                    out.expect(take.min(frames.saturating_sub(skip)) + held.len());
                     let mut w = (skip, take);
                     let mut more = w.1 > 0;
                     for s in held.drain(..) {
-                        more = keep(&mut out, &mut w, s);
+                        more = keep(out, &mut w, s);
                     }
                     window = Some(w);
                     if !more {
@@ -224,7 +237,7 @@ pub fn read_log_span(
             Some(Message::Health(_)) => {}
             Some(Message::Sample(s)) => match window.as_mut() {
                 Some(w) => {
-                    if !keep(&mut out, w, s) {
+                    if !keep(out, w, s) {
                         break 'read;
                     }
                 }
@@ -241,9 +254,12 @@ pub fn read_log_span(
         }
     }
     if desc.is_none() {
-        out = held;
+        out.expect(held.len());
+        for s in held {
+            out.push(s);
+        }
     }
-    Ok((desc, out, dec.stats()))
+    Ok((desc, dec.stats()))
 }
 
 /// Read until `buf` is full or the file ends; the number of bytes read.

@@ -6,9 +6,9 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 
-use super::{load_span, parse_channels, present_channels};
+use super::{load_channels_to, parse_channels, present_channels_of};
 use crate::analysis::allan::plot::allan_svg;
-use crate::analysis::allan::report::{AllanReport, allan_report};
+use crate::analysis::allan::report::{AllanReport, allan_report_of};
 use crate::analysis::allan::{export, terms::FitSettings};
 
 /// The report and the names of the files written beside it.
@@ -26,12 +26,13 @@ pub fn allan(
     skip_s: f64,
     out_dir: &Path,
 ) -> Result<AllanRun> {
-    let (rate, samples) = load_span(log, skip_s)?;
+    // Held by channel (64 bytes per sample, where the samples take 136): see `Channels`.
+    let (rate, samples) = load_channels_to(log, skip_s, None)?;
     let chans = parse_channels(channels)?;
     // A partial sensor's absent channels are said in the report, never analysed as NaN.
-    let (chans, absent) = present_channels(log, &samples, &chans)?;
+    let (chans, absent) = present_channels_of(log, &samples, &chans)?;
     let source = log.display().to_string();
-    let mut report = allan_report(&source, &samples, rate, &chans, &FitSettings::default())
+    let mut report = allan_report_of(&source, &samples, rate, &chans, &FitSettings::default())
         .with_context(|| {
             format!(
                 "{source}: {} ({:.2} s at {} Hz) after --skip-s {skip_s}",
@@ -41,7 +42,7 @@ pub fn allan(
             )
         })?;
     report.skipped.extend(absent);
-    if let Some(w) = super::not_at_rest(&samples, rate) {
+    if let Some(w) = super::not_at_rest_of(&samples, rate) {
         report.warnings.push(format!(
             "{w}: the Allan deviation and its terms measure the motion as well as the sensor's noise, and so do imu.yaml, gnss_imu_config.txt and bias.toml; analyse a recording at rest, or skip to a still part (--skip-s)"
         ));

@@ -51,7 +51,7 @@ mod recordings;
 mod report;
 mod text;
 
-pub use class::{Class, classify, gyro_roughness_ratio};
+pub use class::{Class, classify, gyro_roughness_ratio, gyro_roughness_ratio_of};
 pub use harm::score_harm;
 pub use inject::{
     Counts, inject_bad_values, inject_outliers, inject_spikes, score as score_injections,

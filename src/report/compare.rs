@@ -8,7 +8,7 @@ use anyhow::{Context, Result, anyhow, ensure};
 use serde::Serialize;
 
 use super::detector_compare::{self as dc, DetectorReport};
-use super::{load_span, parse_channels, present_channels, read_scenario};
+use super::{parse_channels, read_scenario};
 use crate::analysis::bias_compare::{CompareReport, CompareSettings, SensorKind, compare_channel};
 use crate::config::Config;
 use crate::sample::CHANNEL_NAMES;
@@ -96,13 +96,13 @@ pub fn bias_models(
     skip_s: f64,
     temp_exo: bool,
 ) -> Result<BiasCompareReport> {
-    let (rate, samples) = load_span(log, skip_s)?;
+    let (rate, samples) = super::load_channels_to(log, skip_s, None)?;
     let chans = parse_channels(channels)?;
-    let (chans, mut skipped) = present_channels(log, &samples, &chans)?;
+    let (chans, mut skipped) = super::present_channels_of(log, &samples, &chans)?;
     // A channel with NaN/Inf cannot be fitted: left out with the reason, the others compared.
     let chans: Vec<usize> = chans
         .into_iter()
-        .filter(|&c| match super::non_finite(&samples, c) {
+        .filter(|&c| match super::non_finite_of(&samples, c) {
             None => true,
             Some((k, first_s)) => {
                 skipped.push((
@@ -127,21 +127,16 @@ pub fn bias_models(
             .collect::<Vec<_>>()
             .join("; ")
     );
-    let temp: Vec<f64> = samples.iter().filter_map(|s| s.temp_c).collect();
-    let have_temp = temp_exo && temp.len() == samples.len();
+    let temp = samples.temp_c.as_deref().filter(|_| temp_exo);
     ensure!(
-        !temp_exo || have_temp,
+        !temp_exo || temp.is_some(),
         "--temp-exo: the log has no complete temperature channel"
     );
     let settings = CompareSettings::paper(rate);
-    let exo: Vec<&[f64]> = if have_temp {
-        vec![&temp[..]]
-    } else {
-        Vec::new()
-    };
+    let exo: Vec<&[f64]> = temp.into_iter().collect();
     let mut out = Vec::new();
     for c in chans {
-        let y: Vec<f64> = samples.iter().map(|s| s.channel(c)).collect();
+        let y = &samples.values[c];
         let kind = if c < 3 {
             SensorKind::Gyro
         } else {
@@ -149,7 +144,7 @@ pub fn bias_models(
         };
         let name = CHANNEL_NAMES[c];
         out.push(
-            compare_channel(&y, &exo, name, kind, &settings).with_context(|| {
+            compare_channel(y, &exo, name, kind, &settings).with_context(|| {
                 format!(
                     "{}: {name} ({:.1} s at {} Hz)",
                     log.display(),

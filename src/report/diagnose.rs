@@ -11,7 +11,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, anyhow, ensure};
 
-use super::{load_span_to, parse_channels, present_channels};
+use super::{load_channels_to, parse_channels, present_channels_of};
 use crate::analysis::AnalysisError;
 use crate::analysis::diagnose::paper_split::{
     ChannelInput, DeploymentFit, DiagnoseSettings, diagnose_channel,
@@ -19,7 +19,7 @@ use crate::analysis::diagnose::paper_split::{
 use crate::analysis::diagnose::report::{DiagnoseReport, channel_plots, effect_text};
 use crate::analysis::exogenous::Exogenous;
 use crate::model::bias_model::{BiasModelFile, ChannelBiasModel, Effect};
-use crate::sample::{CHANNEL_NAMES, Sample};
+use crate::sample::{CHANNEL_NAMES, Channels};
 use crate::stats::NumError;
 
 /// What one run added, per channel: (channel, effects chosen by the loop, with times from the
@@ -46,31 +46,31 @@ pub fn diagnose(
     (paper_split, allow_motion): (bool, bool),
     progress: &mut dyn Write,
 ) -> Result<Added> {
-    let (rate, samples) = load_span_to(log, from_s, to_s.map(|t| (t - from_s).max(0.0)))?;
-    let end = match to_s {
-        Some(t) => (((t - from_s) * rate).round() as usize).min(samples.len()),
-        None => samples.len(),
-    };
+    // Held by channel, never as samples: the columns become the analyses' series as they are.
+    let (rate, mut ch) = load_channels_to(log, from_s, to_s.map(|t| (t - from_s).max(0.0)))?;
+    if let Some(t) = to_s {
+        ch.truncate(((t - from_s) * rate).round() as usize);
+    }
     let run = if paper_split {
         diagnose_samples
     } else {
         super::diagnose_whole::diagnose_whole_samples
     };
-    let samples = &samples[..end];
     let stretch = Stretch {
         log,
-        samples,
+        len: ch.len(),
         rate,
         from_s,
         channels,
         out_dir,
-        motion: motion_warning(samples, rate, allow_motion),
+        motion: motion_warning(&ch, rate, allow_motion),
         allow_motion,
     };
     if let Some(w) = &stretch.motion {
         writeln!(progress, "WARNING: {w}")?;
     }
-    run(&stretch, progress)
+    let p = prepare(&stretch, ch, progress)?;
+    run(&stretch, p, progress)
 }
 
 /// What diagnosing a stretch not at rest means (`None` at rest, by [`super::not_at_rest`]):
@@ -79,8 +79,8 @@ pub fn diagnose(
 /// changed gz by 9.7 °/s rms (the raw gz is 9.3 °/s rms) and the integrated heading by 850°;
 /// the "g-sensitivity" it held on gz, 0.16 (rad/s)/(m/s²) on ay, is the car's turning seen as
 /// centripetal acceleration (1/speed).
-fn motion_warning(samples: &[Sample], rate: f64, allow_motion: bool) -> Option<String> {
-    let w = super::not_at_rest(samples, rate)?;
+fn motion_warning(ch: &Channels, rate: f64, allow_motion: bool) -> Option<String> {
+    let w = super::not_at_rest_of(ch, rate)?;
     let what = if allow_motion {
         "written anyway (--allow-motion): load it only where that is what you want"
     } else {
@@ -104,11 +104,11 @@ pub fn none_diagnosed(log: &Path, none: bool) -> Result<()> {
     Ok(())
 }
 
-/// One stretch of a log to diagnose: its samples (cut to the stretch that starts `from_s` into
-/// `log`) at `rate` Hz, the channels asked for, the output folder.
+/// One stretch of a log to diagnose: its length in samples (the stretch that starts `from_s`
+/// into `log`) at `rate` Hz, the channels asked for, the output folder.
 pub struct Stretch<'a> {
     pub log: &'a Path,
-    pub samples: &'a [Sample],
+    pub len: usize,
     pub rate: f64,
     pub from_s: f64,
     pub channels: &'a [String],
@@ -167,9 +167,8 @@ pub fn exogenous<'a>(
 
 /// The loop on one stretch: per channel a line on `progress`; `report.txt`, `report.json`, `bias.toml` and `plots/` in
 /// `out_dir`.
-pub fn diagnose_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added> {
+pub fn diagnose_samples(st: &Stretch, p: Prepared, progress: &mut dyn Write) -> Result<Added> {
     let (rate, out_dir) = (st.rate, st.out_dir);
-    let p = prepare(st, progress)?;
     let settings = DiagnoseSettings::default();
     let mut report = DiagnoseReport {
         source: p.source.clone(),
@@ -255,31 +254,33 @@ pub struct Prepared {
 
 /// [`Prepared`] for a stretch; each channel asked for
 /// but left out is said on `progress` with why.
-pub fn prepare(st: &Stretch, progress: &mut dyn Write) -> Result<Prepared> {
-    let samples = st.samples;
-    ensure!(!samples.is_empty(), "the chosen stretch is empty");
-    let (chans, left_out) = present_channels(st.log, samples, &parse_channels(st.channels)?)?;
+pub fn prepare(st: &Stretch, ch: Channels, progress: &mut dyn Write) -> Result<Prepared> {
+    ensure!(!ch.is_empty(), "the chosen stretch is empty");
+    let (chans, left_out) = present_channels_of(st.log, &ch, &parse_channels(st.channels)?)?;
     for (name, why) in &left_out {
         writeln!(progress, "{name}: skipped: {why}")?;
     }
-    let absent = samples.iter().fold(0u8, |m, s| m | s.absent);
-    let series: Vec<Vec<f64>> = (0..6)
-        .map(|c| {
+    let absent = ch.absent();
+    let Channels { values, temp_c, .. } = ch;
+    let series: Vec<Vec<f64>> = values
+        .into_iter()
+        .enumerate()
+        .map(|(c, v)| {
             if absent & (1 << c) != 0 {
                 Vec::new()
             } else {
-                samples.iter().map(|s| s.channel(c)).collect()
+                v
             }
         })
         .collect();
-    let temp: Option<Vec<f64>> = samples.iter().map(|s| s.temp_c).collect();
+    let temp = temp_c;
     let plots = st.out_dir.join("plots");
     std::fs::create_dir_all(&plots).with_context(|| format!("creating {}", plots.display()))?;
     let source = format!(
         "{} [{} s .. +{:.1} s at {} Hz]",
         st.log.display(),
         st.from_s,
-        samples.len() as f64 / st.rate,
+        st.len as f64 / st.rate,
         st.rate
     );
     Ok(Prepared {

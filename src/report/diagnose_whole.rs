@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::diagnose::{
-    Added, Stretch, channel_input, channel_model, effects_text, others_of, prepare, write_outputs,
+    Added, Prepared, Stretch, channel_input, channel_model, effects_text, others_of, write_outputs,
     write_plots,
 };
 use crate::analysis::diagnose::whole::{WholeDiagnosis, WholeSettings, diagnose_whole};
@@ -47,9 +47,12 @@ impl WholeReport {
 }
 
 /// The whole-log diagnosis of one stretch.
-pub fn diagnose_whole_samples(st: &Stretch, progress: &mut dyn Write) -> Result<Added> {
+pub fn diagnose_whole_samples(
+    st: &Stretch,
+    p: Prepared,
+    progress: &mut dyn Write,
+) -> Result<Added> {
     let (rate, out_dir) = (st.rate, st.out_dir);
-    let p = prepare(st, progress)?;
     let mut model = BiasModelFile::default();
     let mut added_all: Added = Vec::new();
     let settings = WholeSettings::default();

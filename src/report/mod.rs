@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, ensure};
 
 use crate::frame::detect::{ProtocolArgs, ProtocolConfig};
-use crate::sample::Sample;
+use crate::sample::{Channels, Sample, SampleSink};
 use convert::ImportArgs;
 
 /// Exit status of an offline command whose input decoded to nothing or was mostly garbage.
@@ -122,6 +122,48 @@ pub fn load_span_to(
     skip_s: f64,
     span_s: Option<f64>,
 ) -> Result<(f64, Vec<Sample>)> {
+    load_span_into(log, skip_s, span_s)
+}
+
+/// [`load_span_to`] held by channel ([`Channels`]): a log is streamed into its columns and
+/// never held as samples (an imported recording is, while it is imported).
+pub fn load_channels_to(
+    log: &Recording,
+    skip_s: f64,
+    span_s: Option<f64>,
+) -> Result<(f64, Channels)> {
+    load_span_into(log, skip_s, span_s)
+}
+
+/// What [`load_span_into`] can fill.
+trait Loaded: SampleSink + Default {
+    fn from_samples(v: Vec<Sample>) -> Self;
+    fn count(&self) -> usize;
+}
+
+impl Loaded for Vec<Sample> {
+    fn from_samples(v: Vec<Sample>) -> Self {
+        v
+    }
+    fn count(&self) -> usize {
+        self.len()
+    }
+}
+
+impl Loaded for Channels {
+    fn from_samples(v: Vec<Sample>) -> Self {
+        v.iter().collect()
+    }
+    fn count(&self) -> usize {
+        self.len()
+    }
+}
+
+fn load_span_into<S: Loaded>(
+    log: &Recording,
+    skip_s: f64,
+    span_s: Option<f64>,
+) -> Result<(f64, S)> {
     no_import_flags_on_a_log(log, &log.flags())?;
     // A negative start or a span of no length is a mistake in what was asked, said as such
     // (not as a log that "ends before that").
@@ -131,13 +173,19 @@ pub fn load_span_to(
         log.display(),
         span_s.map(|s| format!(" for {s} s")).unwrap_or_default()
     );
+    let imported = |log: &Recording| -> Result<_> {
+        let (desc, v) = imported_span(log, skip_s, span_s)?;
+        Ok((desc, S::from_samples(v)))
+    };
     let (desc, samples) = if log.is_dir() {
-        imported_span(log, skip_s, span_s)?
+        imported(log)?
     } else {
-        match crate::io::csv::read_log_span(log, skip_s, span_s) {
-            Ok((desc, samples, _)) => (desc, samples),
+        let mut out = S::default();
+        match crate::io::log::read_log_span_into(log, skip_s, span_s, &mut out) {
+            Ok((desc, _)) => (desc, out),
             Err(crate::io::log::LogError::Header { err, .. }) if err.not_a_log() => {
-                imported_span(log, skip_s, span_s)?
+                drop(out);
+                imported(log)?
             }
             Err(e) => return Err(e.into()),
         }
@@ -151,7 +199,7 @@ pub fn load_span_to(
     // Named by what was asked, not by one command's flag: fit and compare say --skip-s,
     // diagnose and calibrate --from-s, fit's --train-s sets the span.
     ensure!(
-        !samples.is_empty(),
+        samples.count() > 0,
         "{}: no samples from {skip_s} s after its start{}: the log ends before that, or the span is empty",
         log.display(),
         span_s.map(|s| format!(" for {s} s")).unwrap_or_default()
@@ -159,9 +207,6 @@ pub fn load_span_to(
     Ok((rate, samples))
 }
 
-/// A recording that is not an imuprep log (a CSV, a sensor protocol's file, a bag) read as
-/// `imuprep import` reads it with the recording's flags ([`imported_log`]); then the span,
-/// counted in samples at the found rate as for a log.
 fn imported_span(
     rec: &Recording,
     skip_s: f64,
@@ -259,6 +304,15 @@ pub fn non_finite(samples: &[Sample], c: usize) -> Option<(usize, f64)> {
     Some((samples.iter().filter(bad).count(), first.t_s()))
 }
 
+/// [`non_finite`] of a recording held by channel.
+pub fn non_finite_of(ch: &Channels, c: usize) -> Option<(usize, f64)> {
+    let v = &ch.values[c];
+    let first = v.iter().position(|x| !x.is_finite())?;
+    // As `Sample::t_s`.
+    let t_s = ch.t_ns[first] as f64 * 1e-9;
+    Some((v.iter().filter(|x| !x.is_finite()).count(), t_s))
+}
+
 /// The channels of `chans` a log's `samples` have, and why each other one is left out (a partial
 /// sensor's absent channels: [`Sample::absent`]). A channel absent in any sample is left out:
 /// the analyses need every sample of a channel. An error, naming the channels, when none of
@@ -268,20 +322,42 @@ pub fn present_channels(
     samples: &[Sample],
     chans: &[usize],
 ) -> Result<(Vec<usize>, Vec<LeftOut>)> {
+    let mut absent_in = [0; 6];
+    for (c, n) in absent_in.iter_mut().enumerate() {
+        *n = samples.iter().filter(|s| s.is_absent(c)).count();
+    }
+    present_of(log, absent_in, samples.len(), chans)
+}
+
+/// [`present_channels`] of a recording held by channel.
+pub fn present_channels_of(
+    log: &Path,
+    ch: &Channels,
+    chans: &[usize],
+) -> Result<(Vec<usize>, Vec<LeftOut>)> {
+    present_of(log, ch.absent_in, ch.len(), chans)
+}
+
+/// [`present_channels`] from the samples in which each channel is absent, of `len`.
+fn present_of(
+    log: &Path,
+    absent_in: [usize; 6],
+    len: usize,
+    chans: &[usize],
+) -> Result<(Vec<usize>, Vec<LeftOut>)> {
     let mut present = Vec::new();
     let mut left_out = Vec::new();
     for &c in chans {
-        let n = samples.iter().filter(|s| s.is_absent(c)).count();
         let name = crate::sample::CHANNEL_NAMES[c];
-        match n {
+        match absent_in[c] {
             0 => present.push(c),
-            n if n == samples.len() => left_out.push((
+            n if n == len => left_out.push((
                 name.to_string(),
                 "absent: the log has no such channel (a partial sensor); nothing to analyse".into(),
             )),
             n => left_out.push((
                 name.to_string(),
-                format!("absent in {n} of {} samples: not analysed", samples.len()),
+                format!("absent in {n} of {len} samples: not analysed"),
             )),
         }
     }
@@ -295,7 +371,9 @@ pub fn present_channels(
             .collect::<Vec<_>>()
             .join(", "),
         {
-            let all = samples.iter().fold(0u8, |m, s| m | s.absent);
+            let all = (0..6)
+                .filter(|&c| absent_in[c] > 0)
+                .fold(0u8, |m, c| m | 1 << c);
             let have = crate::sample::channel_names_of(!all & crate::sample::ALL_CHANNELS);
             if have.is_empty() {
                 "no sensor channel".to_string()
@@ -332,7 +410,15 @@ pub fn write_json<T: serde::Serialize + ?Sized>(path: &Path, value: &T) -> Resul
 /// classifies: the gyro's 1-s roughness varies 2× or more over it) they model the motion as
 /// sensor error. The first half of their warning, or `None` at rest or without a gyro to tell.
 pub fn not_at_rest(samples: &[crate::sample::Sample], rate_hz: f64) -> Option<String> {
-    let r = audit::gyro_roughness_ratio(samples, rate_hz)?;
+    at_rest_warning(audit::gyro_roughness_ratio(samples, rate_hz)?)
+}
+
+/// [`not_at_rest`] of a recording held by channel.
+pub fn not_at_rest_of(ch: &Channels, rate_hz: f64) -> Option<String> {
+    at_rest_warning(audit::gyro_roughness_ratio_of(ch, rate_hz)?)
+}
+
+fn at_rest_warning(r: f64) -> Option<String> {
     (r >= 2.0).then(|| {
         format!(
             "the record is not at rest: the gyro's roughness in 1-s windows varies {r:.1}x over it (99th over 1st percentile; a record at rest stays under 2x, as `imuprep audit` classifies)"

@@ -11,7 +11,7 @@
 use super::terms::{FitSettings, MODEL_ERROR_MAX, Resolution, Term, TermFit, fit_terms};
 use super::{AllanReadings, overlapping_adev};
 use crate::analysis::AnalysisError;
-use crate::sample::{CHANNEL_NAMES, Sample};
+use crate::sample::{CHANNEL_NAMES, Channels, Sample};
 use crate::stats::NumError;
 use serde::Serialize;
 use std::fmt;
@@ -72,10 +72,9 @@ pub struct AllanReport {
     pub warnings: Vec<String>,
 }
 
-fn timing(samples: &[Sample], rate_hz: f64) -> Timing {
-    let mut dts: Vec<f64> = samples
-        .windows(2)
-        .map(|w| (w[1].t_ns as f64 - w[0].t_ns as f64) * 1e-9)
+fn timing(n: usize, t_ns: impl Fn(usize) -> u64, rate_hz: f64) -> Timing {
+    let mut dts: Vec<f64> = (1..n)
+        .map(|i| (t_ns(i) as f64 - t_ns(i - 1) as f64) * 1e-9)
         .collect();
     let long_intervals = dts.iter().filter(|d| **d > 1.5 / rate_hz).count();
     let non_increasing = dts.iter().filter(|d| **d <= 0.0).count();
@@ -85,9 +84,9 @@ fn timing(samples: &[Sample], rate_hz: f64) -> Timing {
     } else {
         crate::stats::robust::upper_median(&mut dts)
     };
-    let span_s = match (samples.first(), samples.last()) {
-        (Some(a), Some(b)) => (b.t_ns as f64 - a.t_ns as f64) * 1e-9,
-        _ => 0.0,
+    let span_s = match n {
+        0 => 0.0,
+        _ => (t_ns(n - 1) as f64 - t_ns(0) as f64) * 1e-9,
     };
     Timing {
         median_dt_s,
@@ -108,35 +107,76 @@ pub fn allan_report(
     channels: &[usize],
     settings: &FitSettings,
 ) -> Result<AllanReport, AnalysisError> {
+    let series = Series {
+        n: samples.len(),
+        t_ns: &|i| samples[i].t_ns,
+        fill: &|c, y| {
+            for (v, s) in y.iter_mut().zip(samples) {
+                *v = s.channel(c);
+            }
+        },
+    };
+    report_of(source, &series, rate_hz, channels, settings)
+}
+
+/// [`allan_report`] of a recording held by channel.
+pub fn allan_report_of(
+    source: &str,
+    ch: &Channels,
+    rate_hz: f64,
+    channels: &[usize],
+    settings: &FitSettings,
+) -> Result<AllanReport, AnalysisError> {
+    let series = Series {
+        n: ch.len(),
+        t_ns: &|i| ch.t_ns[i],
+        fill: &|c, y| y.copy_from_slice(&ch.values[c]),
+    };
+    report_of(source, &series, rate_hz, channels, settings)
+}
+
+/// What the report reads of a recording: `n` samples, sample `i`'s time stamp, and channel
+/// `c`'s values filled into a slice of `n`.
+struct Series<'a> {
+    n: usize,
+    t_ns: &'a dyn Fn(usize) -> u64,
+    fill: &'a dyn Fn(usize, &mut [f64]),
+}
+
+fn report_of(
+    source: &str,
+    rec: &Series,
+    rate_hz: f64,
+    channels: &[usize],
+    settings: &FitSettings,
+) -> Result<AllanReport, AnalysisError> {
     if !(rate_hz > 0.0 && rate_hz.is_finite()) {
         return Err(AnalysisError::bad("allan: the sample rate must be > 0"));
     }
-    if samples.len() < 16 {
+    if rec.n < 16 {
         return Err(NumError::TooShort {
             needed: 16,
-            got: samples.len(),
+            got: rec.n,
         }
         .into());
     }
     let mut out = AllanReport {
         source: source.to_string(),
         rate_hz,
-        n_samples: samples.len(),
-        duration_s: samples.len() as f64 / rate_hz,
-        timing: timing(samples, rate_hz),
+        n_samples: rec.n,
+        duration_s: rec.n as f64 / rate_hz,
+        timing: timing(rec.n, rec.t_ns, rate_hz),
         settings: settings.clone(),
         channels: Vec::new(),
         skipped: Vec::new(),
         warnings: Vec::new(),
     };
-    let mut y = vec![0.0; samples.len()];
+    let mut y = vec![0.0; rec.n];
     for &c in channels {
         let name = CHANNEL_NAMES
             .get(c)
             .ok_or(AnalysisError::bad("allan: channel index"))?;
-        for (v, s) in y.iter_mut().zip(samples) {
-            *v = s.channel(c);
-        }
+        (rec.fill)(c, &mut y);
         let bad = y.iter().filter(|v| !v.is_finite()).count();
         if bad > 0 {
             out.skipped.push((

@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use crate::sample::Sample;
+use crate::sample::{Channels, Sample};
 
 /// Static or moving, decided from the data (the parent module's docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -15,15 +15,20 @@ pub enum Class {
 
 /// Three-axis gyro sd of consecutive 1-s windows.
 pub(super) fn window_gyro_sd(samples: &[Sample], rate_hz: f64) -> Vec<f64> {
+    window_gyro_sd_by(samples.len(), rate_hz, |i, a| samples[i].gyro[a])
+}
+
+/// [`window_gyro_sd`] of `n` samples whose gyro axis `a` at sample `i` is `gyro(i, a)`.
+fn window_gyro_sd_by(n: usize, rate_hz: f64, gyro: impl Fn(usize, usize) -> f64) -> Vec<f64> {
     let w = (rate_hz.round() as usize).max(10);
-    samples
-        .chunks_exact(w)
-        .map(|c| {
-            let n = c.len() as f64;
+    (0..n / w)
+        .map(|k| {
+            let c = k * w..(k + 1) * w;
+            let len = w as f64;
             (0..3)
                 .map(|a| {
-                    let m = c.iter().map(|s| s.gyro[a]).sum::<f64>() / n;
-                    c.iter().map(|s| (s.gyro[a] - m).powi(2)).sum::<f64>() / n
+                    let m = c.clone().map(|i| gyro(i, a)).sum::<f64>() / len;
+                    c.clone().map(|i| (gyro(i, a) - m).powi(2)).sum::<f64>() / len
                 })
                 .sum::<f64>()
                 .sqrt()
@@ -44,7 +49,16 @@ pub(super) fn percentile(v: &mut [f64], p: f64) -> f64 {
 /// three-axis gyro sd of its 1-s windows, the statistic [`classify`] calls static below 2.
 /// `None` when it cannot tell: no gyro, or fewer than 10 whole windows.
 pub fn gyro_roughness_ratio(samples: &[Sample], rate_hz: f64) -> Option<f64> {
-    let mut sd = window_gyro_sd(samples, rate_hz);
+    roughness_ratio(window_gyro_sd(samples, rate_hz))
+}
+
+/// [`gyro_roughness_ratio`] of a recording held by channel.
+pub fn gyro_roughness_ratio_of(ch: &Channels, rate_hz: f64) -> Option<f64> {
+    let g = &ch.values[..3];
+    roughness_ratio(window_gyro_sd_by(ch.len(), rate_hz, |i, a| g[a][i]))
+}
+
+fn roughness_ratio(mut sd: Vec<f64>) -> Option<f64> {
     if sd.len() < 10 {
         return None;
     }
