@@ -35,11 +35,18 @@ impl ArimaFit {
     /// True if the AR or MA polynomial sits within twice the LM margin of the admissibility
     /// boundary, i.e. LM stopped because the boundary blocked it.
     pub fn at_boundary(&self) -> bool {
-        !is_stable(&self.ar, 2.0 * AR_MARGIN)
-            || !is_stable(
-                &self.ma.iter().map(|t| -t).collect::<Vec<_>>(),
-                2.0 * MA_MARGIN,
-            )
+        !is_stable(&self.ar, 2.0 * AR_MARGIN) || self.ma_at_boundary()
+    }
+
+    /// True if the MA polynomial sits within twice the LM margin of the invertibility boundary:
+    /// an MA root on the unit circle never forgets an innovation, and one there usually cancels
+    /// an AR root (an over-parameterised fit). An AR root there is a line (or a unit root): a
+    /// legitimate model of a channel that carries one.
+    pub fn ma_at_boundary(&self) -> bool {
+        !is_stable(
+            &self.ma.iter().map(|t| -t).collect::<Vec<_>>(),
+            2.0 * MA_MARGIN,
+        )
     }
 
     /// Process mean of w, `c / (1 − Σφ)`.

@@ -98,7 +98,8 @@ pub struct AicEntry {
     pub aic: f64,
     /// Innovation standard deviation of this candidate.
     pub sigma: f64,
-    /// The fit ended on the admissibility boundary (not eligible; see `identify`).
+    /// The fit ended on the admissibility boundary: its AR part (a line; eligible) or its MA
+    /// part (not eligible; see `identify`).
     #[serde(default)]
     pub at_boundary: bool,
 }
@@ -173,11 +174,14 @@ pub fn identify(x: &[f64], settings: &IdentifySettings) -> Result<ArimaIdentific
                         sigma: f.sigma2.sqrt(),
                         at_boundary,
                     });
-                    // A fit that ends on the stationarity/invertibility boundary is an
-                    // over-parameterised candidate (near-common AR/MA factors or a unit MA
-                    // root): its AIC is not trustworthy and, online, an MA root on the unit
-                    // circle never forgets an innovation. It is reported but not chosen.
-                    if !at_boundary && best.as_ref().is_none_or(|b| f.aic < b.aic) {
+                    // A fit that ends on the invertibility boundary is an over-parameterised
+                    // candidate (near-common AR/MA factors or a unit MA root): its AIC is not
+                    // trustworthy and, online, an MA root on the unit circle never forgets an
+                    // innovation. It is reported but not chosen. One whose AR part ends on the
+                    // stationarity boundary is a line (a complex root pair on the unit circle:
+                    // a channel carrying a vibration line), which is what the data hold: it is
+                    // eligible.
+                    if !f.ma_at_boundary() && best.as_ref().is_none_or(|b| f.aic < b.aic) {
                         best = Some(f);
                     }
                 }
