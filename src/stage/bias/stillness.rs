@@ -87,8 +87,8 @@
 //! learned instead of configured.
 
 use nalgebra::{Rotation3, Vector3};
-use serde::{Deserialize, Serialize};
 
+pub use super::settings::StillnessSettings;
 use crate::stats::grid::grid_step_counted;
 
 /// Longest window, samples (fixed-size ring buffer; 0.5 s up to 1 kHz).
@@ -100,113 +100,6 @@ pub const MAX_WINDOW: usize = 512;
 /// 25 (72) they rarely do. A 10-Hz bench of 5 min at rest (white noise, replayed as a CSV) was
 /// still for 3 s of it and its gyros never warmed up; with 25 samples, 98 % (docs/real-data.md).
 pub const MIN_WINDOW: usize = 25;
-
-/// Stillness detector settings (units in names; each test explained in the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct StillnessSettings {
-    /// Window length, s (at least `MIN_WINDOW` = 25 samples, at most `MAX_WINDOW`). Default 0.5.
-    /// In time, not samples, so a 250 Hz sensor's detector sees a motion onset as soon as a
-    /// 100 Hz one's; below 50 Hz the window is 25 samples (1 s at 25 Hz, 2.5 s at 10 Hz).
-    pub window_s: f64,
-    /// Candidate time required before entering STILL, s (T_in). Default 1.0.
-    pub enter_after_s: f64,
-    /// A window is still when its gyro and accel sds are at most this factor above their noise
-    /// floors. Default 2: a 50-sample window's three-axis sd of white noise varies by ~6 % (1σ),
-    /// so the quietest windows sit ~15 % below the typical and the loudest ~15 % above; real
-    /// rest wanders more (x-IMU3 at rest: accel window sd 0.038–0.063 in its first 4 s), while
-    /// motion is many times the floor (x-IMU3 handheld: gyro ×12 at the median).
-    pub noise_factor: f64,
-    /// A sample further than this many per-axis σ (the window's own, no lower than the floor's)
-    /// from the window mean is motion. Default 7: real rest is heavy-tailed (an ADIS16405's
-    /// quantised accelerometers show 5–11 LSB samples at ~1 LSB noise).
-    pub instant_k: f64,
-    /// The window's gyro mean may differ from a confident bias estimate by this many σ (the
-    /// mean's noise and the estimate's σ combined). Default 4.
-    pub mean_k: f64,
-    /// The mean test vetoes an otherwise quiet stretch for this long, s, before its offset may
-    /// be taken for a bias that moved (a shock; the bias stage's consistency guard then
-    /// re-anchors). Default 2. A steady turn stays vetoed for as long as it lasts (module docs,
-    /// "Steady turns").
-    pub mean_veto_s: f64,
-    /// The noise floors may rise by at most a factor 2 per this many seconds. Default 600.
-    pub floor_rise_s: f64,
-    /// Ceiling of the gyro window sd, rad/s, whatever the floor. Default 0.1 (5.7 °/s: no MEMS
-    /// gyro at rest is noisier, engine vibration included).
-    pub gyro_sd_max_rad_s: f64,
-    /// Ceiling of the accel window sd, m/s². Default 0.3: above any MEMS accelerometer's noise
-    /// and a standing car's engine vibration (rtklibexplorer: 0.10–0.15), below a moving car's
-    /// road vibration (comma2k19 on a highway: ≥ 0.49).
-    pub accel_sd_max_m_s2: f64,
-    /// Max `accel_norm`, m/s². Default 1.0: room for an uncalibrated consumer accelerometer's
-    /// zero-g offset and scale (MPU-6050: ±80 mg on z); guards against sustained vertical
-    /// acceleration and free fall.
-    pub accel_norm_dev_max_m_s2: f64,
-    /// Gravity magnitude, m/s². Default 9.80665.
-    pub gravity_m_s2: f64,
-}
-
-impl Default for StillnessSettings {
-    fn default() -> Self {
-        StillnessSettings {
-            window_s: 0.5,
-            enter_after_s: 1.0,
-            noise_factor: 2.0,
-            instant_k: 7.0,
-            mean_k: 4.0,
-            mean_veto_s: 2.0,
-            floor_rise_s: 600.0,
-            gyro_sd_max_rad_s: 0.1,
-            accel_sd_max_m_s2: 0.3,
-            accel_norm_dev_max_m_s2: 1.0,
-            gravity_m_s2: 9.80665,
-        }
-    }
-}
-
-impl StillnessSettings {
-    /// Append every problem to `errors`, keys prefixed by `key` (e.g. `stillness`).
-    pub fn validate_into(&self, key: &str, errors: &mut Vec<String>) {
-        if !(self.window_s.is_finite() && self.window_s > 0.0 && self.window_s <= 10.0) {
-            errors.push(format!(
-                "{key}.window_s: must be in (0, 10] s (got {})",
-                self.window_s
-            ));
-        }
-        if !(self.enter_after_s.is_finite() && (0.0..=3600.0).contains(&self.enter_after_s)) {
-            errors.push(format!(
-                "{key}.enter_after_s: must be in [0, 3600] s (got {})",
-                self.enter_after_s
-            ));
-        }
-        for (name, v, lo, hi) in [
-            ("noise_factor", self.noise_factor, 1.0, 100.0),
-            ("instant_k", self.instant_k, 1.0, 100.0),
-            ("mean_k", self.mean_k, 0.5, 100.0),
-            ("mean_veto_s", self.mean_veto_s, 0.0, 3600.0),
-            ("floor_rise_s", self.floor_rise_s, 1.0, 1e7),
-        ] {
-            if !(v.is_finite() && v > lo && v <= hi) {
-                errors.push(format!("{key}.{name}: must be in ({lo}, {hi}] (got {v})"));
-            }
-        }
-        for (name, v) in [
-            ("gyro_sd_max_rad_s", self.gyro_sd_max_rad_s),
-            ("accel_sd_max_m_s2", self.accel_sd_max_m_s2),
-            ("accel_norm_dev_max_m_s2", self.accel_norm_dev_max_m_s2),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                errors.push(format!("{key}.{name}: must be finite and > 0 (got {v})"));
-            }
-        }
-        if !(self.gravity_m_s2.is_finite() && self.gravity_m_s2 > 9.7 && self.gravity_m_s2 < 9.9) {
-            errors.push(format!(
-                "{key}.gravity_m_s2: must be in (9.7, 9.9) m/s² (got {})",
-                self.gravity_m_s2
-            ));
-        }
-    }
-}
 
 /// The window features of the last sample (diagnostics; units as in the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
