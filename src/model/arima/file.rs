@@ -114,6 +114,31 @@ impl ArimaChannelModel {
     pub fn mean(&self) -> f64 {
         self.constant / (1.0 - self.ar.iter().sum::<f64>())
     }
+
+    /// The vibration line the model holds, as its angular frequency in rad per sample: when the
+    /// AR part sits on the stationarity boundary (as [`ArimaFit::at_boundary`] judges it) and
+    /// its root nearest the unit circle is a complex pair, that pair's angle. `None` otherwise
+    /// (a stationary AR part, or a real unit root: a level, not a line).
+    pub fn line(&self) -> Option<f64> {
+        let p = self.ar.len();
+        if p < 2 || is_stable(&self.ar, 2.0 * AR_MARGIN) {
+            return None;
+        }
+        // The companion matrix's eigenvalues are the inverse roots of 1 − Σ φ_i B^i.
+        let companion = nalgebra::DMatrix::from_fn(p, p, |i, j| {
+            if i == 0 {
+                self.ar[j]
+            } else if i == j + 1 {
+                1.0
+            } else {
+                0.0
+            }
+        });
+        let ev = companion.complex_eigenvalues();
+        let top = ev.iter().max_by(|a, b| a.norm().total_cmp(&b.norm()))?;
+        let omega = top.im.atan2(top.re).abs();
+        (top.im.abs() > 1e-9 * top.norm() && omega.is_finite()).then_some(omega)
+    }
 }
 
 impl ArimaIdentification {

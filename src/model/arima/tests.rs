@@ -319,6 +319,9 @@ fn a_vibration_line_is_modelled_not_refused() {
         old.q
     );
     assert!(!id.fit.ma_at_boundary());
+    // The line the gross-error stage takes out before its model-free tests.
+    let omega = model.line().expect("a line");
+    assert!((omega - w).abs() < 1e-3, "{omega} vs {w}");
     // Within 10 % of the innovation variance: the line is predicted, not left in the errors
     // (measured 1.008; the old rule's choice 1.098).
     assert!(new < 1.1, "{new}");
@@ -327,4 +330,35 @@ fn a_vibration_line_is_modelled_not_refused() {
     // 1.448: it follows part of the line, which the AR part then sees twice), but the line
     // model stays the better one there too.
     assert!(new_stage < before_stage, "{new_stage} vs {before_stage}");
+}
+
+/// `line()`: the angle of an AR root pair on the unit circle, and nothing for a stationary AR
+/// part or a real unit root.
+#[test]
+fn the_line_of_a_model_is_its_unit_circle_root_pair() {
+    let model = |ar: Vec<f64>| ArimaChannelModel {
+        channel: "gx".into(),
+        p: ar.len(),
+        d: 0,
+        q: 0,
+        constant: 0.0,
+        ar,
+        ma: vec![],
+        sigma: 1.0,
+        diagnostics: None,
+    };
+    let w: f64 = 1.2;
+    // (1 − 2cos w B + B²): exactly on the circle; with a third, stationary factor (1 − 0.3B).
+    let got = model(vec![2.0 * w.cos(), -1.0]).line().unwrap();
+    assert!((got - w).abs() < 1e-12, "{got}");
+    let (a, b) = (2.0 * w.cos(), -1.0);
+    let got = model(vec![a + 0.3, b - 0.3 * a, -0.3 * b]).line().unwrap();
+    assert!((got - w).abs() < 1e-9, "{got}");
+    // Stationary: no line.
+    assert_eq!(model(vec![0.5, -0.2]).line(), None);
+    assert_eq!(model(vec![2.0 * w.cos() * 0.99, -0.98]).line(), None);
+    // (1 − B)(1 − 0.5B): a real unit root is a level, not a line.
+    assert_eq!(model(vec![1.5, -0.5]).line(), None);
+    // One AR coefficient cannot hold a line.
+    assert_eq!(model(vec![1.0]).line(), None);
 }

@@ -88,6 +88,49 @@ impl LineCanceller {
     /// previous one; returns the line estimate to subtract.
     #[inline]
     pub fn process(&mut self, d: f64, t_s: f64, steps: u32) -> f64 {
+        let (s, c) = self.rotate(t_s, steps);
+        if !d.is_finite() {
+            return self.w_s * s + self.w_c * c;
+        }
+        let level = *self.level.get_or_insert(d);
+        let y = self.w_s * s + self.w_c * c;
+        let e = d - level - y;
+        let two_mu_e = 2.0 * self.mu * e;
+        self.w_s += two_mu_e * s;
+        self.w_c += two_mu_e * c;
+        y + self.mu * e
+    }
+
+    /// The line predicted at the next sample (sensor time `t_s`, `steps` samples after the
+    /// previous one) from the weights so far, the reference advanced to it but nothing learned:
+    /// [`LineCanceller::learn`] then learns from that sample, or is not called for a sample that
+    /// must not be learned (a candidate gross error).
+    #[inline]
+    pub fn predict_next(&mut self, t_s: f64, steps: u32) -> f64 {
+        let (s, c) = self.rotate(t_s, steps);
+        self.w_s * s + self.w_c * c
+    }
+
+    /// Learn from `d`, the sample [`LineCanceller::predict_next`] last predicted (the LMS step
+    /// of [`LineCanceller::process`]).
+    #[inline]
+    pub fn learn(&mut self, d: f64) {
+        let Some((s, c)) = self.osc else {
+            return;
+        };
+        if !d.is_finite() {
+            return;
+        }
+        let level = *self.level.get_or_insert(d);
+        let e = d - level - (self.w_s * s + self.w_c * c);
+        let two_mu_e = 2.0 * self.mu * e;
+        self.w_s += two_mu_e * s;
+        self.w_c += two_mu_e * c;
+    }
+
+    /// The reference advanced to sensor time `t_s`, `steps` samples after the previous sample.
+    #[inline]
+    fn rotate(&mut self, t_s: f64, steps: u32) -> (f64, f64) {
         let (s, c) = match self.osc {
             None => {
                 // Phase from the sensor time, reduced before the multiplication by 2π.
@@ -113,16 +156,7 @@ impl LineCanceller {
             }
         };
         self.osc = Some((s, c));
-        if !d.is_finite() {
-            return self.w_s * s + self.w_c * c;
-        }
-        let level = *self.level.get_or_insert(d);
-        let y = self.w_s * s + self.w_c * c;
-        let e = d - level - y;
-        let two_mu_e = 2.0 * self.mu * e;
-        self.w_s += two_mu_e * s;
-        self.w_c += two_mu_e * c;
-        y + self.mu * e
+        (s, c)
     }
 }
 
@@ -222,5 +256,34 @@ mod tests {
             so += d - lc.process(d, t, 1);
         }
         assert!((so / si - 1.0).abs() < 1e-6, "{so} vs {si}");
+    }
+
+    #[test]
+    fn predicting_then_learning_is_processing() {
+        // The gross-error stage's use (predict the line, then learn from the sample only if the
+        // gate accepted it) against `process` on the same samples: the same weights to the bit,
+        // and the prediction is `process`'s estimate less its μ e.
+        let fs = 100.0;
+        let mut a = LineCanceller::new(22.0, fs, 0.5, 0.0, 0.0);
+        let mut b = a;
+        let mut r = Rng::new(9);
+        for k in 0..3000 {
+            let t = k as f64 / fs;
+            let d = 0.3 * (TAU * 22.0 * t).sin() + 0.05 * r.normal() + 1.0;
+            let y_a = a.process(d, t, 1);
+            let y_b = b.predict_next(t, 1);
+            b.learn(d);
+            assert_eq!(a.amplitude_phase(), b.amplitude_phase());
+            let e = d - b.level.unwrap() - y_b;
+            // y_a = y_b + μ e: the same sum in another order, 1e-15 absolute on O(1) values.
+            assert!(
+                (y_a - (y_b + a.mu * e)).abs() < 1e-15,
+                "{y_a} vs {y_b} + μ {e}"
+            );
+        }
+        // And it tracks the line: LMS weights at μ = 0.016 in noise of 1/6 the amplitude
+        // scatter by several % (measured 0.284 of 0.3); 10 % bound.
+        let (amp, _) = b.amplitude_phase();
+        assert!((amp / 0.3 - 1.0).abs() < 0.1, "{amp}");
     }
 }

@@ -42,6 +42,9 @@
 //! predictions it fed itself during the event, so one real manoeuvre does not cascade into a
 //! string of events.
 //!
+//! **Lines.** When a channel's model holds a vibration line, every test judges the channel
+//! with the tracked line taken out, and a replacement gets it back (`line.rs`).
+//!
 //! A sample that copies the previous one bit for bit where whole samples rarely repeat by
 //! chance is a stale repeat (`repeat.rs`): flagged `REPEATED`, given the output of the sample it
 //! repeats, and no measurement for any stage.
@@ -51,6 +54,8 @@ pub mod gate;
 pub mod guard;
 pub mod health;
 pub mod identify;
+mod line;
+use line::ChannelLine;
 mod repeat;
 use repeat::RepeatDetector;
 pub mod settings;
@@ -129,6 +134,8 @@ struct Channel {
     preds: Box<[f64; RING]>,
     /// Confirmed gross errors per sample, exponentially weighted over `RATE_WINDOW` samples.
     gross_rate: f64,
+    /// The vibration line the channel's model holds, tracked (module docs, "Lines").
+    line: ChannelLine,
 }
 
 /// One event's verdict, as recorded by [`GrossErrorStage::record_verdicts`]: what the
@@ -244,6 +251,7 @@ impl GrossErrorStage {
                 raw: Box::new([f64::NAN; RING]),
                 preds: Box::new([f64::NAN; RING]),
                 gross_rate: 0.0,
+                line: ChannelLine::new(),
             });
         }
         // A worker identifies the models of channels that warm up, unless told to do it inline.
@@ -374,6 +382,12 @@ impl GrossErrorStage {
         if s.has(flags::GAP) {
             self.on_gap(s.seq);
         }
+        // Samples since the previous measurement (a gap's missing ones too): what a line's
+        // reference advances by.
+        let steps = match self.last_seq {
+            Some(last) if s.has(flags::GAP) => s.seq.wrapping_sub(last).clamp(1, 1 << 16),
+            _ => 1,
+        };
         self.last_seq = Some(s.seq);
         if let Some(l) = self.last_t
             && !s.has(flags::GAP)
@@ -392,11 +406,14 @@ impl GrossErrorStage {
             if self.ch[c].gate.mode == Mode::Disabled || s.is_absent(c) {
                 continue;
             }
-            let v = s.channel(c);
+            let x = s.channel(c);
             let saturated = s.flags & flags::sat_ch(c) != 0;
-            let finite = v.is_finite();
-            let implausible = finite && v.abs() > self.plausible(c);
+            let finite = x.is_finite();
+            let implausible = finite && x.abs() > self.plausible(c);
             let bad = !finite || implausible;
+            // With a line, every test below judges the value less the line predicted for it.
+            let line = self.line_step(c, idx, steps);
+            let v = if bad { x } else { x - line };
             {
                 let k = &mut self.ch[c].gate.counters;
                 if !finite {
@@ -425,6 +442,9 @@ impl GrossErrorStage {
             };
             let accepted = usable && !matches!(outcome, Outcome::Candidate { .. });
             self.ch[c].guard.commit(v, accepted);
+            if accepted {
+                self.ch[c].line.learn(x);
+            }
             self.ch[c].preds[slot] = match outcome {
                 Outcome::Candidate { pred } => pred,
                 _ => f64::NAN,
@@ -512,6 +532,17 @@ impl GrossErrorStage {
         }
     }
 
+    /// Channel `c`'s line estimate for its sample at index `idx`, `steps` samples after the
+    /// previous one (0 without a line); a channel that has just become active is first looked
+    /// at for a line.
+    fn line_step(&mut self, c: usize, idx: u64, steps: u32) -> f64 {
+        let ch = &mut self.ch[c];
+        if ch.gate.mode == Mode::Active {
+            ch.line.adopt(ch.gate.model.as_ref(), CHANNEL_NAMES[c]);
+        }
+        ch.line.predict(idx, steps)
+    }
+
     fn open(&mut self, c: usize, idx: u64) {
         self.ch[c].pending.push_back(OpenEvent {
             start: idx,
@@ -523,9 +554,10 @@ impl GrossErrorStage {
     /// Causal verdict on a candidate (no look-ahead): bad values are replaced by the prediction,
     /// the rest pass flagged suspect.
     fn apply_causal(&mut self, c: usize, s: &mut Sample, bad: bool, pred: f64) {
+        let r = self.ch[c].line.put_back(self.n_in, pred);
         let k = &mut self.ch[c].gate.counters;
         if bad && pred.is_finite() {
-            s.set_channel(c, pred);
+            s.set_channel(c, r);
             s.flags |= flags::REPLACED | flags::replaced_ch(c);
             k.replaced += 1;
         } else {

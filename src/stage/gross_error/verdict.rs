@@ -181,7 +181,7 @@ impl GrossErrorStage {
                     self.ch[c].preds[slot]
                 };
                 if r.is_finite() {
-                    h.out.set_channel(c, r);
+                    h.out.set_channel(c, self.ch[c].line.put_back(h.idx, r));
                     h.out.flags |= flags::REPLACED | bit;
                     self.ch[c].ring[slot] = r;
                     replaced += 1;
