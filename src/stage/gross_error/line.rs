@@ -25,9 +25,10 @@ pub const LINE_BANDWIDTH: f64 = 0.0016;
 /// One channel's line: none until its model is active and holds one.
 #[derive(Debug, Clone)]
 pub(super) struct ChannelLine {
-    notch: Option<LineCanceller>,
-    /// The estimate taken out of the raw value at each index % RING (0 without a line).
-    taken: Box<[f64; RING]>,
+    /// The notch, and the estimate it took out of the raw value at each index % RING (allocated
+    /// with the notch: a channel without a line holds one pointer and touches nothing per
+    /// sample).
+    notch: Option<Box<(LineCanceller, [f64; RING])>>,
     /// The model was looked at (once, when the channel became active).
     checked: bool,
 }
@@ -36,9 +37,14 @@ impl ChannelLine {
     pub(super) fn new() -> Self {
         ChannelLine {
             notch: None,
-            taken: Box::new([0.0; RING]),
             checked: false,
         }
+    }
+
+    /// Whether the model was looked at already.
+    #[inline]
+    pub(super) fn checked(&self) -> bool {
+        self.checked
     }
 
     /// Look at the channel's `model` for a line, once (call when the channel is active).
@@ -50,7 +56,8 @@ impl ChannelLine {
         if let Some(omega) = model.and_then(|m| m.line()) {
             // Per-sample units: frequency ω/2π cycles per sample, "time" the sample index.
             let f = omega / std::f64::consts::TAU;
-            self.notch = Some(LineCanceller::new(f, 1.0, LINE_BANDWIDTH, 0.0, 0.0));
+            let notch = LineCanceller::new(f, 1.0, LINE_BANDWIDTH, 0.0, 0.0);
+            self.notch = Some(Box::new((notch, [0.0; RING])));
             tracing::info!(
                 channel,
                 "gross_error: the channel's model holds a vibration line ({f:.4} of the sample rate); its tests judge the channel with the line taken out"
@@ -60,27 +67,32 @@ impl ChannelLine {
 
     /// The line predicted for the sample at index `idx`, `steps` samples after the previous one
     /// (0 without a line), kept for its replacement.
+    #[inline]
     pub(super) fn predict(&mut self, idx: u64, steps: u32) -> f64 {
-        let est = match self.notch.as_mut() {
-            Some(n) => n.predict_next(idx as f64, steps),
+        match self.notch.as_deref_mut() {
+            Some((n, taken)) => {
+                let est = n.predict_next(idx as f64, steps);
+                taken[(idx % RING as u64) as usize] = est;
+                est
+            }
             None => 0.0,
-        };
-        self.taken[(idx % RING as u64) as usize] = est;
-        est
+        }
     }
 
     /// Learn the line from raw value `x`, the sample last predicted (one the gate accepted).
+    #[inline]
     pub(super) fn learn(&mut self, x: f64) {
-        if let Some(n) = self.notch.as_mut() {
+        if let Some((n, _)) = self.notch.as_deref_mut() {
             n.learn(x);
         }
     }
 
     /// `r`, a replacement at index `idx` judged without the line, with the line put back (`r`
     /// itself without a line).
+    #[inline]
     pub(super) fn put_back(&self, idx: u64, r: f64) -> f64 {
-        match self.notch {
-            Some(_) => r + self.taken[(idx % RING as u64) as usize],
+        match self.notch.as_deref() {
+            Some((_, taken)) => r + taken[(idx % RING as u64) as usize],
             None => r,
         }
     }

@@ -537,7 +537,7 @@ impl GrossErrorStage {
     /// at for a line.
     fn line_step(&mut self, c: usize, idx: u64, steps: u32) -> f64 {
         let ch = &mut self.ch[c];
-        if ch.gate.mode == Mode::Active {
+        if !ch.line.checked() && ch.gate.mode == Mode::Active {
             ch.line.adopt(ch.gate.model.as_ref(), CHANNEL_NAMES[c]);
         }
         ch.line.predict(idx, steps)
