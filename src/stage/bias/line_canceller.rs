@@ -88,17 +88,11 @@ impl LineCanceller {
     /// previous one; returns the line estimate to subtract.
     #[inline]
     pub fn process(&mut self, d: f64, t_s: f64, steps: u32) -> f64 {
-        let (s, c) = self.rotate(t_s, steps);
-        if !d.is_finite() {
-            return self.w_s * s + self.w_c * c;
+        let y = self.predict_next(t_s, steps);
+        match self.learn(d) {
+            Some(e) => y + self.mu * e,
+            None => y,
         }
-        let level = *self.level.get_or_insert(d);
-        let y = self.w_s * s + self.w_c * c;
-        let e = d - level - y;
-        let two_mu_e = 2.0 * self.mu * e;
-        self.w_s += two_mu_e * s;
-        self.w_c += two_mu_e * c;
-        y + self.mu * e
     }
 
     /// The line predicted at the next sample (sensor time `t_s`, `steps` samples after the
@@ -111,21 +105,20 @@ impl LineCanceller {
         self.w_s * s + self.w_c * c
     }
 
-    /// Learn from `d`, the sample [`LineCanceller::predict_next`] last predicted (the LMS step
-    /// of [`LineCanceller::process`]).
+    /// Learn from `d`, the sample [`LineCanceller::predict_next`] last predicted (one LMS step);
+    /// its error `e`, or `None` when nothing was learned (no finite `d`, or nothing predicted).
     #[inline]
-    pub fn learn(&mut self, d: f64) {
-        let Some((s, c)) = self.osc else {
-            return;
-        };
+    pub fn learn(&mut self, d: f64) -> Option<f64> {
+        let (s, c) = self.osc?;
         if !d.is_finite() {
-            return;
+            return None;
         }
         let level = *self.level.get_or_insert(d);
         let e = d - level - (self.w_s * s + self.w_c * c);
         let two_mu_e = 2.0 * self.mu * e;
         self.w_s += two_mu_e * s;
         self.w_c += two_mu_e * c;
+        Some(e)
     }
 
     /// The reference advanced to sensor time `t_s`, `steps` samples after the previous sample.
