@@ -1,10 +1,13 @@
 //! Identification speed: ADF (AIC lag search) + AIC grid p ≤ 3, q ≤ 2 + CSS estimation +
-//! diagnostics on 36 000 samples (3 min at 200 Hz). Target ≤ 1 s.
+//! diagnostics on 36 000 samples (3 min at 200 Hz). Target ≤ 1 s. And the stage's warm-up
+//! window (2000 samples): identification against the line search run before it
+//! (`stats::line::strongest_line`), on a window without and with a line.
 //! Run: cargo bench --bench arima
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use imuprep::model::arima::{IdentifySettings, identify};
 use imuprep::rng::Rng;
+use imuprep::stats::line::strongest_line;
 use std::hint::black_box;
 
 /// ARMA(1,1) noise (φ = 0.6, θ = 0.3, σ = 0.005 rad/s) around a bias: a gyro axis at 200 Hz.
@@ -45,6 +48,24 @@ fn bench(c: &mut Criterion) {
     });
     g.bench_function("integrated_ari11", |b| {
         b.iter(|| identify(black_box(&y), &s).unwrap())
+    });
+    g.finish();
+
+    let w = gyro_like(2000, 3);
+    let with_line: Vec<f64> = w
+        .iter()
+        .enumerate()
+        .map(|(i, v)| v + 0.02 * (std::f64::consts::TAU * 0.22 * i as f64).sin())
+        .collect();
+    let mut g = c.benchmark_group("warmup_window_2000");
+    g.bench_function("identify", |b| {
+        b.iter(|| identify(black_box(&w), &s).unwrap())
+    });
+    g.bench_function("line_search_none", |b| {
+        b.iter(|| strongest_line(black_box(&w), 1e-3))
+    });
+    g.bench_function("line_search_line", |b| {
+        b.iter(|| strongest_line(black_box(&with_line), 1e-3).unwrap())
     });
     g.finish();
 }

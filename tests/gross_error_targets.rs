@@ -193,15 +193,21 @@ fn bench_with_line(r: f64) -> Scenario {
 /// A line well above the noise used to blind the stage's model-free tests (the jump test and
 /// the confirmation assume a signal smooth at the sample scale): F1 0.501 at 4× the white σ,
 /// 0.015 at 10× (docs/gross_error_results.md, "A vibration line blinds the model-free tests").
-/// The identified model holds the line (an AR root pair on the unit circle), and the stage now
-/// judges the channel with the tracked line taken out: measured F1 0.873 and 0.813, precision 1.
-/// Bounds 0.02 below the measured figures (deterministic; the margin is for changes elsewhere
-/// in the stage that move single events), far above the 0.50 / 0.02 of before.
+/// Stop 43 tracked a line the identified model held (an AR root pair on the unit circle): F1
+/// 0.869 / 0.864 / 0.873 / 0.813 at 1 / 2 / 4 / 10×, against 0.897 without a line; channels whose
+/// best fit put the line's MA pair at the invertibility margin kept it. Now the warm-up window's
+/// line is found by a spectral test, taken out before identification and tracked: measured
+/// 0.888 / 0.899 / 0.895 / 0.896, precision ≥ 0.9994 (one false alarm at 2, 4 and 10×, the
+/// sample next to an injected error). The bar: within 0.015 of the bench without a line at every
+/// amplitude (deterministic; at 1× the accelerometers' line, 0.7× their white σ, is below the
+/// share that is taken out, and costs 0.010; stop 43's worst was 0.084 below).
 #[test]
-fn bench_with_a_vibration_line_still_finds_its_gross_errors() {
-    for (r, f1_min) in [(4.0, 0.85), (10.0, 0.79)] {
+fn bench_with_a_vibration_line_finds_its_gross_errors_as_without_one() {
+    let scn = bench();
+    let base = run(&scn, scn.seed.unwrap(), None)[0].pooled.f1;
+    for r in [1.0, 2.0, 4.0, 10.0] {
         let scn = bench_with_line(r);
         let rows = run(&scn, scn.seed.unwrap(), None);
-        assert_targets(&rows, f1_min);
+        assert_targets(&rows, base - 0.015);
     }
 }

@@ -5,6 +5,7 @@
 //! * [`acf`]: sample ACF and PACF with their white-noise bounds, the Ljung–Box test.
 //! * [`adf`]: the augmented Dickey–Fuller unit-root test with MacKinnon's p-values.
 //! * [`grid`]: the LSB a quantised channel's values lie on, and the rails a clipped one held.
+//! * [`line`]: the strongest vibration line of a series (a stationary sinusoid), found and fitted.
 //! * [`robust`]: median, MAD-based σ, the Hampel filter.
 //! * [`ar_poly`]: the AR polynomial — stability (Schur–Cohn step-down), Durbin–Levinson and its
 //!   inverse, exact AR autocovariances. It sits here rather than in `model/` because the PACF
@@ -19,6 +20,7 @@ pub mod adf;
 pub mod allan_edf;
 pub mod ar_poly;
 pub mod grid;
+pub mod line;
 pub mod robust;
 pub mod special;
 pub mod student_t;

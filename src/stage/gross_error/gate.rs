@@ -56,6 +56,7 @@ use crate::model::arima::{
     ArimaChannelModel, ArimaError, ArimaPredictor, MAX_D, MAX_P, psi_weights,
 };
 use crate::stats::grid::grid_step;
+use crate::stats::line::Sinusoid;
 use crate::stats::robust::{HampelScratch, hampel_at, median_small, upper_median_and_mad_sigma};
 use crate::stats::special::{normal_cdf, normal_pdf};
 
@@ -225,6 +226,10 @@ pub struct ChannelGate {
     /// construction).
     job_buf: Vec<f64>,
     pub model: Option<ArimaChannelModel>,
+    /// The line taken out of the warm-up window before its model was identified
+    /// ([`identify_window`](super::identify::identify_window)), indexed from the sample after
+    /// activation (the channel's line tracker starts from it, [`super::line`]).
+    pub line: Option<Sinusoid>,
     /// The step of the grid the warm-up's values lie on (the channel's LSB), 0 when they lie on
     /// none (or the model came from a file): see [`grid_step`](crate::stats::grid::grid_step) and [`ChannelGate::resolution`].
     resolution: f64,
@@ -333,6 +338,7 @@ impl ChannelGate {
             job_buf: Vec::new(),
             resolution: 0.0,
             model: None,
+            line: None,
         }
     }
 

@@ -18,6 +18,7 @@ use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use super::gate::{GateParams, Seed};
 use crate::model::arima::{ArimaChannelModel, IdentifySettings, identify};
 use crate::stats::grid::grid_step;
+use crate::stats::line::{Sinusoid, strongest_line};
 use crate::stats::robust::{hampel, upper_median_and_mad_sigma};
 
 /// Half-width and bar of the Hampel filter run over the warm-up before identification: it
@@ -36,6 +37,9 @@ pub struct Identified {
     /// Models that fell back to white noise: the identification failed, or (cannot happen with
     /// validated settings) its model would not run.
     pub fallbacks: u64,
+    /// The line taken out of the window before identification ([`window_line`]), in the
+    /// window's sample index (0 = its first sample).
+    pub line: Option<Sinusoid>,
 }
 
 impl Identified {
@@ -47,6 +51,7 @@ impl Identified {
             model,
             resolution: grid_step(raw),
             fallbacks: 1,
+            line: None,
         }
     }
 }
@@ -67,8 +72,36 @@ pub fn white_model(cleaned: &[f64], name: &str, min_var: f64) -> ArimaChannelMod
     }
 }
 
+/// The window's line test: its p-value bar ([`strongest_line`]'s, one test per channel).
+pub const LINE_ALPHA: f64 = 1e-3;
+/// A line is taken out of the window (and tracked by the channel, [`super::line`]) only when it
+/// is at least this share of the window's second-difference variance: the model-free tests
+/// judge the second differences, and a line below this share widens their roughness by under
+/// 5 %. A slow line (the ADIS16405 accelerometers' 0.57 Hz at 100 Hz) has almost no second
+/// difference, and the ARIMA model holds it as it is.
+pub const LINE_ROUGHNESS_SHARE: f64 = 0.1;
+
+/// The line of `cleaned` (a Hampel-cleaned window) that the stage's tests should not see: a
+/// stationary sinusoid found by [`strongest_line`] that is at least [`LINE_ROUGHNESS_SHARE`] of
+/// the window's second-difference variance.
+pub fn window_line(cleaned: &[f64]) -> Option<Sinusoid> {
+    let l = strongest_line(cleaned, LINE_ALPHA)?;
+    // Var Δ²(A sin ωi) = A²/2 · (4 sin²(ω/2))².
+    let g = 4.0 * (0.5 * l.omega).sin().powi(2);
+    let line_var = 0.5 * l.amplitude().powi(2) * g * g;
+    let d2: Vec<f64> = cleaned
+        .windows(3)
+        .map(|w| w[2] - 2.0 * w[1] + w[0])
+        .collect();
+    let m = d2.iter().sum::<f64>() / d2.len() as f64;
+    let var = d2.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / d2.len() as f64;
+    (line_var >= LINE_ROUGHNESS_SHARE * var).then_some(l)
+}
+
 /// Identify channel `name`'s model from its raw warm-up window and seed it (a failed
-/// identification falls back to [`white_model`]).
+/// identification falls back to [`white_model`]). A line the tests should not see
+/// ([`window_line`], found on the Hampel-cleaned window) is taken out of the raw window first:
+/// the model is then identified, and seeded, on the window without it.
 pub fn identify_window(
     raw: &[f64],
     id: &IdentifySettings,
@@ -76,9 +109,21 @@ pub fn identify_window(
     name: &str,
     min_var: f64,
 ) -> Identified {
-    let cleaned = hampel(raw, HAMPEL_HALF_WIDTH, HAMPEL_K)
-        .map(|r| r.corrected)
-        .unwrap_or_else(|_| raw.to_vec());
+    let clean = |x: &[f64]| {
+        hampel(x, HAMPEL_HALF_WIDTH, HAMPEL_K)
+            .map(|r| r.corrected)
+            .unwrap_or_else(|_| x.to_vec())
+    };
+    let mut cleaned = clean(raw);
+    let line = window_line(&cleaned);
+    if let Some(l) = &line {
+        let without: Vec<f64> = raw
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v - l.value(i as f64))
+            .collect();
+        cleaned = clean(&without);
+    }
     let mut fallbacks = 0;
     let mut model = identify(&cleaned, id)
         .map(|m| m.to_channel_model(name))
@@ -97,6 +142,7 @@ pub fn identify_window(
         seed,
         resolution: grid_step(raw),
         fallbacks,
+        line,
     }
 }
 

@@ -538,7 +538,8 @@ impl GrossErrorStage {
     fn line_step(&mut self, c: usize, idx: u64, steps: u32) -> f64 {
         let ch = &mut self.ch[c];
         if !ch.line.checked() && ch.gate.mode == Mode::Active {
-            ch.line.adopt(ch.gate.model.as_ref(), CHANNEL_NAMES[c]);
+            ch.line
+                .adopt(ch.gate.line, ch.gate.model.as_ref(), idx, CHANNEL_NAMES[c]);
         }
         ch.line.predict(idx, steps)
     }

@@ -280,6 +280,13 @@ impl ChannelGate {
                 Err(Missing::Failed) => Identified::white(window, p, name, self.min_var),
             };
             if let Some(sd) = r.seed.as_mut() {
+                // The model was identified without the window's line: so are the samples since
+                // (the line continued over their indices).
+                if let Some(l) = &r.line {
+                    for (k, v) in self.tail.iter_mut().enumerate() {
+                        *v -= l.value((closed_n + k) as f64);
+                    }
+                }
                 sd.extend(p, &self.tail);
             }
             self.finish(p, r, name);
@@ -324,6 +331,8 @@ impl ChannelGate {
     /// Activate on an identified (and seeded) window.
     fn finish(&mut self, p: &GateParams, r: Identified, name: &str) {
         self.resolution = r.resolution;
+        // The next sample is the warm-up's next index (every kept sample is in `warm`).
+        self.line = r.line.map(|l| l.shifted(self.warm.len() as f64));
         // The tracked scales never fall below the channel's quantisation noise, LSB/√12: on a
         // channel whose noise is below one LSB most samples repeat one code, the scales shrink
         // towards `min_sigma`, and every one-LSB toggle would make a candidate.
