@@ -28,6 +28,7 @@
 
 use super::AnalysisError;
 use crate::model::fos::{FosSettings, fos_search};
+use crate::stats::line::{PairSums, neighbour_median};
 use crate::stats::{NumError, check_series};
 use rustfft::{FftPlanner, num_complex::Complex};
 use serde::Serialize;
@@ -161,18 +162,18 @@ pub fn noise_floor(psd: &Psd, s: &PeakSettings) -> Vec<f64> {
     let mut buf = Vec::with_capacity(2 * s.floor_halfwidth_bins + 1);
     (0..n)
         .map(|k| {
-            buf.clear();
-            let lo = k.saturating_sub(s.floor_halfwidth_bins).max(1);
-            let hi = (k + s.floor_halfwidth_bins).min(n - 1);
-            for j in lo..=hi {
-                if j + s.guard_bins < k || j > k + s.guard_bins {
-                    buf.push(psd.density[j]);
-                }
-            }
+            let m = neighbour_median(
+                &psd.density,
+                k,
+                s.floor_halfwidth_bins,
+                s.guard_bins,
+                n - 1,
+                &mut buf,
+            );
             if buf.is_empty() {
                 psd.density[k]
             } else {
-                crate::stats::robust::upper_median(&mut buf) / std::f64::consts::LN_2
+                m / std::f64::consts::LN_2
             }
         })
         .collect()
@@ -226,50 +227,6 @@ pub struct RefinedLine {
     pub phase_rad: f64,
     /// MSE reduction of the pair on the fitted segment, units².
     pub q: f64,
-}
-
-/// Running sums for the least-squares fit of a·sin + b·cos to a mean-removed segment, the
-/// raw columns' sums centred at the end (orthogonal to the constant).
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct PairSums {
-    ss: f64,
-    cc: f64,
-    sc: f64,
-    s1: f64,
-    c1: f64,
-    /// Σ sin·x and Σ cos·x.
-    pub sx: f64,
-    pub cx: f64,
-}
-
-impl PairSums {
-    /// One sample: sin and cos of its phase, and its mean-removed value.
-    #[inline]
-    pub(crate) fn add(&mut self, s: f64, c: f64, x: f64) {
-        self.ss += s * s;
-        self.cc += c * c;
-        self.sc += s * c;
-        self.s1 += s;
-        self.c1 += c;
-        self.sx += s * x;
-        self.cx += c * x;
-    }
-
-    /// (a, b) over the `n` samples added; `None` where sin and cos are (nearly) collinear there.
-    pub(crate) fn solve(&self, n: usize) -> Option<(f64, f64)> {
-        let nf = n as f64;
-        let (s1, c1, sx, cx) = (self.s1, self.c1, self.sx, self.cx);
-        let (ss, cc, sc) = (
-            self.ss - s1 * s1 / nf,
-            self.cc - c1 * c1 / nf,
-            self.sc - s1 * c1 / nf,
-        );
-        let det = ss * cc - sc * sc;
-        if det.abs() < 1e-12 * nf * nf {
-            return None;
-        }
-        Some(((cc * sx - sc * cx) / det, (ss * cx - sc * sx) / det))
-    }
 }
 
 /// Least-squares fit of (sin, cos) at `f_hz` to the mean-removed segment: returns (a, b, Q).

@@ -1,5 +1,8 @@
-//! The strongest vibration line in a series, when there is one: a sinusoid of fixed frequency,
-//! amplitude and phase on top of the series' own noise.
+//! Spectral lines: the primitives every line search here uses — a spectrum's local floor
+//! ([`neighbour_median`]), the DFT at one frequency ([`dft_at`]), the least-squares sinusoid at
+//! one frequency ([`PairSums`], [`pair_ls`]), a peak refined on a grid ([`peak_on_grid`]) — and
+//! the strongest vibration line in a series, when there is one ([`strongest_line`]): a sinusoid
+//! of fixed frequency, amplitude and phase on top of the series' own noise.
 //!
 //! **Found.** The Hann periodogram of the series (mean removed) is compared bin by bin with its
 //! local floor: the median over ±[`FLOOR_HALF_WIDTH`] bins, the main lobe's ±[`GUARD`] bins
@@ -17,11 +20,140 @@
 //! **Fitted.** The frequency is the maximum of the unwindowed periodogram |Σ (x_i − x̄)
 //! e^{−iωi}|² over ±1 bin of the peak (⅛-bin grid, then a parabola through the grid's three
 //! best points) — for one sinusoid in white noise, the least-squares frequency — and (a, b) of
-//! a sin ωi + b cos ωi are least squares at that frequency, with an intercept.
+//! a sin ωi + b cos ωi are least squares at that frequency on the mean-removed series.
 
-use nalgebra::{Matrix3, Vector3};
+use crate::stats::robust::upper_median;
 use rustfft::{FftPlanner, num_complex::Complex};
 use std::f64::consts::TAU;
+
+/// The upper median of `p[k]` over the bins `k` within `half_width` of `j` (from bin 1 to
+/// `last`), the `guard` bins either side of `j` left out: a spectrum's local floor at `j` before
+/// its normalisation (the caller divides by the median of its bins' distribution). `scratch`
+/// holds the bins used afterwards; NaN when there is none.
+pub fn neighbour_median(
+    p: &[f64],
+    j: usize,
+    half_width: usize,
+    guard: usize,
+    last: usize,
+    scratch: &mut Vec<f64>,
+) -> f64 {
+    scratch.clear();
+    let lo = j.saturating_sub(half_width).max(1);
+    let hi = (j + half_width).min(last);
+    scratch.extend((lo..=hi).filter(|k| k.abs_diff(j) > guard).map(|k| p[k]));
+    upper_median(scratch)
+}
+
+/// Σ (x_n − mean) cos ω(t0+n) and Σ (x_n − mean) sin ω(t0+n): the DFT of `x` at `w` rad per
+/// sample (its power is the sum of their squares), `x`'s first sample being sample `t0`, by a
+/// rotating phasor (renormalised every 4096 samples).
+pub fn dft_at(x: &[f64], mean: f64, w: f64, t0: usize) -> (f64, f64) {
+    let (s0, c0) = (w * t0 as f64).sin_cos();
+    let (ds, dc) = w.sin_cos();
+    let (mut c, mut s) = (c0, s0);
+    let (mut re, mut im) = (0.0, 0.0);
+    for (i, v) in x.iter().enumerate() {
+        let d = v - mean;
+        re += d * c;
+        im += d * s;
+        let nc = c * dc - s * ds;
+        s = s * dc + c * ds;
+        c = nc;
+        if i % 4096 == 4095 {
+            let r = (c * c + s * s).sqrt();
+            c /= r;
+            s /= r;
+        }
+    }
+    (re, im)
+}
+
+/// Running sums for the least-squares fit of a·sin + b·cos to a mean-removed segment, the
+/// raw columns' sums centred at the end (orthogonal to the constant).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PairSums {
+    ss: f64,
+    cc: f64,
+    sc: f64,
+    s1: f64,
+    c1: f64,
+    /// Σ sin·x and Σ cos·x.
+    pub sx: f64,
+    pub cx: f64,
+}
+
+impl PairSums {
+    /// One sample: sin and cos of its phase, and its mean-removed value.
+    #[inline]
+    pub fn add(&mut self, s: f64, c: f64, x: f64) {
+        self.ss += s * s;
+        self.cc += c * c;
+        self.sc += s * c;
+        self.s1 += s;
+        self.c1 += c;
+        self.sx += s * x;
+        self.cx += c * x;
+    }
+
+    /// (a, b) over the `n` samples added; `None` where sin and cos are (nearly) collinear there.
+    pub fn solve(&self, n: usize) -> Option<(f64, f64)> {
+        let nf = n as f64;
+        let (s1, c1, sx, cx) = (self.s1, self.c1, self.sx, self.cx);
+        let (ss, cc, sc) = (
+            self.ss - s1 * s1 / nf,
+            self.cc - c1 * c1 / nf,
+            self.sc - s1 * c1 / nf,
+        );
+        let det = ss * cc - sc * sc;
+        if det.abs() < 1e-12 * nf * nf {
+            return None;
+        }
+        Some(((cc * sx - sc * cx) / det, (ss * cx - sc * sx) / det))
+    }
+}
+
+/// Least-squares (a, b) of a sin(ωi) + b cos(ωi) on `x` − `mean` (i = `t0` + the index in `x`);
+/// (0, 0) where they cannot be told apart. The phasor is not renormalised: its drift over a
+/// block of 10⁶ samples is ~1e-10.
+pub fn pair_ls(x: &[f64], mean: f64, w: f64, t0: usize) -> (f64, f64) {
+    let (s0, c0) = (w * t0 as f64).sin_cos();
+    let (ds, dc) = w.sin_cos();
+    let (mut c, mut s) = (c0, s0);
+    let mut sums = PairSums::default();
+    for v in x {
+        sums.add(s, c, v - mean);
+        let nc = c * dc - s * ds;
+        s = s * dc + c * ds;
+        c = nc;
+    }
+    sums.solve(x.len()).unwrap_or((0.0, 0.0))
+}
+
+/// The frequency of the largest `power` on the grid of `points` frequencies spaced `step` and
+/// centred on `centre` (an odd count), refined by the parabola through the best grid point and
+/// its neighbours (not at the grid's ends).
+pub fn peak_on_grid(power: impl Fn(f64) -> f64, centre: f64, step: f64, points: usize) -> f64 {
+    let mid = (points / 2) as f64;
+    let grid: Vec<(f64, f64)> = (0..points)
+        .map(|j| {
+            let f = centre + (j as f64 - mid) * step;
+            (f, power(f))
+        })
+        .collect();
+    let jb = (0..points)
+        .max_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
+        .unwrap_or(points / 2);
+    let mut f = grid[jb].0;
+    if jb > 0 && jb + 1 < points {
+        let (p0, p1, p2) = (grid[jb - 1].1, grid[jb].1, grid[jb + 1].1);
+        let den = p0 - 2.0 * p1 + p2;
+        if den < 0.0 {
+            f += 0.5 * (p0 - p2) / den * step;
+        }
+    }
+    f
+}
 
 /// Half-width of the local floor, bins.
 pub const FLOOR_HALF_WIDTH: usize = 32;
@@ -95,15 +227,8 @@ pub fn strongest_line(x: &[f64], alpha: f64) -> Option<Sinusoid> {
         if !(p[j] >= p[j - 1] && p[j] > p[j + 1]) {
             continue;
         }
-        scratch.clear();
-        let lo_k = j.saturating_sub(FLOOR_HALF_WIDTH).max(1);
-        let hi_k = (j + FLOOR_HALF_WIDTH).min(half);
-        scratch.extend(
-            (lo_k..=hi_k)
-                .filter(|k| k.abs_diff(j) > GUARD)
-                .map(|k| p[k]),
-        );
-        let floor = crate::stats::robust::median(&mut scratch) / std::f64::consts::LN_2;
+        let floor = neighbour_median(&p, j, FLOOR_HALF_WIDTH, GUARD, half, &mut scratch)
+            / std::f64::consts::LN_2;
         if floor > 0.0 {
             // The floor is an estimate: with ν bins' worth of information the ratio's tail is
             // (1 + r/ν)^{−ν} rather than e^{−r}. The median of Exp(1) has 2.08/m relative
@@ -123,69 +248,22 @@ pub fn strongest_line(x: &[f64], alpha: f64) -> Option<Sinusoid> {
     if p_value.is_nan() || p_value >= alpha {
         return None;
     }
-    let omega = refine(x, mean, TAU * j as f64 / n as f64, TAU / n as f64);
-    let whole = fit_at(x, omega, 0..n)?;
-    let first = fit_at(x, omega, 0..n / 2)?;
-    let second = fit_at(x, omega, n / 2..n)?;
-    let gap = (first.a - second.a).hypot(first.b - second.b);
-    (gap <= 0.5 * first.amplitude().max(second.amplitude())).then_some(whole)
-}
-
-/// The frequency within ±`bin` of `omega0` that maximises the unwindowed periodogram of `x`.
-fn refine(x: &[f64], mean: f64, omega0: f64, bin: f64) -> f64 {
-    const STEPS: i32 = 8;
+    // ±1 bin at ⅛ bin.
+    let bin = TAU / n as f64;
     let power = |w: f64| {
-        // Σ (x_i − x̄) e^{−iωi} by a rotating phasor, renormalised every 256 samples.
-        let rot = Complex::from_polar(1.0, -w);
-        let mut ph = Complex::new(1.0, 0.0);
-        let mut acc = Complex::new(0.0, 0.0);
-        for (i, v) in x.iter().enumerate() {
-            acc += ph * (v - mean);
-            ph *= rot;
-            if i % 256 == 255 {
-                ph /= ph.norm();
-            }
-        }
-        acc.norm_sqr()
+        let (re, im) = dft_at(x, mean, w, 0);
+        re * re + im * im
     };
-    let grid: Vec<(f64, f64)> = (-STEPS..=STEPS)
-        .map(|k| {
-            let w = omega0 + bin * k as f64 / STEPS as f64;
-            (w, power(w))
-        })
-        .collect();
-    let k = (0..grid.len())
-        .max_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
-        .unwrap_or(STEPS as usize);
-    if k == 0 || k + 1 == grid.len() {
-        return grid[k].0;
-    }
-    let (y0, y1, y2) = (grid[k - 1].1, grid[k].1, grid[k + 1].1);
-    let den = y0 - 2.0 * y1 + y2;
-    let shift = if den < 0.0 {
-        0.5 * (y0 - y2) / den
-    } else {
-        0.0
+    let omega = peak_on_grid(power, bin * j as f64, bin / 8.0, 17);
+    let fit = |r: std::ops::Range<usize>| {
+        let seg = &x[r.clone()];
+        let m = seg.iter().sum::<f64>() / seg.len() as f64;
+        let (a, b) = pair_ls(seg, m, omega, r.start);
+        Sinusoid { omega, a, b }
     };
-    grid[k].0 + shift.clamp(-0.5, 0.5) * bin / STEPS as f64
-}
-
-/// Least squares of `x[range]` on sin ωi, cos ωi and 1 (i the index in `x`).
-fn fit_at(x: &[f64], omega: f64, range: std::ops::Range<usize>) -> Option<Sinusoid> {
-    let mut g = Matrix3::<f64>::zeros();
-    let mut r = Vector3::<f64>::zeros();
-    for i in range {
-        let (s, c) = (omega * i as f64).sin_cos();
-        let u = Vector3::new(s, c, 1.0);
-        g += u * u.transpose();
-        r += u * x[i];
-    }
-    let sol = g.cholesky()?.solve(&r);
-    Some(Sinusoid {
-        omega,
-        a: sol[0],
-        b: sol[1],
-    })
+    let (first, second) = (fit(0..n / 2), fit(n / 2..n));
+    let gap = (first.a - second.a).hypot(first.b - second.b);
+    (gap <= 0.5 * first.amplitude().max(second.amplitude())).then(|| fit(0..n))
 }
 
 #[cfg(test)]

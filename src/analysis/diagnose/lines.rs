@@ -21,8 +21,7 @@
 //! inventing one.
 
 use super::blocks::Blocks;
-use crate::analysis::spectrum::PairSums;
-use crate::stats::robust::upper_median;
+use crate::stats::line::{dft_at, neighbour_median, pair_ls, peak_on_grid};
 use crate::stats::special::chi2_sf;
 use rustfft::{FftPlanner, num_complex::Complex};
 use serde::Serialize;
@@ -115,15 +114,9 @@ pub fn line_candidates(
         return vec![];
     }
     let m = (hi - lo) as f64;
-    let floor_at = |j: usize| -> f64 {
-        let a = j.saturating_sub(hw).max(1);
-        let b = (j + hw).min(half);
-        let mut v: Vec<f64> = (a..=b)
-            .filter(|i| i.abs_diff(j) > guard)
-            .map(|i| avg[i])
-            .collect();
-        upper_median(&mut v) / med_corr
-    };
+    let mut scratch = Vec::with_capacity(2 * hw + 1);
+    let mut floor_at =
+        |j: usize| -> f64 { neighbour_median(&avg, j, hw, guard, half, &mut scratch) / med_corr };
     let mut out: Vec<LineCandidate> = Vec::new();
     for j in lo..hi {
         if !(avg[j] >= avg[j - 1] && avg[j] > avg[j + 1]) {
@@ -163,43 +156,6 @@ pub fn line_candidates(
     kept
 }
 
-/// |Σ (x_n − x̄) e^{−iω(t0+n)}|² and the sums, by a rotating phasor.
-fn dft_at(x: &[f64], mean: f64, w: f64, t0: usize) -> (f64, f64) {
-    let (s0, c0) = (w * t0 as f64).sin_cos();
-    let (ds, dc) = w.sin_cos();
-    let (mut c, mut s) = (c0, s0);
-    let (mut re, mut im) = (0.0, 0.0);
-    for (i, v) in x.iter().enumerate() {
-        let d = v - mean;
-        re += d * c;
-        im += d * s;
-        let nc = c * dc - s * ds;
-        s = s * dc + c * ds;
-        c = nc;
-        if i % 4096 == 4095 {
-            let r = (c * c + s * s).sqrt();
-            c /= r;
-            s /= r;
-        }
-    }
-    (re, im)
-}
-
-/// Least-squares (a, b) of a sin(ωi) + b cos(ωi) (i the log's sample index) on `x` − mean.
-fn pair_ls(x: &[f64], mean: f64, w: f64, t0: usize) -> (f64, f64) {
-    let (s0, c0) = (w * t0 as f64).sin_cos();
-    let (ds, dc) = w.sin_cos();
-    let (mut c, mut s) = (c0, s0);
-    let mut sums = PairSums::default();
-    for v in x {
-        sums.add(s, c, v - mean);
-        let nc = c * dc - s * ds;
-        s = s * dc + c * ds;
-        c = nc;
-    }
-    sums.solve(x.len()).unwrap_or((0.0, 0.0))
-}
-
 /// Frequencies tried per block (±1 bin at ¼ bin).
 const GRID: usize = 9;
 
@@ -224,24 +180,7 @@ pub fn track(
                 re * re + im * im
             };
             let step = 2.0 * bin / (GRID - 1) as f64;
-            let mid = (GRID / 2) as f64;
-            let grid: Vec<(f64, f64)> = (0..GRID)
-                .map(|j| {
-                    let f = cand.freq_hz + (j as f64 - mid) * step;
-                    (f, pw(f))
-                })
-                .collect();
-            let jb = (0..GRID)
-                .max_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
-                .unwrap_or(GRID / 2);
-            let mut f = grid[jb].0;
-            if jb > 0 && jb + 1 < GRID {
-                let (p0, p1, p2) = (grid[jb - 1].1, grid[jb].1, grid[jb + 1].1);
-                let den = p0 - 2.0 * p1 + p2;
-                if den < 0.0 {
-                    f += 0.5 * (p0 - p2) / den * step;
-                }
-            }
+            let f = peak_on_grid(pw, cand.freq_hz, step, GRID);
             let w = 2.0 * PI * f / rate_hz;
             let (a, bb) = pair_ls(x, mean, w, r.start);
             let snr = pw(f) / (l as f64 * cand.noise_var);

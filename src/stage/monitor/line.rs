@@ -12,7 +12,7 @@
 //! the last frequency seen: a line may drift, e.g. with a fan's speed) is the same effect,
 //! tracked, not a new one.
 
-use crate::stats::robust::upper_median;
+use crate::stats::line::neighbour_median;
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 use std::sync::Arc;
@@ -216,18 +216,11 @@ impl LineDetector {
             if p <= 0.0 || p < self.acc[bin - 1] || p < self.acc[(bin + 1).min(last)] {
                 continue;
             }
-            nb.clear();
-            let lo = bin.saturating_sub(NEIGHBOURS + LOBE).max(1);
-            let hi = (bin + NEIGHBOURS + LOBE).min(last);
-            nb.extend(
-                (lo..=hi)
-                    .filter(|&j| j.abs_diff(bin) > LOBE)
-                    .map(|j| self.acc[j]),
-            );
+            let m = neighbour_median(&self.acc, bin, NEIGHBOURS + LOBE, LOBE, last, &mut nb);
             if nb.len() < NEIGHBOURS {
                 continue;
             }
-            let reference = upper_median(&mut nb) / self.median_norm;
+            let reference = m / self.median_norm;
             if reference > 0.0 && p / reference >= self.k {
                 out.push((bin, p / reference));
             }
