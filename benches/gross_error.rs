@@ -28,6 +28,7 @@ fn models(d: usize) -> ArimaModelFile {
                 ar: vec![0.5, -0.1, 0.05],
                 ma: vec![0.3, 0.1],
                 sigma: 0.005,
+                line_per_sample: None,
                 diagnostics: None,
             })
             .collect(),

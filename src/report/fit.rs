@@ -18,6 +18,8 @@ use crate::model::{ArFit, ModelError};
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample};
 use crate::stage::bias::stillness::{StillnessDetector, StillnessSettings};
 use crate::stage::gross_error::GrossErrorStage;
+use crate::stage::gross_error::identify::{HAMPEL_HALF_WIDTH, HAMPEL_K, window_line};
+use crate::stats::robust::hampel;
 
 /// How `fit` estimates the bias model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -114,6 +116,10 @@ pub struct ArimaRow {
     pub sigma: f64,
     pub ljung_box_q: f64,
     pub ljung_box_p: f64,
+    /// A vibration line taken out before identification: frequency, Hz, and amplitude (channel
+    /// unit) on the training span.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub line: Option<(f64, f64)>,
 }
 
 /// One channel's bias model.
@@ -196,7 +202,19 @@ pub fn fit(log: &super::Recording, out_dir: &Path, o: &FitOptions) -> Result<Fit
     let mut arima = Vec::new();
     for &c in &present {
         let name = CHANNEL_NAMES[c];
-        let id = identify(&series(c), &IdentifySettings::default()).map_err(|e| {
+        // A vibration line the stage's tests should not see is taken out first, as the stage
+        // does on its own warm-up window (`stage::gross_error::identify::window_line`).
+        let mut x = series(c);
+        let cleaned = hampel(&x, HAMPEL_HALF_WIDTH, HAMPEL_K)
+            .map(|r| r.corrected)
+            .unwrap_or_else(|_| x.clone());
+        let line = window_line(&cleaned);
+        if let Some(l) = &line {
+            for (i, v) in x.iter_mut().enumerate() {
+                *v -= l.value(i as f64);
+            }
+        }
+        let id = identify(&x, &IdentifySettings::default()).map_err(|e| {
             anyhow!(
                 "{}: ARIMA identification of {name} on {} ({:.1} s at {} Hz): {e}",
                 log.display(),
@@ -205,7 +223,8 @@ pub fn fit(log: &super::Recording, out_dir: &Path, o: &FitOptions) -> Result<Fit
                 crate::text::trim_decimals(rate, 3)
             )
         })?;
-        let m = id.to_channel_model(name);
+        let mut m = id.to_channel_model(name);
+        m.line_per_sample = line.map(|l| l.omega / std::f64::consts::TAU);
         arima.push(ArimaRow {
             channel: name.to_string(),
             p: m.p,
@@ -216,6 +235,7 @@ pub fn fit(log: &super::Recording, out_dir: &Path, o: &FitOptions) -> Result<Fit
             sigma: m.sigma,
             ljung_box_q: id.diagnostics.ljung_box.q,
             ljung_box_p: id.diagnostics.ljung_box.p_value,
+            line: line.map(|l| (l.omega / std::f64::consts::TAU * rate, l.amplitude())),
         });
         file.channels.push(m);
     }
@@ -399,6 +419,15 @@ impl fmt::Display for FitReport {
                 r.ljung_box_q,
                 r.ljung_box_p
             )?;
+        }
+        for r in &self.arima {
+            if let Some((hz, amp)) = r.line {
+                writeln!(
+                    f,
+                    "{:<4} a vibration line at {hz:.3} Hz (amplitude {amp:.3e}) was taken out before identification; the daemon fits it on its warm-up and judges the channel without it",
+                    r.channel
+                )?;
+            }
         }
         for (c, why) in &self.absent {
             writeln!(f, "{c:<4} not fitted: {why}")?;

@@ -130,6 +130,14 @@ pub fn pair_ls(x: &[f64], mean: f64, w: f64, t0: usize) -> (f64, f64) {
     sums.solve(x.len()).unwrap_or((0.0, 0.0))
 }
 
+/// The least-squares sinusoid at `omega` rad per sample on `x` less its mean, indexed as
+/// sample `t0` + the index in `x` ((0, 0) where sin and cos cannot be told apart there).
+pub fn fit_sinusoid(x: &[f64], omega: f64, t0: usize) -> Sinusoid {
+    let m = x.iter().sum::<f64>() / x.len().max(1) as f64;
+    let (a, b) = pair_ls(x, m, omega, t0);
+    Sinusoid { omega, a, b }
+}
+
 /// The frequency of the largest `power` on the grid of `points` frequencies spaced `step` and
 /// centred on `centre` (an odd count), refined by the parabola through the best grid point and
 /// its neighbours (not at the grid's ends).
@@ -255,12 +263,7 @@ pub fn strongest_line(x: &[f64], alpha: f64) -> Option<Sinusoid> {
         re * re + im * im
     };
     let omega = peak_on_grid(power, bin * j as f64, bin / 8.0, 17);
-    let fit = |r: std::ops::Range<usize>| {
-        let seg = &x[r.clone()];
-        let m = seg.iter().sum::<f64>() / seg.len() as f64;
-        let (a, b) = pair_ls(seg, m, omega, r.start);
-        Sinusoid { omega, a, b }
-    };
+    let fit = |r: std::ops::Range<usize>| fit_sinusoid(&x[r.clone()], omega, r.start);
     let (first, second) = (fit(0..n / 2), fit(n / 2..n));
     let gap = (first.a - second.a).hypot(first.b - second.b);
     (gap <= 0.5 * first.amplitude().max(second.amplitude())).then(|| fit(0..n))

@@ -172,6 +172,7 @@ pub fn white_arima(channel: &str, sigma: f64) -> imuprep::model::arima::ArimaCha
         ar: vec![],
         ma: vec![],
         sigma,
+        line_per_sample: None,
         diagnostics: None,
     }
 }

@@ -51,6 +51,12 @@ pub struct ArimaChannelModel {
     pub ma: Vec<f64>,
     /// Innovation standard deviation σ (rad/s or m/s²).
     pub sigma: f64,
+    /// The vibration line taken out of the training data before identification, cycles per
+    /// sample (0 < f < 0.5): the model is the channel's without it. The daemon fits the line's
+    /// amplitude and phase on its warm-up window, and its gross-error tests judge the channel
+    /// with the line taken out (docs/gross_error_results.md, "The warm-up's line").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub line_per_sample: Option<f64>,
     /// What identification found (optional in hand-written files).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diagnostics: Option<ArimaDiagnostics>,
@@ -90,6 +96,13 @@ impl ArimaChannelModel {
         }
         if !(self.sigma > 0.0 && self.sigma.is_finite()) {
             e.push(format!("sigma = {} must be positive", self.sigma));
+        }
+        if let Some(f) = self.line_per_sample
+            && !(f > 0.0 && f < 0.5)
+        {
+            e.push(format!(
+                "line_per_sample = {f} must be a frequency in cycles per sample, 0 < f < 0.5"
+            ));
         }
         if self.ar.len() == self.p && !is_stable(&self.ar, 0.0) {
             e.push("AR polynomial is not stationary".into());
@@ -153,6 +166,7 @@ impl ArimaIdentification {
             ar: self.fit.ar.clone(),
             ma: self.fit.ma.clone(),
             sigma: self.fit.sigma2.sqrt(),
+            line_per_sample: None,
             diagnostics: Some(self.diagnostics.clone()),
         }
     }

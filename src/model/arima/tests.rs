@@ -146,6 +146,7 @@ fn predictor_reproduces_css_residuals() {
         ar: f.ar.clone(),
         ma: f.ma.clone(),
         sigma: f.sigma2.sqrt(),
+        line_per_sample: None,
         diagnostics: None,
     };
     let resid = css_residuals(&x, f.constant, &f.ar, &f.ma, 2);
@@ -174,6 +175,7 @@ fn predictor_d1_predicts_last_value_plus_drift_for_random_walk() {
         ar: vec![],
         ma: vec![],
         sigma: 1.0,
+        line_per_sample: None,
         diagnostics: None,
     };
     let mut pr = ArimaPredictor::new(&model, 0.5, 0.0).unwrap();
@@ -196,6 +198,7 @@ fn psi_weights_are_closed_form_for_arma11_and_random_walk() {
         ar: vec![0.5],
         ma: vec![0.3],
         sigma: 1.0,
+        line_per_sample: None,
         diagnostics: None,
     };
     let mut psi = [0.0; 6];
@@ -244,6 +247,19 @@ fn model_file_round_trips_toml_and_rejects_unknown_fields() {
     // An inconsistent one does not.
     let wrong = hand.replace("ar = [0.5]", "ar = [1.5]");
     assert!(ArimaModelFile::from_toml_str(&wrong).is_err());
+    // A line taken out before identification: its frequency, cycles per sample, round-trips;
+    // one that is no frequency below Nyquist is refused with the field named.
+    let lined = format!("{hand}line_per_sample = 0.22\n");
+    let f = ArimaModelFile::from_toml_str(&lined).unwrap();
+    assert_eq!(f.channel("gx").unwrap().line_per_sample, Some(0.22));
+    let back = ArimaModelFile::from_toml_str(&f.to_toml_string().unwrap()).unwrap();
+    assert_eq!(back, f);
+    for bad in ["0.5", "0.0", "-0.1", "nan"] {
+        let e = ArimaModelFile::from_toml_str(&format!("{hand}line_per_sample = {bad}\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line_per_sample"), "{bad}: {e}");
+    }
 }
 
 /// One-step innovations of `model` on `x[from..]` (predictor started on `x[..from]`), with the
@@ -299,6 +315,7 @@ fn a_vibration_line_is_modelled_not_refused() {
         ar: old_fit.ar.clone(),
         ma: old_fit.ma.clone(),
         sigma: old_fit.sigma2.sqrt(),
+        line_per_sample: None,
         diagnostics: None,
     };
     // Innovation variance 1e-4; 18 000 held-out samples give the MSE a 1.1 % sd.
@@ -345,6 +362,7 @@ fn the_line_of_a_model_is_its_unit_circle_root_pair() {
         ar,
         ma: vec![],
         sigma: 1.0,
+        line_per_sample: None,
         diagnostics: None,
     };
     let w: f64 = 1.2;

@@ -230,6 +230,9 @@ pub struct ChannelGate {
     /// ([`identify_window`](super::identify::identify_window)), indexed from the sample after
     /// activation (the channel's line tracker starts from it, [`super::line`]).
     pub line: Option<Sinusoid>,
+    /// A model file's model that declares a line, seeded at the warm-up's end
+    /// ([`ChannelGate::warm_up_for`]).
+    given: Option<ArimaChannelModel>,
     /// The step of the grid the warm-up's values lie on (the channel's LSB), 0 when they lie on
     /// none (or the model came from a file): see [`grid_step`](crate::stats::grid::grid_step) and [`ChannelGate::resolution`].
     resolution: f64,
@@ -339,6 +342,7 @@ impl ChannelGate {
             resolution: 0.0,
             model: None,
             line: None,
+            given: None,
         }
     }
 

@@ -18,7 +18,7 @@ use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use super::gate::{GateParams, Seed};
 use crate::model::arima::{ArimaChannelModel, IdentifySettings, identify};
 use crate::stats::grid::grid_step;
-use crate::stats::line::{Sinusoid, strongest_line};
+use crate::stats::line::{Sinusoid, fit_sinusoid, strongest_line};
 use crate::stats::robust::{hampel, upper_median_and_mad_sigma};
 
 /// Half-width and bar of the Hampel filter run over the warm-up before identification: it
@@ -68,6 +68,7 @@ pub fn white_model(cleaned: &[f64], name: &str, min_var: f64) -> ArimaChannelMod
         ar: vec![],
         ma: vec![],
         sigma: sd.max(min_var.sqrt()),
+        line_per_sample: None,
         diagnostics: None,
     }
 }
@@ -102,12 +103,17 @@ pub fn window_line(cleaned: &[f64]) -> Option<Sinusoid> {
 /// identification falls back to [`white_model`]). A line the tests should not see
 /// ([`window_line`], found on the Hampel-cleaned window) is taken out of the raw window first:
 /// the model is then identified, and seeded, on the window without it.
+///
+/// With a `given` model (a model file's that declares a line, `line_per_sample`) nothing is
+/// identified: the line is fitted at the file's frequency, taken out, and the given model seeded
+/// on what is left.
 pub fn identify_window(
     raw: &[f64],
     id: &IdentifySettings,
     p: &GateParams,
     name: &str,
     min_var: f64,
+    given: Option<&ArimaChannelModel>,
 ) -> Identified {
     let clean = |x: &[f64]| {
         hampel(x, HAMPEL_HALF_WIDTH, HAMPEL_K)
@@ -115,7 +121,12 @@ pub fn identify_window(
             .unwrap_or_else(|_| x.to_vec())
     };
     let mut cleaned = clean(raw);
-    let line = window_line(&cleaned);
+    let line = match given {
+        Some(m) => m
+            .line_per_sample
+            .map(|f| fit_sinusoid(&cleaned, std::f64::consts::TAU * f, 0)),
+        None => window_line(&cleaned),
+    };
     if let Some(l) = &line {
         let without: Vec<f64> = raw
             .iter()
@@ -125,12 +136,15 @@ pub fn identify_window(
         cleaned = clean(&without);
     }
     let mut fallbacks = 0;
-    let mut model = identify(&cleaned, id)
-        .map(|m| m.to_channel_model(name))
-        .unwrap_or_else(|_| {
-            fallbacks += 1;
-            white_model(&cleaned, name, min_var)
-        });
+    let mut model = match given {
+        Some(m) => m.clone(),
+        None => identify(&cleaned, id)
+            .map(|m| m.to_channel_model(name))
+            .unwrap_or_else(|_| {
+                fallbacks += 1;
+                white_model(&cleaned, name, min_var)
+            }),
+    };
     let seed = Seed::new(p, &model, &cleaned).unwrap_or_else(|_| {
         fallbacks += 1;
         model = white_model(&cleaned, name, min_var);
@@ -175,6 +189,7 @@ struct Job {
     p: GateParams,
     name: String,
     min_var: f64,
+    given: Option<ArimaChannelModel>,
     slot: Arc<Slot>,
 }
 
@@ -195,11 +210,18 @@ impl Identifier {
     }
 
     /// [`identify_window`] with these settings, here and now.
-    pub fn window(&self, raw: &[f64], p: &GateParams, name: &str, min_var: f64) -> Identified {
-        identify_window(raw, &self.settings, p, name, min_var)
+    pub fn window(
+        &self,
+        raw: &[f64],
+        p: &GateParams,
+        name: &str,
+        min_var: f64,
+        given: Option<&ArimaChannelModel>,
+    ) -> Identified {
+        identify_window(raw, &self.settings, p, name, min_var, given)
     }
 
-    /// Hand `raw` to the worker; `None` without one (the caller then identifies inline: the
+    /// Hand `raw` (and a `given` model, [`identify_window`]) to the worker; `None` without one (the caller then identifies inline: the
     /// same result, only on the sample path).
     pub fn start(
         &self,
@@ -207,6 +229,7 @@ impl Identifier {
         p: &GateParams,
         name: &str,
         min_var: f64,
+        given: Option<&ArimaChannelModel>,
     ) -> Option<Pending> {
         let slot = Arc::new(Slot {
             state: Mutex::new(State::Running),
@@ -218,6 +241,11 @@ impl Identifier {
             p: *p,
             name: name.to_string(),
             min_var,
+            // Its diagnostics are not needed to seed it.
+            given: given.map(|m| ArimaChannelModel {
+                diagnostics: None,
+                ..m.clone()
+            }),
             slot: slot.clone(),
         };
         self.jobs.as_ref()?.send(job).ok()?;
@@ -233,7 +261,14 @@ fn spawn_worker() -> Option<Sender<Job>> {
             batch();
             for job in rx {
                 let r = std::panic::catch_unwind(AssertUnwindSafe(|| {
-                    identify_window(&job.raw, &job.id, &job.p, &job.name, job.min_var)
+                    identify_window(
+                        &job.raw,
+                        &job.id,
+                        &job.p,
+                        &job.name,
+                        job.min_var,
+                        job.given.as_ref(),
+                    )
                 }));
                 let mut g = job
                     .slot

@@ -239,6 +239,8 @@ impl GrossErrorStage {
             gate.set_stagger(c);
             if gate.mode != Mode::Disabled {
                 match models.and_then(|m| m.channel(name)) {
+                    // A line in the model: its amplitude and phase come from the warm-up.
+                    Some(m) if m.line_per_sample.is_some() => gate.warm_up_for(&p, m.clone())?,
                     Some(m) => gate.activate(&p, m.clone())?,
                     None => gate.reserve_warmup(&p.warmup),
                 }

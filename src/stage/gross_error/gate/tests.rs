@@ -10,6 +10,7 @@ fn model(p: Vec<f64>, d: usize, q: Vec<f64>) -> ArimaChannelModel {
         ar: p,
         ma: q,
         sigma: 2.0,
+        line_per_sample: None,
         diagnostics: None,
     }
 }

@@ -154,6 +154,21 @@ impl ChannelGate {
         self.activate_seeded(p, model, None)
     }
 
+    /// Take a model file's `model` that declares a line (`line_per_sample`): the channel warms
+    /// up, then fits the line on its window and seeds the model on the window without it
+    /// ([`identify_window`](super::super::identify::identify_window)) instead of identifying.
+    pub fn warm_up_for(
+        &mut self,
+        p: &GateParams,
+        model: ArimaChannelModel,
+    ) -> Result<(), ArimaError> {
+        // Validated as `activate` would (the predictor's online limits).
+        ArimaPredictor::new(&model, p.level_alpha, p.trend_beta)?;
+        self.given = Some(model);
+        self.reserve_warmup(&p.warmup);
+        Ok(())
+    }
+
     /// Switch to `model`, with the predictor and scales from `seed` where there is one.
     fn activate_seeded(
         &mut self,
@@ -276,7 +291,9 @@ impl ChannelGate {
             let window = &self.warm[..closed_n];
             let mut r = match d.pending.wait() {
                 Ok(r) => r,
-                Err(Missing::Taken) => id.window(window, p, name, self.min_var),
+                Err(Missing::Taken) => {
+                    id.window(window, p, name, self.min_var, self.given.as_ref())
+                }
                 Err(Missing::Failed) => Identified::white(window, p, name, self.min_var),
             };
             if let Some(sd) = r.seed.as_mut() {
@@ -300,7 +317,7 @@ impl ChannelGate {
             // allocation here faulted its pages in on the sample path.
             let mut job = std::mem::take(&mut self.job_buf);
             job.extend_from_slice(&self.warm);
-            if let Some(pending) = id.start(job, p, name, self.min_var) {
+            if let Some(pending) = id.start(job, p, name, self.min_var, self.given.as_ref()) {
                 self.deferred = Some(Deferred {
                     pending,
                     closed_n: n,
@@ -310,7 +327,7 @@ impl ChannelGate {
                 return false;
             }
         }
-        let r = id.window(&self.warm, p, name, self.min_var);
+        let r = id.window(&self.warm, p, name, self.min_var, self.given.as_ref());
         self.finish(p, r, name);
         true
     }
