@@ -99,7 +99,7 @@ impl ChannelLine {
                 let f = l.omega / TAU;
                 tracing::info!(
                     channel,
-                    "gross_error: the warm-up held a vibration line ({f:.4} of the sample rate, amplitude {:.3e}); the channel's model was identified without it, and its tests judge the channel with it taken out while it stays a line",
+                    "gross_error: the warm-up held a vibration line ({f:.4} of the sample rate, amplitude {:.3e}); the channel's model is of the channel without it, and its tests judge the channel with it taken out while it stays a line",
                     l.amplitude()
                 );
                 let n = LineCanceller::new(f, 1.0, LINE_BANDWIDTH, l.amplitude(), l.b.atan2(l.a));
