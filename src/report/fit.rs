@@ -18,8 +18,7 @@ use crate::model::{ArFit, ModelError};
 use crate::sample::{CHANNEL_NAMES, N_CHANNELS, Sample};
 use crate::stage::bias::stillness::{StillnessDetector, StillnessSettings};
 use crate::stage::gross_error::GrossErrorStage;
-use crate::stage::gross_error::identify::{HAMPEL_HALF_WIDTH, HAMPEL_K, window_line};
-use crate::stats::robust::hampel;
+use crate::stage::gross_error::identify::{hampel_cleaned, window_line};
 
 /// How `fit` estimates the bias model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -205,14 +204,9 @@ pub fn fit(log: &super::Recording, out_dir: &Path, o: &FitOptions) -> Result<Fit
         // A vibration line the stage's tests should not see is taken out first, as the stage
         // does on its own warm-up window (`stage::gross_error::identify::window_line`).
         let mut x = series(c);
-        let cleaned = hampel(&x, HAMPEL_HALF_WIDTH, HAMPEL_K)
-            .map(|r| r.corrected)
-            .unwrap_or_else(|_| x.clone());
-        let line = window_line(&cleaned);
+        let line = window_line(&hampel_cleaned(&x));
         if let Some(l) = &line {
-            for (i, v) in x.iter_mut().enumerate() {
-                *v -= l.value(i as f64);
-            }
+            l.subtract_from(&mut x, 0);
         }
         let id = identify(&x, &IdentifySettings::default()).map_err(|e| {
             anyhow!(

@@ -194,6 +194,13 @@ impl Sinusoid {
         self.a.hypot(self.b)
     }
 
+    /// Subtract it from `x`, whose first value is at sample index `first`.
+    pub fn subtract_from(&self, x: &mut [f64], first: usize) {
+        for (k, v) in x.iter_mut().enumerate() {
+            *v -= self.value((first + k) as f64);
+        }
+    }
+
     /// The same sinusoid with its index origin moved `k` samples later: `shifted(k).value(i) ==
     /// value(i + k)`.
     pub fn shifted(&self, k: f64) -> Sinusoid {

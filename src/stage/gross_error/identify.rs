@@ -73,6 +73,14 @@ pub fn white_model(cleaned: &[f64], name: &str, min_var: f64) -> ArimaChannelMod
     }
 }
 
+/// `x` through the Hampel filter identification runs first ([`HAMPEL_HALF_WIDTH`],
+/// [`HAMPEL_K`]); `x` itself where the filter cannot run (too short).
+pub fn hampel_cleaned(x: &[f64]) -> Vec<f64> {
+    hampel(x, HAMPEL_HALF_WIDTH, HAMPEL_K)
+        .map(|r| r.corrected)
+        .unwrap_or_else(|_| x.to_vec())
+}
+
 /// The window's line test: its p-value bar ([`strongest_line`]'s, one test per channel).
 pub const LINE_ALPHA: f64 = 1e-3;
 /// A line is taken out of the window (and tracked by the channel, [`super::line`]) only when it
@@ -115,12 +123,7 @@ pub fn identify_window(
     min_var: f64,
     given: Option<&ArimaChannelModel>,
 ) -> Identified {
-    let clean = |x: &[f64]| {
-        hampel(x, HAMPEL_HALF_WIDTH, HAMPEL_K)
-            .map(|r| r.corrected)
-            .unwrap_or_else(|_| x.to_vec())
-    };
-    let mut cleaned = clean(raw);
+    let mut cleaned = hampel_cleaned(raw);
     let line = match given {
         Some(m) => m
             .line_per_sample
@@ -128,12 +131,9 @@ pub fn identify_window(
         None => window_line(&cleaned),
     };
     if let Some(l) = &line {
-        let without: Vec<f64> = raw
-            .iter()
-            .enumerate()
-            .map(|(i, v)| v - l.value(i as f64))
-            .collect();
-        cleaned = clean(&without);
+        let mut without = raw.to_vec();
+        l.subtract_from(&mut without, 0);
+        cleaned = hampel_cleaned(&without);
     }
     let mut fallbacks = 0;
     let mut model = match given {

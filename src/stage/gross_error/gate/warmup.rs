@@ -300,9 +300,7 @@ impl ChannelGate {
                 // The model was identified without the window's line: so are the samples since
                 // (the line continued over their indices).
                 if let Some(l) = &r.line {
-                    for (k, v) in self.tail.iter_mut().enumerate() {
-                        *v -= l.value((closed_n + k) as f64);
-                    }
+                    l.subtract_from(&mut self.tail, closed_n);
                 }
                 sd.extend(p, &self.tail);
             }
