@@ -79,6 +79,11 @@ impl LineCanceller {
         }
     }
 
+    /// The weights (A cos φ, A sin φ) of the tracked line `A sin(θ + φ)`.
+    pub fn weights(&self) -> (f64, f64) {
+        (self.w_s, self.w_c)
+    }
+
     /// Tracked amplitude (unit) and phase (rad) of the line.
     pub fn amplitude_phase(&self) -> (f64, f64) {
         (self.w_s.hypot(self.w_c), self.w_c.atan2(self.w_s))

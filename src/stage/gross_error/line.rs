@@ -141,11 +141,10 @@ impl ChannelLine {
         t.since += 1;
         if t.since >= LINE_CHECK_SAMPLES {
             t.since = 0;
-            let (amp, ph) = t.notch.amplitude_phase();
-            let now = (amp * ph.cos(), amp * ph.sin());
+            let now = t.notch.weights();
             if let Some(was) = t.seen {
-                let still =
-                    (now.0 - was.0).hypot(now.1 - was.1) <= 0.5 * amp.max(was.0.hypot(was.1));
+                let still = (now.0 - was.0).hypot(now.1 - was.1)
+                    <= 0.5 * now.0.hypot(now.1).max(was.0.hypot(was.1));
                 t.passes = if still { t.passes.saturating_add(1) } else { 0 };
                 t.live = if t.live { still } else { t.passes >= 2 };
             }
