@@ -119,6 +119,9 @@ struct Line {
     omega_rad_s: f64,
     phase_rad: f64,
     amp: [f64; N_CHANNELS],
+    start_s: f64,
+    /// π × the frequency's drift, rad/s².
+    half_sweep_rad_s2: f64,
 }
 
 /// Transport fault generator.
@@ -329,6 +332,8 @@ impl Simulator {
                     l.accel_amp_mg,
                     MG_TO_M_S2,
                 ),
+                start_s: l.start_s,
+                half_sweep_rad_s2: std::f64::consts::PI * l.drift_hz_per_s,
             })
             .collect();
         if !lines.is_empty() {
@@ -540,8 +545,13 @@ impl Simulator {
         if let (Some(tb), Some(tc)) = (&mut self.temp_bias, temp_true) {
             comps[Effect::Temperature as usize] = tb.step(tc);
         }
-        for l in &self.lines {
-            let s = (l.omega_rad_s * t_s + l.phase_rad).sin();
+        for l in self.lines.iter().filter(|l| t_s >= l.start_s) {
+            let tau = t_s - l.start_s;
+            let s = if l.half_sweep_rad_s2 == 0.0 {
+                (l.omega_rad_s * t_s + l.phase_rad).sin()
+            } else {
+                (l.omega_rad_s * t_s + l.half_sweep_rad_s2 * tau * tau + l.phase_rad).sin()
+            };
             for (v, amp) in comps[Effect::Vibration as usize].iter_mut().zip(&l.amp) {
                 *v += amp * s;
             }

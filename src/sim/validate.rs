@@ -147,7 +147,7 @@ impl Scenario {
             }
         }
 
-        self.check_errors(&mut ck, nyquist);
+        self.check_errors(&mut ck, nyquist, traj.as_ref().map(|t| t.duration_s()));
 
         if let Some(tp) = &self.transport {
             ck.probability("transport.drop_prob", tp.drop_prob);
@@ -170,7 +170,8 @@ impl Scenario {
         ck.issues
     }
 
-    fn check_errors(&self, ck: &mut Checker, nyquist: f64) {
+    /// `duration_s`: the record's length, where the motion is valid.
+    fn check_errors(&self, ck: &mut Checker, nyquist: f64, duration_s: Option<f64>) {
         let e = &self.errors;
         if let Some(w) = e.white_noise.as_ref().filter(|w| w.enabled) {
             ck.non_negative3("errors.white_noise.arw_deg_sqrt_h", &w.arw_deg_sqrt_h);
@@ -267,6 +268,17 @@ impl Scenario {
                 );
             }
             ck.finite(&format!("{p}.phase_deg"), l.phase_deg);
+            ck.non_negative(&format!("{p}.start_s"), l.start_s);
+            ck.finite(&format!("{p}.drift_hz_per_s"), l.drift_hz_per_s);
+            if let Some(end_s) = duration_s {
+                let f_end = l.freq_hz + l.drift_hz_per_s * (end_s - l.start_s).max(0.0);
+                if l.drift_hz_per_s != 0.0 && !(f_end > 0.0 && f_end < nyquist) {
+                    ck.push(
+                        format!("{p}.drift_hz_per_s"),
+                        format!("takes the line to {f_end} Hz by the end ({end_s} s): it must stay in (0, Nyquist = {nyquist} Hz)"),
+                    );
+                }
+            }
             ck.finite3(&format!("{p}.gyro_amp_deg_s"), &l.gyro_amp_deg_s);
             ck.finite3(&format!("{p}.accel_amp_mg"), &l.accel_amp_mg);
         }

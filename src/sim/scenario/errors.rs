@@ -179,7 +179,8 @@ pub struct TemperatureBias {
     pub accel_mg_per_c2: [f64; 3],
 }
 
-/// A sinusoidal error line A sin(2π f t + φ) (e.g. a nearby motor, a PWM supply ripple).
+/// A sinusoidal error line A sin(2π f t + φ) (e.g. a nearby motor, a PWM supply ripple), from
+/// `start_s` on, its frequency drifting by `drift_hz_per_s`.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct VibrationLine {
@@ -195,6 +196,13 @@ pub struct VibrationLine {
     /// Amplitude per accel axis, mg.
     #[serde(default)]
     pub accel_amp_mg: [f64; 3],
+    /// The line is there from this time on, s (0: from the start; a motor switched on later).
+    #[serde(default)]
+    pub start_s: f64,
+    /// Its frequency changes by this much per second from `start_s` on, Hz/s (0: constant; a
+    /// fan or an engine whose speed drifts): sin(2π (f τ + d τ²/2) + φ), τ = t − `start_s`.
+    #[serde(default)]
+    pub drift_hz_per_s: f64,
 }
 
 /// A bias step of the given size from `t_s` on.
