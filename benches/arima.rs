@@ -7,6 +7,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use imuprep::model::arima::{IdentifySettings, identify};
 use imuprep::rng::Rng;
+use imuprep::stage::gross_error::identify::{hampel_cleaned, window_line};
 use imuprep::stats::line::strongest_line;
 use std::hint::black_box;
 
@@ -66,6 +67,19 @@ fn bench(c: &mut Criterion) {
     });
     g.bench_function("line_search_line", |b| {
         b.iter(|| strongest_line(black_box(&with_line), 1e-3).unwrap())
+    });
+    g.finish();
+
+    // A channel's search for a line after the warm-up (`stage::gross_error::line`), on the
+    // stage's ring of 2048 samples without a line: its parts, the Hampel cleaning and the test.
+    let r = gyro_like(2048, 4);
+    let cleaned = hampel_cleaned(&r);
+    let mut g = c.benchmark_group("line_search_ring_2048");
+    g.bench_function("hampel_cleaned", |b| {
+        b.iter(|| hampel_cleaned(black_box(&r)))
+    });
+    g.bench_function("window_line", |b| {
+        b.iter(|| window_line(black_box(&cleaned)))
     });
     g.finish();
 }

@@ -23,8 +23,10 @@
 //! a sin ωi + b cos ωi are least squares at that frequency on the mean-removed series.
 
 use crate::stats::robust::upper_median;
-use rustfft::{FftPlanner, num_complex::Complex};
+use rustfft::{Fft, FftPlanner, num_complex::Complex};
+use std::cell::RefCell;
 use std::f64::consts::TAU;
+use std::sync::Arc;
 
 /// The upper median of `p[k]` over the bins `k` within `half_width` of `j` (from bin 1 to
 /// `last`), the `guard` bins either side of `j` left out: a spectrum's local floor at `j` before
@@ -213,33 +215,74 @@ impl Sinusoid {
     }
 }
 
+/// The Hann window of `n` samples and the forward FFT of that length, made once per thread
+/// for the last length asked (a stage's searches and warm-ups ask for one or two lengths).
+fn hann_and_fft(n: usize) -> (Arc<Vec<f64>>, Arc<dyn Fft<f64>>) {
+    type Cached = Option<(Arc<Vec<f64>>, Arc<dyn Fft<f64>>)>;
+    thread_local! {
+        static LAST: RefCell<Cached> = const { RefCell::new(None) };
+    }
+    LAST.with(|last| {
+        let mut last = last.borrow_mut();
+        if let Some((w, f)) = last.as_ref().filter(|(w, _)| w.len() == n) {
+            return (w.clone(), f.clone());
+        }
+        let w: Arc<Vec<f64>> = Arc::new(
+            (0..n)
+                .map(|i| 0.5 - 0.5 * (TAU * i as f64 / n as f64).cos())
+                .collect(),
+        );
+        let f = FftPlanner::<f64>::new().plan_fft_forward(n);
+        *last = Some((w.clone(), f.clone()));
+        (w, f)
+    })
+}
+
 /// The strongest line of `x` (finite values) if its test's p-value is below `alpha` and it is
 /// stationary over `x` (module docs); `None` otherwise, or for a series shorter than
 /// [`MIN_LEN`] or with a non-finite value.
 pub fn strongest_line(x: &[f64], alpha: f64) -> Option<Sinusoid> {
+    strongest_line_if(x, alpha, |_, _| true)
+}
+
+/// [`strongest_line`], or `None` at once, before any floor is estimated, when no local maximum
+/// of the periodogram `could` hold a line worth finding: `could(ω, A)` is asked with a bound
+/// `A` on the amplitude a line near that bin can have (twice what its Hann-window power puts
+/// there, after the window's worst scalloping, 0.85). The same line as [`strongest_line`]'s
+/// whenever one bin could; a caller that would refuse every line below some amplitude saves
+/// the floors of a window that has none.
+pub fn strongest_line_if(
+    x: &[f64],
+    alpha: f64,
+    could: impl Fn(f64, f64) -> bool,
+) -> Option<Sinusoid> {
     let n = x.len();
     if n < MIN_LEN || x.iter().any(|v| !v.is_finite()) {
         return None;
     }
     let mean = x.iter().sum::<f64>() / n as f64;
+    let (window, fft) = hann_and_fft(n);
     let mut buf: Vec<Complex<f64>> = x
         .iter()
-        .enumerate()
-        .map(|(i, v)| {
-            let w = 0.5 - 0.5 * (TAU * i as f64 / n as f64).cos();
-            Complex::new((v - mean) * w, 0.0)
-        })
+        .zip(window.iter())
+        .map(|(v, w)| Complex::new((v - mean) * w, 0.0))
         .collect();
-    FftPlanner::<f64>::new()
-        .plan_fft_forward(n)
-        .process(&mut buf);
+    fft.process(&mut buf);
     let half = n / 2;
     let p: Vec<f64> = buf[..=half].iter().map(|z| z.norm_sqr()).collect();
     let hi = half - 2;
+    let peak = |j: usize| p[j] >= p[j - 1] && p[j] > p[j + 1];
+    // |X| = A N / 4 at a bin's centre (the Hann window's coherent gain 1/2), ≥ 0.85 of that
+    // between bins.
+    let bound = |j: usize| 2.0 * 4.0 * p[j].sqrt() / (0.85 * n as f64);
+    let bin = TAU / n as f64;
+    if !(LOWEST_BIN..hi).any(|j| peak(j) && could(bin * j as f64, bound(j))) {
+        return None;
+    }
     let mut scratch = Vec::with_capacity(2 * FLOOR_HALF_WIDTH + 1);
     let mut best: Option<(usize, f64)> = None;
     for j in LOWEST_BIN..hi {
-        if !(p[j] >= p[j - 1] && p[j] > p[j + 1]) {
+        if !peak(j) {
             continue;
         }
         let floor = neighbour_median(&p, j, FLOOR_HALF_WIDTH, GUARD, half, &mut scratch)
@@ -264,7 +307,6 @@ pub fn strongest_line(x: &[f64], alpha: f64) -> Option<Sinusoid> {
         return None;
     }
     // ±1 bin at ⅛ bin.
-    let bin = TAU / n as f64;
     let power = |w: f64| {
         let (re, im) = dft_at(x, mean, w, 0);
         re * re + im * im

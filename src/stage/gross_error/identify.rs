@@ -18,7 +18,7 @@ use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use super::gate::{GateParams, Seed};
 use crate::model::arima::{ArimaChannelModel, IdentifySettings, identify};
 use crate::stats::grid::grid_step;
-use crate::stats::line::{Sinusoid, fit_sinusoid, strongest_line};
+use crate::stats::line::{Sinusoid, fit_sinusoid, strongest_line_if};
 use crate::stats::robust::{hampel, upper_median_and_mad_sigma};
 
 /// Half-width and bar of the Hampel filter run over the warm-up before identification: it
@@ -81,7 +81,7 @@ pub fn hampel_cleaned(x: &[f64]) -> Vec<f64> {
         .unwrap_or_else(|_| x.to_vec())
 }
 
-/// The window's line test: its p-value bar ([`strongest_line`]'s, one test per channel).
+/// The window's line test: its p-value bar ([`strongest_line`](crate::stats::line::strongest_line)'s, one test per channel).
 pub const LINE_ALPHA: f64 = 1e-3;
 /// A line is taken out of the window (and tracked by the channel, [`super::line`]) only when it
 /// is at least this share of the window's second-difference variance: the model-free tests
@@ -91,20 +91,28 @@ pub const LINE_ALPHA: f64 = 1e-3;
 pub const LINE_ROUGHNESS_SHARE: f64 = 0.1;
 
 /// The line of `cleaned` (a Hampel-cleaned window) that the stage's tests should not see: a
-/// stationary sinusoid found by [`strongest_line`] that is at least [`LINE_ROUGHNESS_SHARE`] of
+/// stationary sinusoid found by [`strongest_line`](crate::stats::line::strongest_line) that is at least [`LINE_ROUGHNESS_SHARE`] of
 /// the window's second-difference variance.
 pub fn window_line(cleaned: &[f64]) -> Option<Sinusoid> {
-    let l = strongest_line(cleaned, LINE_ALPHA)?;
     // Var Δ²(A sin ωi) = A²/2 · (4 sin²(ω/2))².
-    let g = 4.0 * (0.5 * l.omega).sin().powi(2);
-    let line_var = 0.5 * l.amplitude().powi(2) * g * g;
+    let line_var = |omega: f64, amplitude: f64| {
+        let g = 4.0 * (0.5 * omega).sin().powi(2);
+        0.5 * amplitude * amplitude * g * g
+    };
     let d2: Vec<f64> = cleaned
         .windows(3)
         .map(|w| w[2] - 2.0 * w[1] + w[0])
         .collect();
-    let m = d2.iter().sum::<f64>() / d2.len() as f64;
-    let var = d2.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / d2.len() as f64;
-    (line_var >= LINE_ROUGHNESS_SHARE * var).then_some(l)
+    let m = d2.iter().sum::<f64>() / d2.len().max(1) as f64;
+    let var = d2.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / d2.len().max(1) as f64;
+    let bar = LINE_ROUGHNESS_SHARE * var;
+    // A bin whose line could not reach the bar, even a bin higher up (g grows with ω), is not
+    // worth a floor.
+    let bin = std::f64::consts::TAU / cleaned.len().max(1) as f64;
+    let l = strongest_line_if(cleaned, LINE_ALPHA, |omega, a| {
+        line_var((omega + bin).min(std::f64::consts::PI), a) >= bar
+    })?;
+    (line_var(l.omega, l.amplitude()) >= bar).then_some(l)
 }
 
 /// Identify channel `name`'s model from its raw warm-up window and seed it (a failed
