@@ -84,6 +84,20 @@ impl LineCanceller {
         (self.w_s, self.w_c)
     }
 
+    /// The frequency, cycles per unit of the sample rate given.
+    pub fn freq_hz(&self) -> f64 {
+        self.freq_hz
+    }
+
+    /// Move the reference to `freq_hz`, its phase continuing from where it is: the weights then
+    /// stop turning at the old frequency's offset (a line whose frequency drifts is followed).
+    pub fn retune(&mut self, freq_hz: f64, sample_rate_hz: f64) {
+        let step = TAU * freq_hz / sample_rate_hz;
+        self.freq_hz = freq_hz;
+        self.rot_cos = step.cos();
+        self.rot_sin = step.sin();
+    }
+
     /// Tracked amplitude (unit) and phase (rad) of the line.
     pub fn amplitude_phase(&self) -> (f64, f64) {
         (self.w_s.hypot(self.w_c), self.w_c.atan2(self.w_s))

@@ -150,6 +150,8 @@ crate::stage::health::counters! {
         warmup,
         /// Identifications that fell back to the white-noise model.
         fallback_models,
+        /// Vibration lines found after the warm-up and taken out (`line.rs`).
+        lines_found,
     }
 }
 

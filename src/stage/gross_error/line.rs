@@ -12,20 +12,32 @@
 //!   of the window's second-difference variance). The model was identified on the window
 //!   without it, and the notch starts from the window's fit; or
 //! * its model holds one ([`ArimaChannelModel::line`]: an AR part on the stationarity boundary
-//!   with a complex root pair there; a model from a file, say). The notch starts at zero.
+//!   with a complex root pair there; a model from a file, say). The notch starts at zero; or
+//! * later, a search of the channel's last [`RING`] values finds one, as the warm-up's window
+//!   is searched ([`ChannelLine::start_search`]): every [`LINE_SEARCH_SAMPLES`] while no line
+//!   is taken out, on the stage's line-search thread (`search.rs`), the result taken up [`LINE_CHECK_SAMPLES`]
+//!   after the search started. A motor switched on after the warm-up, a line that drifted out
+//!   of its notch. The notch starts from a fit on the window's last [`SEARCH_TAIL`] samples.
 //!
 //! Every test (the ARIMA gate, the jump test, the confirmation, the several-axes test's
 //! partners) then judges the value less the line predicted for it; a replacement gets the line
 //! back, and a value passed keeps its own. The stale-repeat detector still compares the raw
-//! values. A line that moves away — an engine's firing order at idle when the revs rise (the
-//! rtklibexplorer drive: 30.7 Hz at idle for its first 40 s, then spread over 25–31 Hz) — is
-//! no longer taken out ([`ChannelLine::predict`]), so that a slice of the motion the notch would
-//! then track does not sharpen the tests against real motion. Without a line nothing changes.
+//! values. A line that drifts slowly (a fan's speed) is followed: at each look the turn of the
+//! notch's weights is its frequency error, and the notch is moved by it ([`LINE_MAX_TURN`],
+//! [`LINE_FOLLOW_SHARE`]). A line that moves away — an engine's firing order at idle when the
+//! revs rise (the rtklibexplorer drive: 30.7 Hz at idle for its first 40 s, then spread over
+//! 25–31 Hz) — is no longer taken out ([`ChannelLine::predict`]), so that a slice of the motion
+//! the notch would then track does not sharpen the tests against real motion; the searches find
+//! it again where it settles. Without a line nothing changes but the searches (a window copied
+//! every [`LINE_SEARCH_SAMPLES`]; the worker's test, 73 µs, stops at the periodogram when no
+//! peak could hold a line that matters).
 
 use super::RING;
+use super::identify::window_line;
+use super::search::Searcher;
 use crate::model::arima::ArimaChannelModel;
 use crate::stage::bias::line_canceller::LineCanceller;
-use crate::stats::line::Sinusoid;
+use crate::stats::line::{Sinusoid, fit_sinusoid, pair_ls, peak_on_grid};
 use std::f64::consts::TAU;
 
 /// Bandwidth of a line's notch, cycles per sample: μ = π × this = 0.005, so the tracked line
@@ -37,10 +49,28 @@ pub const LINE_BANDWIDTH: f64 = 0.0016;
 /// which is all a notch tracks once its line has gone, has forgotten the previous look.
 pub const LINE_CHECK_SAMPLES: u32 = 256;
 
+/// Samples between two searches for a line on a channel that has none taken out (none found
+/// in its warm-up, or one that moved away): the stage's ring, so that each search reads samples
+/// the previous one did not. A motor switched on after the warm-up, or an engine back at idle at
+/// other revs, is then taken out too.
+pub const LINE_SEARCH_SAMPLES: u64 = RING as u64;
+
+/// Most a live line's notch weights may turn between two looks, rad: a quarter turn, a
+/// frequency error of 1/(4 × [`LINE_CHECK_SAMPLES`]) cycles per sample (0.1 Hz at 100 Hz).
+/// Within it the turn is the line's frequency error, and the notch is moved by it.
+pub const LINE_MAX_TURN: f64 = std::f64::consts::FRAC_PI_2;
+
+/// Most a live line is followed from the frequency it was found at, as a share of it (a fan's
+/// or an idling engine's slow drift); beyond it the line is no longer taken out, and the
+/// channel's searches ([`LINE_SEARCH_SAMPLES`]) find it where it went.
+pub const LINE_FOLLOW_SHARE: f64 = 0.05;
+
 /// The tracker of one channel's line.
 #[derive(Debug, Clone)]
 struct Tracker {
     notch: LineCanceller,
+    /// The frequency the line was found at, cycles per sample.
+    found_at: f64,
     /// The estimate taken out of the raw value at each index % RING (0 while not a line).
     taken: [f64; RING],
     /// The line is taken out (it was still a line at the last look).
@@ -48,9 +78,98 @@ struct Tracker {
     /// Successive looks at which it was a line (two bring a lost line back).
     passes: u8,
     /// The notch's weights (a, b) at the last look (`None` before the first, for a notch that
-    /// starts at zero), and predictions since.
+    /// starts at zero), its index, and predictions since.
     seen: Option<(f64, f64)>,
+    seen_at: u64,
     since: u32,
+}
+
+impl Tracker {
+    fn new(notch: LineCanceller, seen: Option<(f64, f64)>, idx: u64) -> Self {
+        Tracker {
+            found_at: notch.freq_hz(),
+            notch,
+            taken: [0.0; RING],
+            live: true,
+            passes: 0,
+            seen,
+            seen_at: idx,
+            since: 0,
+        }
+    }
+
+    /// A new line, found at index `idx`, replaces the tracked one (what was taken out while the
+    /// last one was live stays, for its replacements).
+    fn restart(&mut self, notch: LineCanceller, seen: Option<(f64, f64)>, idx: u64) {
+        let taken = std::mem::replace(&mut self.taken, [0.0; RING]);
+        *self = Tracker {
+            taken,
+            ..Tracker::new(notch, seen, idx)
+        };
+    }
+
+    /// The look at index `idx` (module docs of [`ChannelLine::predict`]).
+    fn look(&mut self, idx: u64) {
+        let now = self.notch.weights();
+        if let Some(was) = self.seen {
+            let (a_now, a_was) = (now.0.hypot(now.1), was.0.hypot(was.1));
+            if self.live {
+                let turn = (now.1.atan2(now.0) - was.1.atan2(was.0) + std::f64::consts::PI)
+                    .rem_euclid(TAU)
+                    - std::f64::consts::PI;
+                let f = self.notch.freq_hz()
+                    + turn / (TAU * idx.saturating_sub(self.seen_at).max(1) as f64);
+                self.live = (a_now - a_was).abs() <= 0.5 * a_now.max(a_was)
+                    && turn.abs() <= LINE_MAX_TURN
+                    && (f - self.found_at).abs() <= LINE_FOLLOW_SHARE * self.found_at;
+                if self.live {
+                    self.notch.retune(f, 1.0);
+                }
+                self.passes = 0;
+            } else {
+                let still = (now.0 - was.0).hypot(now.1 - was.1) <= 0.5 * a_now.max(a_was);
+                self.passes = if still {
+                    self.passes.saturating_add(1)
+                } else {
+                    0
+                };
+                self.live = self.passes >= 2;
+            }
+        }
+        self.seen = Some(now);
+        self.seen_at = idx;
+    }
+}
+
+/// Samples at the end of a searched window on which the line found is measured again.
+const SEARCH_TAIL: usize = 2 * LINE_CHECK_SAMPLES as usize;
+
+/// The line a window holds that the tests should not see ([`window_line`] on the cleaned
+/// window), as it is at the window's end: its frequency (within one bin of the tail's
+/// resolution around the window's), amplitude and phase fitted again on the last
+/// [`SEARCH_TAIL`] samples, since a line that drifts (the reason it is searched for again) is
+/// not where the whole window's mean puts it by the time it is taken up. None in a window with
+/// a bad value not yet replaced (the next search).
+pub(super) fn search_window(window: &[f64]) -> Option<Sinusoid> {
+    if window.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let cleaned = window;
+    let l = window_line(cleaned)?;
+    let t0 = cleaned.len().checked_sub(SEARCH_TAIL)?;
+    let tail = &cleaned[t0..];
+    let mean = tail.iter().sum::<f64>() / tail.len() as f64;
+    let bin = TAU / SEARCH_TAIL as f64;
+    let omega = peak_on_grid(
+        |w| {
+            let (a, b) = pair_ls(tail, mean, w, t0);
+            a * a + b * b
+        },
+        l.omega,
+        bin / 8.0,
+        17,
+    );
+    Some(fit_sinusoid(tail, omega, t0))
 }
 
 /// One channel's line: none until its model is active and its warm-up or model holds one.
@@ -61,6 +180,13 @@ pub(super) struct ChannelLine {
     tracker: Option<Box<Tracker>>,
     /// The model was looked at (once, when the channel became active).
     checked: bool,
+    /// Index of the next search for a line ([`LINE_SEARCH_SAMPLES`]).
+    next_search: u64,
+    /// The last window searched (its capacity reserved when the stage is built).
+    window: Vec<f64>,
+    /// The search under way: its window's first index, and the index at which its result is
+    /// taken up ([`LINE_CHECK_SAMPLES`] after it started).
+    pending: Option<(u64, u64)>,
 }
 
 impl ChannelLine {
@@ -68,7 +194,81 @@ impl ChannelLine {
         ChannelLine {
             tracker: None,
             checked: false,
+            next_search: u64::MAX,
+            window: Vec::with_capacity(RING),
+            pending: None,
         }
+    }
+
+    /// Whether a search for a line is due at index `idx`: the model was looked at, no line is
+    /// taken out, and [`LINE_SEARCH_SAMPLES`] have passed since the last search.
+    #[inline]
+    pub(super) fn search_due(&self, idx: u64) -> bool {
+        idx >= self.next_search && !self.tracker.as_deref().is_some_and(|t| t.live)
+    }
+
+    /// Start a search of the channel's last [`RING`] values (`ring`, by index % RING, the
+    /// current sample's index `idx` not yet in it; what a live line took out put back) for a
+    /// line the tests should not see, as the warm-up's window is searched ([`window_line`]):
+    /// on the `searcher`'s thread, or at its take-up without one. Its result is taken up
+    /// [`LINE_CHECK_SAMPLES`] later ([`ChannelLine::take_up`]). No allocation.
+    pub(super) fn start_search(
+        &mut self,
+        ring: &[f64; RING],
+        idx: u64,
+        c: usize,
+        searcher: &Searcher,
+    ) {
+        self.next_search = idx + LINE_SEARCH_SAMPLES;
+        let first = idx - RING as u64;
+        self.window.clear();
+        for i in first..idx {
+            let v = ring[(i % RING as u64) as usize];
+            self.window.push(self.put_back(i, v));
+        }
+        searcher.ask(c, &self.window, first);
+        self.pending = Some((first, idx + u64::from(LINE_CHECK_SAMPLES)));
+    }
+
+    /// At index `idx`: the result of channel `c`'s search under way, if it is due (waiting for
+    /// the `searcher`'s thread if it has not finished); a line found is tracked and taken out
+    /// from this sample on, its notch starting from the window's fit (then `true`).
+    #[inline]
+    pub(super) fn take_up(
+        &mut self,
+        idx: u64,
+        c: usize,
+        searcher: &Searcher,
+        channel: &str,
+    ) -> bool {
+        let Some((first, at)) = self.pending else {
+            return false;
+        };
+        if idx < at {
+            return false;
+        }
+        self.pending = None;
+        let found = searcher
+            .answer(c, first)
+            .unwrap_or_else(|| searcher.search_here(&self.window));
+        let Some(l) = found else {
+            return false;
+        };
+        let window = &self.window;
+        let l = l.shifted(-(first as f64));
+        let f = l.omega / TAU;
+        tracing::info!(
+            channel,
+            "gross_error: a vibration line at {f:.4} of the sample rate (amplitude {:.3e}) in samples {first}..{}; the channel's tests judge it with the line taken out from sample {idx} while it stays a line",
+            l.amplitude(),
+            first + window.len() as u64
+        );
+        let notch = LineCanceller::new(f, 1.0, LINE_BANDWIDTH, l.amplitude(), l.b.atan2(l.a));
+        match self.tracker.as_deref_mut() {
+            Some(t) => t.restart(notch, Some((l.a, l.b)), idx),
+            None => self.tracker = Some(Box::new(Tracker::new(notch, Some((l.a, l.b)), idx))),
+        }
+        true
     }
 
     /// Whether the model was looked at already.
@@ -80,17 +280,21 @@ impl ChannelLine {
     /// Look for a line once (call when the channel is active, at its first active sample,
     /// index `idx`): the line its warm-up window held (`window`, indexed from this sample: the
     /// notch starts on it), else one its `model` holds (the notch starts at zero).
+    /// The first search for a line comes [`LINE_SEARCH_SAMPLES`] + `stagger` samples later
+    /// (channels staggered, so that no two search at one sample).
     pub(super) fn adopt(
         &mut self,
         window: Option<Sinusoid>,
         model: Option<&ArimaChannelModel>,
         idx: u64,
+        stagger: u64,
         channel: &str,
     ) {
         if self.checked {
             return;
         }
         self.checked = true;
+        self.next_search = idx + LINE_SEARCH_SAMPLES + stagger;
         // Per-sample units: frequency ω/2π cycles per sample, "time" the sample index.
         let (notch, seen) = match (window, model.and_then(|m| m.line())) {
             (Some(l), _) => {
@@ -115,23 +319,19 @@ impl ChannelLine {
             }
             (None, None) => return,
         };
-        self.tracker = Some(Box::new(Tracker {
-            notch,
-            taken: [0.0; RING],
-            live: true,
-            passes: 0,
-            seen,
-            since: 0,
-        }));
+        self.tracker = Some(Box::new(Tracker::new(notch, seen, idx)));
     }
 
     /// The line predicted for the sample at index `idx`, `steps` samples after the previous one
     /// (0 without a line, or while it is not a line), kept for its replacement. Every
     /// [`LINE_CHECK_SAMPLES`] the notch's weights are compared with the last look's: a line
-    /// keeps its amplitude and phase, so they differ by at most half their size (the window's
-    /// own test, `stats::line`); a line that moved away (an engine's order when the revs
-    /// change) leaves the notch tracking a slice of whatever is there, whose weights wander.
-    /// Then the line is no longer taken out, until two looks in a row find it again.
+    /// keeps its amplitude, so it differs by at most half (the window's own test,
+    /// `stats::line`), and a line a little off the notch's frequency turns the weights at that
+    /// offset — up to [`LINE_MAX_TURN`] the notch is moved by it, within
+    /// [`LINE_FOLLOW_SHARE`] of where the line was found. A line that moved away (an engine's
+    /// order when the revs change) leaves the notch tracking a slice of whatever is there,
+    /// whose weights wander. Then the line is no longer taken out, until two looks in a row
+    /// find the weights where they were (a half of their size apart), or a search finds it.
     #[inline]
     pub(super) fn predict(&mut self, idx: u64, steps: u32) -> f64 {
         let Some(t) = self.tracker.as_deref_mut() else {
@@ -141,14 +341,7 @@ impl ChannelLine {
         t.since += 1;
         if t.since >= LINE_CHECK_SAMPLES {
             t.since = 0;
-            let now = t.notch.weights();
-            if let Some(was) = t.seen {
-                let still = (now.0 - was.0).hypot(now.1 - was.1)
-                    <= 0.5 * now.0.hypot(now.1).max(was.0.hypot(was.1));
-                t.passes = if still { t.passes.saturating_add(1) } else { 0 };
-                t.live = if t.live { still } else { t.passes >= 2 };
-            }
-            t.seen = Some(now);
+            t.look(idx);
         }
         let est = if t.live { est } else { 0.0 };
         t.taken[(idx % RING as u64) as usize] = est;
@@ -201,7 +394,7 @@ mod tests {
             b: 2.0 * (omega * 1000.0 + 0.3).sin(),
         };
         let mut l = ChannelLine::new();
-        l.adopt(Some(fitted), None, 1000, "gx");
+        l.adopt(Some(fitted), None, 1000, 0, "gx");
         let mut rng = Rng::new(5);
         // Seeded from the fit: right from the first sample the estimate is the line (its
         // value at 1000 is 2 sin(ω·1000 + 0.3)).
@@ -231,9 +424,52 @@ mod tests {
     }
 
     #[test]
+    fn a_drifting_line_is_followed_within_its_share() {
+        // Found at 0.22 cycles per sample; then its frequency rises by 1e-7 cycles per sample
+        // per sample (0.001 Hz/s at 100 Hz: 4.5 % of 0.22 over 1e5 samples, inside the 5 %).
+        let f0 = 0.22;
+        let fitted = Sinusoid {
+            omega: TAU * f0,
+            a: 2.0,
+            b: 0.0,
+        };
+        let mut l = ChannelLine::new();
+        l.adopt(Some(fitted), None, 0, 0, "gx");
+        let mut rng = Rng::new(7);
+        let drift = 1e-7;
+        let mut phase = 0.0f64;
+        let mut live = 0;
+        let n = 100_000u64;
+        for i in 0..n {
+            let est = l.predict(i, 1);
+            let f = f0 + drift * i as f64;
+            let line = 2.0 * phase.sin();
+            phase += TAU * f;
+            l.learn(line + 0.5 * rng.normal());
+            // Taken out, and close to the line (the notch's residual on a drifting line).
+            if i > 1000 && est != 0.0 && (est - line).abs() < 0.5 {
+                live += 1;
+            }
+        }
+        // Without the retuning the weights turn by 2π · 1e-7 · i · 256 per look: past a
+        // quarter turn after ~10 000 samples, and the line is dropped for good.
+        assert!(
+            live > 95_000,
+            "{live} of {n} samples taken out close to the line"
+        );
+        let t = l.tracker.as_deref().unwrap();
+        let f_end = f0 + drift * n as f64;
+        assert!(
+            (t.notch.freq_hz() - f_end).abs() < 1e-4,
+            "{} vs {f_end}",
+            t.notch.freq_hz()
+        );
+    }
+
+    #[test]
     fn without_a_line_nothing_is_allocated_or_taken_out() {
         let mut l = ChannelLine::new();
-        l.adopt(None, None, 0, "gx");
+        l.adopt(None, None, 0, 0, "gx");
         assert!(l.checked() && l.tracker.is_none());
         assert_eq!(l.predict(5, 1), 0.0);
         assert_eq!(l.put_back(5, 1.5), 1.5);

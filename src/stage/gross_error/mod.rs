@@ -57,9 +57,11 @@ pub mod identify;
 mod line;
 use line::ChannelLine;
 mod repeat;
+mod search;
 use repeat::RepeatDetector;
 pub mod settings;
 mod verdict;
+pub use verdict::EventVerdict;
 
 use std::collections::VecDeque;
 
@@ -138,37 +140,6 @@ struct Channel {
     line: ChannelLine,
 }
 
-/// One event's verdict, as recorded by [`GrossErrorStage::record_verdicts`]: what the
-/// confirmation saw and decided, for explaining a miss or a false replacement offline.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct EventVerdict {
-    /// Channel index (`CHANNEL_NAMES`).
-    pub channel: usize,
-    /// Index of the event's first sample among the stage's measurements (stale repeats share
-    /// their original's index; see `flags::REPEATED`).
-    pub start: u64,
-    /// The event's samples.
-    pub len: usize,
-    /// The judged part, `lead..keep` (`confirm::trim`); the rest was handed back to the signal.
-    pub lead: usize,
-    pub keep: usize,
-    /// The two-sided evidence on the judged part (`None`: not judged — too long, too little
-    /// context after it, or no roughness to measure).
-    pub evidence: Option<confirm::Evidence>,
-    /// The several-axes test called it a shock.
-    pub shock: bool,
-    /// The gate called it motion and the break covers under a third of it.
-    pub motion_break: bool,
-    /// The level test's distance of the judged part from the recent level, in robust σ of the
-    /// level (`None`: not applied — a judged part of `confirm::SMOOTH_MIN` samples or more, not
-    /// judged, the test off, or too little history).
-    pub level: Option<f64>,
-    /// The level test vetoed it (`level` < `level_k`).
-    pub level_veto: bool,
-    /// Confirmed gross (the judged part replaced).
-    pub gross: bool,
-}
-
 /// One sample held while an event that touches it is judged.
 #[derive(Debug, Clone, Copy)]
 struct Held {
@@ -213,6 +184,7 @@ pub struct GrossErrorStage {
     level_buf: Box<[f64; RING]>,
     /// Identification of the channels that warm up.
     identifier: identify::Identifier,
+    searcher: search::Searcher,
 }
 
 impl GrossErrorStage {
@@ -256,10 +228,12 @@ impl GrossErrorStage {
                 line: ChannelLine::new(),
             });
         }
-        // A worker identifies the models of channels that warm up, unless told to do it inline.
+        // A worker identifies the models of channels that warm up, and another searches the
+        // channels for lines (`line.rs`), unless told to do it inline.
         let warms = ch.iter().any(|c: &Channel| c.gate.mode == Mode::WarmingUp);
         let identifier =
             identify::Identifier::new(settings.identify, warms && p.warmup.defer_max > 0);
+        let searcher = search::Searcher::new(p.warmup.defer_max > 0, line::search_window);
         Ok(GrossErrorStage {
             held: VecDeque::with_capacity(4 * settings.lookahead_samples + 8),
             s: settings,
@@ -282,6 +256,7 @@ impl GrossErrorStage {
             last_t: None,
             level_buf: Box::new([0.0; RING]),
             identifier,
+            searcher,
         })
     }
 
@@ -540,8 +515,20 @@ impl GrossErrorStage {
     fn line_step(&mut self, c: usize, idx: u64, steps: u32) -> f64 {
         let ch = &mut self.ch[c];
         if !ch.line.checked() && ch.gate.mode == Mode::Active {
-            ch.line
-                .adopt(ch.gate.line, ch.gate.model.as_ref(), idx, CHANNEL_NAMES[c]);
+            let stagger = c as u64 * line::LINE_SEARCH_SAMPLES / N_CHANNELS as u64;
+            ch.line.adopt(
+                ch.gate.line,
+                ch.gate.model.as_ref(),
+                idx,
+                stagger,
+                CHANNEL_NAMES[c],
+            );
+        }
+        if ch.line.take_up(idx, c, &self.searcher, CHANNEL_NAMES[c]) {
+            ch.gate.counters.lines_found += 1;
+        }
+        if ch.line.search_due(idx) && idx >= RING as u64 {
+            ch.line.start_search(&ch.ring, idx, c, &self.searcher);
         }
         ch.line.predict(idx, steps)
     }

@@ -85,7 +85,8 @@ pub struct GrossErrorSettings {
     /// later (one take-over per call). It activates at that sample whatever the worker's speed
     /// (a slower worker is waited for), so the output does not depend on the machine. 0 = identify on the sample that closes the window (one call
     /// then takes the whole identification: about 80 ms for six channels, `cargo bench --bench
-    /// latency`).
+    /// latency`). With 0 the searches for a vibration line (`line.rs`) run inline too, instead
+    /// of on the stage's line-search thread.
     pub identify_defer_s: f64,
     /// Floor of the tracked gyro scales (rad/s; default 1e-4).
     pub min_sigma_gyro_rad_s: f64,

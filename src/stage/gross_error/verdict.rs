@@ -11,6 +11,37 @@ use super::{MAX_CONTEXT, MAX_POST};
 use crate::sample::flags;
 use crate::stats::robust::{median, sigma_from_abs_dev, upper_median};
 
+/// One event's verdict, as recorded by [`GrossErrorStage::record_verdicts`]: what the
+/// confirmation saw and decided, for explaining a miss or a false replacement offline.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EventVerdict {
+    /// Channel index (`CHANNEL_NAMES`).
+    pub channel: usize,
+    /// Index of the event's first sample among the stage's measurements (stale repeats share
+    /// their original's index; see `flags::REPEATED`).
+    pub start: u64,
+    /// The event's samples.
+    pub len: usize,
+    /// The judged part, `lead..keep` (`confirm::trim`); the rest was handed back to the signal.
+    pub lead: usize,
+    pub keep: usize,
+    /// The two-sided evidence on the judged part (`None`: not judged — too long, too little
+    /// context after it, or no roughness to measure).
+    pub evidence: Option<confirm::Evidence>,
+    /// The several-axes test called it a shock.
+    pub shock: bool,
+    /// The gate called it motion and the break covers under a third of it.
+    pub motion_break: bool,
+    /// The level test's distance of the judged part from the recent level, in robust σ of the
+    /// level (`None`: not applied — a judged part of `confirm::SMOOTH_MIN` samples or more, not
+    /// judged, the test off, or too little history).
+    pub level: Option<f64>,
+    /// The level test vetoed it (`level` < `level_k`).
+    pub level_veto: bool,
+    /// Confirmed gross (the judged part replaced).
+    pub gross: bool,
+}
+
 /// A partner channel of the several-axes test is sharp beyond this many times its roughness.
 const SHOCK_K: f64 = 4.0;
 /// Time constant of a channel's rate of confirmed gross errors (samples).
@@ -143,7 +174,7 @@ impl GrossErrorStage {
             && !level_veto
             && evidence.is_some_and(|e| e.gross(keep - lead, &self.s.thresholds()));
         if let Some(log) = self.verdicts.as_mut() {
-            log.push(super::EventVerdict {
+            log.push(EventVerdict {
                 channel: c,
                 start: ev.start,
                 len: m,
