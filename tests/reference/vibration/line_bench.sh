@@ -13,29 +13,14 @@ set -euo pipefail
 BIN=${1:-target/release/imuprep}
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
-for R in 0 1 2 4 10; do
-  S="$W/line_$R.toml"
+# bench R [KEY]: the bench with a line of R x the white sigma (none for 0), KEY one more key of
+# the line; prints the stage's and the classical detectors' rows.
+bench() {
+  local R=$1 KEY=${2:-}
+  local S="$W/line.toml"
   cp replay/static_bench.toml "$S"
   if [ "$R" != 0 ]; then
-    G=$(python3 -c "print(0.05 * $R)")
-    A=$(python3 -c "print(round(2.83 * $R, 2))")
-    cat >> "$S" <<TOML
-
-[[errors.vibration_lines]]
-freq_hz = 22.0
-phase_deg = 10.0
-gyro_amp_deg_s = [$G, $G, $G]
-accel_amp_mg = [$A, $A, $A]
-TOML
-  fi
-  echo "== line amplitude ${R} x the white sigma"
-  "$BIN" compare --detectors --scenario "$S" --set errors.gross.rate_per_sample=2e-3 2>/dev/null |
-    sed -n '/^detector/p;/online ARIMA gate/p;/global 3-sigma/p;/Hampel/p'
-done
-for R in 4 10; do
-  for KEY in "start_s = 300.0" "drift_hz_per_s = 0.005"; do
-    S="$W/line_${R}_later.toml"
-    cp replay/static_bench.toml "$S"
+    local G A
     G=$(python3 -c "print(0.05 * $R)")
     A=$(python3 -c "print(round(2.83 * $R, 2))")
     cat >> "$S" <<TOML
@@ -47,8 +32,15 @@ gyro_amp_deg_s = [$G, $G, $G]
 accel_amp_mg = [$A, $A, $A]
 $KEY
 TOML
-    echo "== line amplitude ${R} x the white sigma, ${KEY}"
-    "$BIN" compare --detectors --scenario "$S" --set errors.gross.rate_per_sample=2e-3 2>/dev/null |
-      sed -n '/^detector/p;/online ARIMA gate/p;/global 3-sigma/p;/Hampel/p'
-  done
+  fi
+  echo "== line amplitude ${R} x the white sigma${KEY:+, $KEY}"
+  "$BIN" compare --detectors --scenario "$S" --set errors.gross.rate_per_sample=2e-3 2>/dev/null |
+    sed -n '/^detector/p;/online ARIMA gate/p;/global 3-sigma/p;/Hampel/p'
+}
+for R in 0 1 2 4 10; do
+  bench "$R"
+done
+for R in 4 10; do
+  bench "$R" "start_s = 300.0"
+  bench "$R" "drift_hz_per_s = 0.005"
 done
