@@ -168,9 +168,13 @@ fn spawn(search: fn(&[f64]) -> Option<Sinusoid>) -> Option<Handle> {
                 drop(g);
                 let r = std::panic::catch_unwind(|| search(&buf)).unwrap_or(None);
                 g = theirs.lock();
-                std::mem::swap(&mut g.slots[c].window, &mut buf);
-                g.slots[c].status = Status::Done(r);
-                theirs.done.notify_all();
+                // Asked again meanwhile: that window is in the slot's buffer now, and is searched
+                // next; this result answers nothing.
+                if g.slots[c].status == Status::Running {
+                    std::mem::swap(&mut g.slots[c].window, &mut buf);
+                    g.slots[c].status = Status::Done(r);
+                    theirs.done.notify_all();
+                }
             }
         });
     match spawned {
