@@ -181,8 +181,13 @@ fn bench_with_a_fitted_model_keeps_its_false_alarms_on_a_new_recording() {
 /// The bench with a 22-Hz vibration line on every channel, `r` times the channel's white σ
 /// (`tests/reference/vibration/line_bench.sh` runs the same at r = 0, 1, 2, 4, 10).
 fn bench_with_line(r: f64) -> Scenario {
+    bench_with_line_and(r, "")
+}
+
+/// [`bench_with_line`] with more keys of the line (`start_s`, `drift_hz_per_s`).
+fn bench_with_line_and(r: f64, keys: &str) -> Scenario {
     Scenario::from_toml_str_with(
-        &bench_with_line_text(r),
+        &bench_with_line_text_and(r, keys),
         &[(DENSE.0.to_string(), DENSE.1.to_string())],
     )
     .unwrap()
@@ -224,11 +229,7 @@ fn bench_with_a_late_or_drifting_line_finds_its_gross_errors() {
             ("start_s = 300.0", base - 0.04),
             ("drift_hz_per_s = 0.005", 0.85),
         ] {
-            let scn = Scenario::from_toml_str_with(
-                &bench_with_line_text_and(r, keys),
-                &[(DENSE.0.to_string(), DENSE.1.to_string())],
-            )
-            .unwrap();
+            let scn = bench_with_line_and(r, keys);
             let rows = run(&scn, scn.seed.unwrap(), None);
             assert_targets(&rows, bar);
         }

@@ -29,7 +29,7 @@
 //! 25–31 Hz) — is no longer taken out ([`ChannelLine::predict`]), so that a slice of the motion
 //! the notch would then track does not sharpen the tests against real motion; the searches find
 //! it again where it settles. Without a line nothing changes but the searches (a window copied
-//! every [`LINE_SEARCH_SAMPLES`]; the worker's test, 73 µs, stops at the periodogram when no
+//! every [`LINE_SEARCH_SAMPLES`]; the search thread's test, 73 µs, stops at the periodogram when no
 //! peak could hold a line that matters).
 
 use super::RING;
