@@ -81,6 +81,14 @@ fn bench(c: &mut Criterion) {
     g.bench_function("window_line", |b| {
         b.iter(|| window_line(black_box(&cleaned)))
     });
+    // White noise (a sensor at rest is nearly white): its spectrum has peaks everywhere, and
+    // at the high bins a noise peak is large enough for `window_line`'s share bar, so the test
+    // runs on the whole spectrum.
+    let mut rng = Rng::new(5);
+    let white: Vec<f64> = (0..2048).map(|_| 0.005 * rng.normal()).collect();
+    g.bench_function("window_line_white", |b| {
+        b.iter(|| window_line(black_box(&white)))
+    });
     g.finish();
 }
 
