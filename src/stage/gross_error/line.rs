@@ -29,8 +29,9 @@
 //! 25–31 Hz) — is no longer taken out ([`ChannelLine::predict`]), so that a slice of the motion
 //! the notch would then track does not sharpen the tests against real motion; the searches find
 //! it again where it settles. Without a line nothing changes but the searches (a window copied
-//! every [`LINE_SEARCH_SAMPLES`]; the search thread's test, 73 µs, stops at the periodogram when no
-//! peak could hold a line that matters).
+//! every [`LINE_SEARCH_SAMPLES`]; the search thread's test, 18–26 µs on 2048 samples without a
+//! line, stops at the periodogram when no peak could hold a line that matters, and estimates no
+//! floor under a peak that could not pass).
 
 use super::RING;
 use super::identify::window_line;
@@ -50,10 +51,13 @@ pub const LINE_BANDWIDTH: f64 = 0.0016;
 pub const LINE_CHECK_SAMPLES: u32 = 256;
 
 /// Samples between two searches for a line on a channel that has none taken out (none found
-/// in its warm-up, or one that moved away): the stage's ring, so that each search reads samples
-/// the previous one did not. A motor switched on after the warm-up, or an engine back at idle at
-/// other revs, is then taken out too.
-pub const LINE_SEARCH_SAMPLES: u64 = RING as u64;
+/// in its warm-up, or one that moved away): a quarter of the stage's ring, each search reading
+/// the whole ring. A motor switched on after the warm-up, or an engine back at idle at other
+/// revs, is then taken out too, once the line fills about three quarters of the ring (the
+/// test's halves must agree): taken out 18–23 s after it starts at 100 Hz, where a search
+/// every ring length took 20–37 s (the six channels of the line bench's line switched on at
+/// 300 s, `tests/reference/vibration/line_bench.sh`, at 4 and at 10 times the white σ).
+pub const LINE_SEARCH_SAMPLES: u64 = RING as u64 / 4;
 
 /// Most a live line's notch weights may turn between two looks, rad: a quarter turn, a
 /// frequency error of 1/(4 × [`LINE_CHECK_SAMPLES`]) cycles per sample (0.1 Hz at 100 Hz).
@@ -486,6 +490,51 @@ mod tests {
             "drift {} vs {drift}",
             t.rate
         );
+    }
+
+    #[test]
+    fn a_line_switched_on_later_is_found_once_it_fills_most_of_the_ring() {
+        // No line in the warm-up; at index 30 000 a line of 4 × the noise σ switches on. The
+        // stage's loop (`GrossErrorStage::line_step`), searching inline: the line is taken out
+        // once a searched ring holds it over about three quarters of its length (the test's
+        // halves must agree), and with a search every quarter ring that is within
+        // ¾ RING + ¼ RING + LINE_CHECK_SAMPLES = 2304 samples of its start (23 s at 100 Hz)
+        // whatever the stagger, and never before it starts. (With a search every RING samples,
+        // as before stop 46, this fails: 2976 samples at stagger 0.)
+        let omega = TAU * 0.22;
+        let on = 30_000u64;
+        let searcher = super::super::search::Searcher::new(false, search_window);
+        let bound = RING as u64 + u64::from(LINE_CHECK_SAMPLES);
+        for stagger in [0, LINE_SEARCH_SAMPLES / 3, 2 * LINE_SEARCH_SAMPLES / 3] {
+            let mut l = ChannelLine::new();
+            let mut ring = [0.0; RING];
+            let mut rng = Rng::new(11 + stagger);
+            l.adopt(None, None, 2000, stagger, "gx");
+            let mut found_at = None;
+            for idx in 2000..on + 2 * bound {
+                if l.take_up(idx, 0, &searcher, "gx") {
+                    found_at.get_or_insert(idx);
+                }
+                if l.search_due(idx) && idx >= RING as u64 {
+                    l.start_search(&ring, idx, 0, &searcher);
+                }
+                let line = if idx >= on {
+                    2.0 * (omega * idx as f64).sin()
+                } else {
+                    0.0
+                };
+                let x = line + 0.5 * rng.normal();
+                l.predict(idx, 1);
+                l.learn(x);
+                ring[(idx % RING as u64) as usize] = x;
+            }
+            let at = found_at.expect("the line is found");
+            assert!(
+                at > on && at - on <= bound,
+                "stagger {stagger}: taken out {} samples after it started (bound {bound})",
+                at as i64 - on as i64
+            );
+        }
     }
 
     #[test]
