@@ -41,10 +41,25 @@ pub fn neighbour_median(
     scratch: &mut Vec<f64>,
 ) -> f64 {
     scratch.clear();
+    let (left, right) = floor_bins(p, j, half_width, guard, last);
+    scratch.extend(left.iter().chain(right));
+    upper_median(scratch)
+}
+
+/// The bins of `p` whose median is the local floor at `j` ([`neighbour_median`]): those within
+/// `half_width` of `j` (from bin 1 to `last`) and more than `guard` from it, below and above.
+fn floor_bins(
+    p: &[f64],
+    j: usize,
+    half_width: usize,
+    guard: usize,
+    last: usize,
+) -> (&[f64], &[f64]) {
     let lo = j.saturating_sub(half_width).max(1);
     let hi = (j + half_width).min(last);
-    scratch.extend((lo..=hi).filter(|k| k.abs_diff(j) > guard).map(|k| p[k]));
-    upper_median(scratch)
+    let below = &p[lo..j.saturating_sub(guard).max(lo)];
+    let above = &p[(j + guard + 1).min(hi + 1)..=hi];
+    (below, above)
 }
 
 /// Σ (x_n − mean) cos ω(t0+n) and Σ (x_n − mean) sin ω(t0+n): the DFT of `x` at `w` rad per
@@ -308,12 +323,7 @@ fn strongest(
     let m_full = 2 * (FLOOR_HALF_WIDTH - GUARD);
     let r_min_full = r_min_of(m_full);
     let cannot_pass = |j: usize| {
-        // The floor's bins (as `neighbour_median` takes them): [lo, j − GUARD) and
-        // (j + GUARD, hi].
-        let lo = j.saturating_sub(FLOOR_HALF_WIDTH).max(1);
-        let hi = (j + FLOOR_HALF_WIDTH).min(half);
-        let left = &p[lo..j.saturating_sub(GUARD).max(lo)];
-        let right = &p[(j + GUARD + 1).min(hi + 1)..=hi];
+        let (left, right) = floor_bins(&p, j, FLOOR_HALF_WIDTH, GUARD, half);
         let m = left.len() + right.len();
         let r_min = if m == m_full { r_min_full } else { r_min_of(m) };
         if m == 0 || !(r_min.is_finite() && r_min > 0.0) {
