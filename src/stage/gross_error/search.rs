@@ -1,8 +1,8 @@
 //! The stage's searches for a vibration line (`line.rs`), run off the sample path.
 //!
-//! A search reads 2048 values and takes 0.02–0.2 ms (the more when it finds a line); every channel without a line asks for one
-//! every 512 samples. On the sample path that is a stall of up to a fifth of a 1-kHz sensor's
-//! interval, and its buffers would be allocated there. So a stage has a thread for them: each
+//! A search reads 2048 values and takes 0.02–0.2 ms (the more when it finds a line); every
+//! channel without a line asks for one every 512 samples. On the sample path that is a stall of
+//! up to a fifth of a 1-kHz sensor's interval, and its buffers would be allocated there. So a stage has a thread for them: each
 //! channel has a slot whose buffer is allocated when the stage is built; asking copies the
 //! window into it and wakes the thread, answering waits (only if the thread has not finished)
 //! and reads the result. Neither allocates. The thread's own work allocates, off the sample
