@@ -163,8 +163,9 @@ impl Tracker {
 /// Samples at the end of a searched window on which the line found is measured again.
 const SEARCH_TAIL: usize = 2 * LINE_CHECK_SAMPLES as usize;
 
-/// The line a window holds that the tests should not see ([`window_line`] on the cleaned
-/// window), as it is at the window's end: its frequency (within one bin of the tail's
+/// The line a window holds that the tests should not see ([`window_line`] on the window as
+/// the values came, not Hampel-cleaned: the ring already holds the stage's replacements), as it
+/// is at the window's end: its frequency (within one bin of the tail's
 /// resolution around the window's), amplitude and phase fitted again on the last
 /// [`SEARCH_TAIL`] samples, since a line that drifts (the reason it is searched for again) is
 /// not where the whole window's mean puts it by the time it is taken up. None in a window with
@@ -173,10 +174,9 @@ pub(super) fn search_window(window: &[f64]) -> Option<Sinusoid> {
     if window.iter().any(|v| !v.is_finite()) {
         return None;
     }
-    let cleaned = window;
-    let l = window_line(cleaned)?;
-    let t0 = cleaned.len().checked_sub(SEARCH_TAIL)?;
-    let tail = &cleaned[t0..];
+    let l = window_line(window)?;
+    let t0 = window.len().checked_sub(SEARCH_TAIL)?;
+    let tail = &window[t0..];
     let mean = tail.iter().sum::<f64>() / tail.len() as f64;
     let bin = TAU / SEARCH_TAIL as f64;
     let omega = peak_on_grid(
