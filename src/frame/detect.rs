@@ -13,8 +13,8 @@ use super::ros2::McapOptions;
 use super::ubx::{UbxDecoder, UbxOptions};
 use super::ulog::{UlogDecoder, UlogOptions};
 use super::{DecoderStats, Descriptor, FrameDecoder, LOG_HEADER_LEN, LOG_MAGIC};
-use crate::sample::Sample;
-use bytes::BytesMut;
+use crate::sample::{Sample, SampleSink};
+use bytes::{Buf, BytesMut};
 
 /// Bytes looked at to detect the protocol.
 pub const DETECT_BYTES: usize = 4096;
@@ -389,11 +389,98 @@ pub struct DecodedFile {
     pub found: String,
 }
 
+/// What decoding a file found besides its samples: the protocol used, the descriptor, the
+/// decoder's counters and what the decoder reports it found ([`DecodedFile`]'s other fields).
+pub struct FileDecoding {
+    pub protocol: Protocol,
+    pub descriptor: Option<Descriptor>,
+    pub stats: DecoderStats,
+    pub found: String,
+}
+
+impl FileDecoding {
+    /// With the samples it was decoded to.
+    pub fn with(self, samples: Vec<Sample>) -> DecodedFile {
+        DecodedFile {
+            protocol: self.protocol,
+            descriptor: self.descriptor,
+            samples,
+            stats: self.stats,
+            found: self.found,
+        }
+    }
+}
+
+impl DecodedFile {
+    /// What was found besides the samples, and the samples.
+    pub fn split(self) -> (FileDecoding, Vec<Sample>) {
+        (
+            FileDecoding {
+                protocol: self.protocol,
+                descriptor: self.descriptor,
+                stats: self.stats,
+                found: self.found,
+            },
+            self.samples,
+        )
+    }
+}
+
 /// Decode a whole file's bytes (a native log's file header is skipped).
 pub fn decode_bytes(bytes: &[u8], c: &ProtocolConfig) -> DecodedFile {
+    let mut samples = Vec::new();
     let mut d = Decoding::new(bytes, c);
-    d.feed(bytes, true);
-    d.finish()
+    d.feed(bytes, true, &mut samples);
+    d.finish().with(samples)
+}
+
+/// Bytes read from a file at a time by [`decode_file_into`] (at least [`DETECT_BYTES`], so the
+/// first read holds what detection looks at).
+const FILE_CHUNK: usize = 64 * 1024;
+
+/// Decode the file at `path` as [`decode_bytes`] decodes its bytes — the same protocol, samples,
+/// descriptor and counters — reading it 64 KiB at a time and handing each sample to `out` as it
+/// is decoded, so that neither the file nor its samples need be held (a decoder that needs
+/// more bytes says so and gets them, as the replay source's decoders do; at the file's end what
+/// it holds is given out as [`decode_bytes`] gives it out).
+pub fn decode_file_into(
+    path: &std::path::Path,
+    c: &ProtocolConfig,
+    out: &mut impl SampleSink,
+) -> std::io::Result<FileDecoding> {
+    use std::io::Read;
+    let named =
+        |e: std::io::Error| std::io::Error::new(e.kind(), format!("{}: {e}", path.display()));
+    let mut f = std::fs::File::open(path).map_err(named)?;
+    let mut buf = BytesMut::new();
+    let mut read_more = |buf: &mut BytesMut| -> std::io::Result<bool> {
+        let len = buf.len();
+        buf.resize(len + FILE_CHUNK, 0);
+        let mut n = 0;
+        while n < FILE_CHUNK {
+            match f.read(&mut buf[len + n..]) {
+                Ok(0) => break,
+                Ok(k) => n += k,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(named(e)),
+            }
+        }
+        buf.truncate(len + n);
+        Ok(n > 0)
+    };
+    let mut eof = !read_more(&mut buf)?;
+    let mut dec = Decoding::new(&buf, c);
+    if dec.protocol == Protocol::Native && buf.starts_with(&LOG_MAGIC) {
+        buf.advance(LOG_HEADER_LEN.min(buf.len()));
+    }
+    loop {
+        match dec.next(&mut buf, eof) {
+            Some(item) => dec.take(item, out),
+            None if eof => break,
+            None => eof = !read_more(&mut buf)?,
+        }
+    }
+    Ok(dec.finish())
 }
 
 /// Decode the files of one recording split in parts (rosbag2's `bag_0.mcap`, `bag_1.mcap`, …)
@@ -405,21 +492,25 @@ pub fn decode_files(
     c: &ProtocolConfig,
 ) -> std::io::Result<DecodedFile> {
     let mut dec: Option<Decoding> = None;
+    let mut samples = Vec::new();
     for (i, p) in paths.iter().enumerate() {
         let bytes = std::fs::read(p)
             .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", p.display())))?;
-        dec.get_or_insert_with(|| Decoding::new(&bytes, c))
-            .feed(&bytes, i + 1 == paths.len());
+        dec.get_or_insert_with(|| Decoding::new(&bytes, c)).feed(
+            &bytes,
+            i + 1 == paths.len(),
+            &mut samples,
+        );
     }
     let d = dec.ok_or_else(|| std::io::Error::other("no file to decode"))?;
-    Ok(d.finish())
+    Ok(d.finish().with(samples))
 }
 
-/// One decoder over a file's bytes, or several files' in turn, gathering what it decodes.
+/// One decoder over a file's bytes, or several files' in turn, handing on the samples it
+/// decodes and gathering the descriptor.
 struct Decoding {
     protocol: Protocol,
     d: Box<dyn ProtocolDecoder>,
-    samples: Vec<Sample>,
     descriptor: Option<Descriptor>,
 }
 
@@ -430,13 +521,39 @@ impl Decoding {
         Decoding {
             protocol,
             d: c.decoder(protocol),
-            samples: Vec::new(),
             descriptor: None,
         }
     }
 
-    /// Decode `bytes`; `last`: no more will come (what the decoder holds is given out).
-    fn feed(&mut self, bytes: &[u8], last: bool) {
+    /// The next item at the front of `buf` (`None`: more bytes are needed); `eof`: no more will
+    /// come (what cannot complete is counted and dropped, what the decoder holds given out).
+    fn next(&mut self, buf: &mut BytesMut, eof: bool) -> Option<Decoded> {
+        if eof {
+            self.d.decode_item_eof(buf)
+        } else {
+            self.d.decode_item(buf)
+        }
+    }
+
+    /// One decoded item: a sample to `out`; the first descriptor, with the channels a later
+    /// one declared present again (a channel that came late is part of the file:
+    /// `Stamper::stamp`).
+    fn take(&mut self, item: Decoded, out: &mut impl SampleSink) {
+        match item {
+            Decoded::Sample(s, _) => out.push(s),
+            Decoded::Descriptor(x) => {
+                self.descriptor = Some(self.descriptor.map_or(x, |d: Descriptor| Descriptor {
+                    absent: d.absent & x.absent,
+                    ..d
+                }))
+            }
+            Decoded::Other(_) => {}
+        }
+    }
+
+    /// Decode `bytes`, its samples to `out`; `last`: no more will come (what the decoder holds
+    /// is given out).
+    fn feed(&mut self, bytes: &[u8], last: bool, out: &mut impl SampleSink) {
         let body = if self.protocol == Protocol::Native && bytes.starts_with(&LOG_MAGIC) {
             &bytes[LOG_HEADER_LEN.min(bytes.len())..]
         } else {
@@ -444,22 +561,8 @@ impl Decoding {
         };
         let mut buf = BytesMut::from(body);
         loop {
-            let item = if last {
-                self.d.decode_item_eof(&mut buf)
-            } else {
-                self.d.decode_item(&mut buf)
-            };
-            match item {
-                Some(Decoded::Sample(s, _)) => self.samples.push(s),
-                // The first descriptor, with the channels a later one declared present again
-                // (a channel that came late is part of the file: `Stamper::stamp`).
-                Some(Decoded::Descriptor(x)) => {
-                    self.descriptor = Some(self.descriptor.map_or(x, |d: Descriptor| Descriptor {
-                        absent: d.absent & x.absent,
-                        ..d
-                    }))
-                }
-                Some(Decoded::Other(_)) => {}
+            match self.next(&mut buf, last) {
+                Some(item) => self.take(item, out),
                 // A part that ends inside a record: its tail is dropped (counted) here, not
                 // completed with the next part's bytes.
                 None if !last && !buf.is_empty() => {
@@ -475,11 +578,10 @@ impl Decoding {
         }
     }
 
-    fn finish(self) -> DecodedFile {
-        DecodedFile {
+    fn finish(self) -> FileDecoding {
+        FileDecoding {
             protocol: self.protocol,
             descriptor: self.descriptor.or(self.d.descriptor()),
-            samples: self.samples,
             stats: self.d.stats(),
             found: self.d.found(),
         }

@@ -13,11 +13,13 @@
 //! ([`ulog::sensor_combined_cannot_carry`]) rather than written as numbers a PX4 tool would
 //! take for measurements.
 
-use crate::frame::detect::{DecodedFile, ProtocolConfig, decode_bytes};
-use crate::frame::{Descriptor, Protocol, mavlink, ubx, ulog};
+use crate::frame::detect::{DecodedFile, ProtocolConfig, decode_file_into};
+use crate::frame::{DecoderStats, Descriptor, Protocol, mavlink, ubx, ulog};
+use crate::io::format::{CSV_HEADER, write_csv_row};
 use crate::io::timing::{TimeFaults, rederive_sequence};
 use crate::sample::Sample;
 use bytes::BytesMut;
+use std::io::{Seek, Write};
 use std::path::{Path, PathBuf};
 
 /// What `export --to` writes.
@@ -37,11 +39,12 @@ pub enum ExportFormat {
     Mcap,
 }
 
-/// Read a recording in any protocol the decoders know.
+/// Read a recording in any protocol the decoders know: its samples as
+/// [`decode_bytes`](crate::frame::detect::decode_bytes) gives
+/// them, the file read in pieces ([`decode_file_into`]), never held whole beside them.
 pub fn read_any(path: &Path, c: &ProtocolConfig) -> std::io::Result<DecodedFile> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
-    Ok(decode_bytes(&bytes, c))
+    let mut samples = Vec::new();
+    Ok(decode_file_into(path, c, &mut samples)?.with(samples))
 }
 
 /// Read a whole recording to import it: [`read_any`], then, for a protocol whose decoder derives
@@ -93,12 +96,18 @@ fn whole(mut f: DecodedFile) -> std::io::Result<(DecodedFile, Option<TimeFaults>
     }
     let d = f.descriptor.get_or_insert_with(Descriptor::default);
     let tf = rederive_whole(&mut f.samples, d);
-    f.stats.gaps = tf.gaps;
-    f.stats.missing_frames = tf.missing;
-    f.stats.duplicates = tf.duplicates;
-    f.stats.time_backwards = tf.backwards;
-    f.stats.seq_restarts = tf.restarts;
+    time_counters_from(&mut f.stats, &tf);
     Ok((f, Some(tf)))
+}
+
+/// A decoder's time counters (gaps, missing, duplicates, samples behind, restarts) replaced by
+/// the time faults derived over the whole file; its frame counters kept.
+pub fn time_counters_from(stats: &mut DecoderStats, tf: &TimeFaults) {
+    stats.gaps = tf.gaps;
+    stats.missing_frames = tf.missing;
+    stats.duplicates = tf.duplicates;
+    stats.time_backwards = tf.backwards;
+    stats.seq_restarts = tf.restarts;
 }
 
 /// What every import of a whole file does with its samples: sequence numbers and gap flags
@@ -112,59 +121,173 @@ pub fn rederive_whole(samples: &mut [Sample], d: &mut Descriptor) -> TimeFaults 
     tf
 }
 
-/// The samples as a byte stream in `to` (not CSV). Fails for `Mcap` in a build without ROS 2
-/// support (or on the bag writer's own error), and for `Ulog` when some sample lacks channels
-/// `sensor_combined` cannot mark absent.
+/// Whether `to` can carry a recording whose absent channels are `absent` (the descriptor's and
+/// every sample's together): ULog `sensor_combined` cannot mark every absence
+/// ([`ulog::sensor_combined_cannot_carry`]), and MCAP needs a build with ROS 2 support. Asked
+/// before anything is written, so a refused export leaves no file behind.
+pub fn exportable(to: ExportFormat, absent: u8) -> std::io::Result<()> {
+    if to == ExportFormat::Ulog
+        && let Some(why) = ulog::sensor_combined_cannot_carry(absent)
+    {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("export --to ulog: {why}"),
+        ));
+    }
+    if to == ExportFormat::Mcap && !cfg!(feature = "ros2") {
+        return Err(std::io::Error::other(
+            "export --to mcap: this build has no ROS 2 support (cargo build --release --features ros2)",
+        ));
+    }
+    Ok(())
+}
+
+/// Samples written in an [`ExportFormat`] one at a time as they come, so a recording is
+/// exported without being held: the format's head at creation (the native log's header and
+/// descriptor, ULog's definitions, CSV's header line), each sample as its message or row, the
+/// bytes handed to `W` in blocks of about 64 KiB (MCAP through its own writer, which seeks back
+/// to finish its chunks). UBX ESF-RAW carries the sensor time tag in 39.0625-µs ticks (24 bits,
+/// the decoder's default); MAVLink v2 HIGHRES_IMU is sent as system 1, component 1, its
+/// sequence counting the samples. Ask [`exportable`] first.
+pub struct ExportWriter<W: Write + Seek> {
+    to: ExportFormat,
+    out: ExportOut<W>,
+    buf: BytesMut,
+    line: String,
+    samples: u64,
+}
+
+enum ExportOut<W: Write + Seek> {
+    Bytes(W),
+    #[cfg(feature = "ros2")]
+    Bag(Box<crate::io::mcap_sink::ImuBagWriter<W>>),
+}
+
+/// Bytes gathered before they are handed to the writer.
+const EXPORT_BLOCK: usize = 64 * 1024;
+
+#[cfg(feature = "ros2")]
+fn mcap_error(e: ::mcap::McapError) -> std::io::Error {
+    std::io::Error::other(format!("mcap: {e}"))
+}
+
+impl<W: Write + Seek> ExportWriter<W> {
+    /// Start an export in `to` for a sensor described by `d` on `w`.
+    pub fn new(to: ExportFormat, d: &Descriptor, w: W) -> std::io::Result<Self> {
+        let mut buf = BytesMut::with_capacity(EXPORT_BLOCK + 1024);
+        let out = match to {
+            ExportFormat::Mcap => {
+                #[cfg(feature = "ros2")]
+                {
+                    let mut b = crate::io::mcap_sink::ImuBagWriter::new(w, Default::default())
+                        .map_err(mcap_error)?;
+                    b.descriptor(d);
+                    ExportOut::Bag(Box::new(b))
+                }
+                #[cfg(not(feature = "ros2"))]
+                {
+                    // Refused in this build (returns the error).
+                    exportable(to, 0)?;
+                    ExportOut::Bytes(w)
+                }
+            }
+            ExportFormat::Csv => {
+                buf.extend_from_slice(CSV_HEADER.as_bytes());
+                buf.extend_from_slice(b"\n");
+                ExportOut::Bytes(w)
+            }
+            ExportFormat::Native => {
+                crate::frame::encode_log_header(d, &mut buf);
+                ExportOut::Bytes(w)
+            }
+            ExportFormat::Ulog => {
+                ulog::encode_sensor_combined_head(&mut buf);
+                ExportOut::Bytes(w)
+            }
+            ExportFormat::Ubx | ExportFormat::Mavlink => ExportOut::Bytes(w),
+        };
+        Ok(ExportWriter {
+            to,
+            out,
+            buf,
+            line: String::new(),
+            samples: 0,
+        })
+    }
+
+    /// Write one sample.
+    pub fn push(&mut self, s: &Sample) -> std::io::Result<()> {
+        let b = &mut self.buf;
+        match self.to {
+            ExportFormat::Csv => {
+                self.line.clear();
+                write_csv_row(s, &mut self.line);
+                b.extend_from_slice(self.line.as_bytes());
+            }
+            ExportFormat::Native => crate::frame::encode_sample(s, b),
+            ExportFormat::Ubx => {
+                let tag = ((s.t_ns as f64 / 39_062.5).round() as u64 & 0x00FF_FFFF) as u32;
+                ubx::encode_esf_raw(&[(tag, *s)], b);
+            }
+            ExportFormat::Mavlink => {
+                let p = mavlink::highres_payload(s, 0);
+                let seq = self.samples as u8;
+                mavlink::encode_v2(seq, 1, 1, mavlink::MSG_HIGHRES_IMU, &p, b);
+            }
+            ExportFormat::Ulog => ulog::encode_sensor_combined_sample(s, b),
+            ExportFormat::Mcap => {}
+        }
+        self.samples += 1;
+        match &mut self.out {
+            ExportOut::Bytes(w) => {
+                if self.buf.len() >= EXPORT_BLOCK {
+                    w.write_all(&self.buf)?;
+                    self.buf.clear();
+                }
+            }
+            #[cfg(feature = "ros2")]
+            ExportOut::Bag(w) => w.sample(s).map_err(mcap_error)?,
+        }
+        Ok(())
+    }
+
+    /// The samples written so far.
+    pub fn samples(&self) -> u64 {
+        self.samples
+    }
+
+    /// Write what is left and flush; the writer back.
+    pub fn finish(self) -> std::io::Result<W> {
+        match self.out {
+            ExportOut::Bytes(mut w) => {
+                w.write_all(&self.buf)?;
+                w.flush()?;
+                Ok(w)
+            }
+            #[cfg(feature = "ros2")]
+            ExportOut::Bag(w) => {
+                let mut w = w.finish().map_err(mcap_error)?;
+                w.flush()?;
+                Ok(w)
+            }
+        }
+    }
+}
+
+/// The samples as a byte stream in `to` ([`ExportWriter`] into memory). Fails where
+/// [`exportable`] refuses (the descriptor's and the samples' absent channels together), and on
+/// the bag writer's own error.
 pub fn encode_stream(
     to: ExportFormat,
     d: &Descriptor,
     samples: &[Sample],
 ) -> std::io::Result<BytesMut> {
-    let mut out = BytesMut::with_capacity(samples.len() * 64 + 1024);
-    match to {
-        ExportFormat::Csv | ExportFormat::Native => {
-            crate::io::log::encode_log(d, samples, &mut out);
-        }
-        ExportFormat::Ubx => {
-            // Sensor time tag: 24 bits of 39.0625 µs (the decoder's default).
-            for s in samples {
-                let tag = ((s.t_ns as f64 / 39_062.5).round() as u64 & 0x00FF_FFFF) as u32;
-                ubx::encode_esf_raw(&[(tag, *s)], &mut out);
-            }
-        }
-        ExportFormat::Mavlink => {
-            for (i, s) in samples.iter().enumerate() {
-                let p = mavlink::highres_payload(s, 0);
-                mavlink::encode_v2(i as u8, 1, 1, mavlink::MSG_HIGHRES_IMU, &p, &mut out);
-            }
-        }
-        ExportFormat::Ulog => {
-            let absent = samples.iter().fold(d.absent, |m, s| m | s.absent);
-            if let Some(why) = ulog::sensor_combined_cannot_carry(absent) {
-                return Err(std::io::Error::new(
-                    std::io::ErrorKind::InvalidInput,
-                    format!("export --to ulog: {why}"),
-                ));
-            }
-            ulog::encode_sensor_combined_log(samples, &mut out)
-        }
-        ExportFormat::Mcap => {
-            #[cfg(feature = "ros2")]
-            {
-                let b = crate::io::mcap_sink::encode_bag(d, samples, Default::default())
-                    .map_err(|e| std::io::Error::other(format!("mcap: {e}")))?;
-                out.extend_from_slice(&b);
-            }
-            #[cfg(not(feature = "ros2"))]
-            {
-                let _ = d;
-                return Err(std::io::Error::other(
-                    "export --to mcap: this build has no ROS 2 support (cargo build --release --features ros2)",
-                ));
-            }
-        }
+    exportable(to, samples.iter().fold(d.absent, |m, s| m | s.absent))?;
+    let mut w = ExportWriter::new(to, d, std::io::Cursor::new(Vec::new()))?;
+    for s in samples {
+        w.push(s)?;
     }
-    Ok(out)
+    Ok(BytesMut::from(&w.finish()?.into_inner()[..]))
 }
 
 #[cfg(test)]

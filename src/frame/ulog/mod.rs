@@ -500,6 +500,14 @@ pub fn sensor_combined_cannot_carry(absent: u8) -> Option<String> {
 /// has `accelerometer_timestamp_relative = RELATIVE_TIMESTAMP_INVALID` and NaN there; other
 /// absent channels are written NaN (check [`sensor_combined_cannot_carry`] first).
 pub fn encode_sensor_combined_log(samples: &[Sample], out: &mut BytesMut) {
+    encode_sensor_combined_head(out);
+    for s in samples {
+        encode_sensor_combined_sample(s, out);
+    }
+}
+
+/// The file header, flag bits, format and subscription of [`encode_sensor_combined_log`].
+pub fn encode_sensor_combined_head(out: &mut BytesMut) {
     out.extend_from_slice(&MAGIC);
     out.extend_from_slice(&[1]);
     out.extend_from_slice(&0u64.to_le_bytes());
@@ -510,36 +518,38 @@ pub fn encode_sensor_combined_log(samples: &[Sample], out: &mut BytesMut) {
         out,
     );
     encode_message(b'A', b"\x00\x01\x00sensor_combined", out);
-    for s in samples {
-        let mut b = Vec::with_capacity(46);
-        b.extend_from_slice(&1u16.to_le_bytes());
-        b.extend_from_slice(&(s.t_ns / 1000).to_le_bytes());
-        let ch = s.channels();
-        let value = |c: usize| {
-            if s.is_absent(c) {
-                f32::NAN
-            } else {
-                ch[c] as f32
-            }
-        };
-        for c in 0..3 {
-            b.extend_from_slice(&value(c).to_le_bytes());
-        }
-        b.extend_from_slice(&4000u32.to_le_bytes());
-        let accel_absent = (3..6).all(|c| s.is_absent(c));
-        let rel = if accel_absent {
-            format::RELATIVE_TIMESTAMP_INVALID
+}
+
+/// One sample as a `sensor_combined` data message of [`encode_sensor_combined_log`].
+pub fn encode_sensor_combined_sample(s: &Sample, out: &mut BytesMut) {
+    let mut b = Vec::with_capacity(46);
+    b.extend_from_slice(&1u16.to_le_bytes());
+    b.extend_from_slice(&(s.t_ns / 1000).to_le_bytes());
+    let ch = s.channels();
+    let value = |c: usize| {
+        if s.is_absent(c) {
+            f32::NAN
         } else {
-            0
-        };
-        b.extend_from_slice(&rel.to_le_bytes());
-        for c in 3..6 {
-            b.extend_from_slice(&value(c).to_le_bytes());
+            ch[c] as f32
         }
-        b.extend_from_slice(&4000u32.to_le_bytes());
-        b.extend_from_slice(&[0, 0, 1, 1]);
-        encode_message(b'D', &b, out);
+    };
+    for c in 0..3 {
+        b.extend_from_slice(&value(c).to_le_bytes());
     }
+    b.extend_from_slice(&4000u32.to_le_bytes());
+    let accel_absent = (3..6).all(|c| s.is_absent(c));
+    let rel = if accel_absent {
+        format::RELATIVE_TIMESTAMP_INVALID
+    } else {
+        0
+    };
+    b.extend_from_slice(&rel.to_le_bytes());
+    for c in 3..6 {
+        b.extend_from_slice(&value(c).to_le_bytes());
+    }
+    b.extend_from_slice(&4000u32.to_le_bytes());
+    b.extend_from_slice(&[0, 0, 1, 1]);
+    encode_message(b'D', &b, out);
 }
 
 #[cfg(test)]

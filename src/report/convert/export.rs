@@ -3,15 +3,19 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, ensure};
 use serde::Serialize;
 
 use super::{for_import, protocol_config, through_import};
-use crate::io::convert::{ExportFormat, encode_stream, read_any};
-use crate::io::csv as csvio;
+use crate::frame::Descriptor;
+use crate::frame::detect::decode_file_into;
+use crate::io::convert::{ExportFormat, ExportWriter, exportable};
 use crate::io::sim_log::SimLogSummary;
 use crate::report::check_input;
+use crate::sample::{Sample, SampleSink};
 use crate::text::count;
+use std::fs::File;
+use std::io::BufWriter;
 
 /// What `export` wrote.
 #[derive(Debug, Clone, Serialize)]
@@ -24,6 +28,12 @@ pub struct ExportReport {
 
 /// Write the samples of `log` (any protocol, or any recording `import` reads, with the
 /// recording's import flags) to `output` as `to`.
+///
+/// A recording the decoders read (a native log, UBX, MAVLink, ULog, MCAP) is streamed, never
+/// held: a first pass decodes it for its checks (input problems, the descriptor, the channels it
+/// lacks, which ULog must be able to mark) before `output` is created, a second writes each
+/// sample as it is decoded ([`ExportWriter`]). A recording read as `import` reads it is held
+/// whole, as the import needs it (time faults derived over the whole file).
 pub fn export(
     log: &crate::report::Recording,
     output: &Path,
@@ -34,27 +44,86 @@ pub fn export(
     crate::report::no_import_flags_on_a_log(log, &import_flags)?;
     // Import flags given: the file is read as `import` reads it with them, whatever it is.
     let imports = !import_flags.is_empty() || through_import(log, pc.protocol);
-    let (descriptor, samples, stats) = if imports {
-        let pc = for_import(&pc, log.proto.protocol.is_some());
-        crate::report::imported_log(log, &pc, &log.import, &log.flags())?
-    } else {
-        let f = read_any(log, &pc)?;
-        check_input(log, f.samples.len() as u64, &f.stats)?;
-        (f.descriptor, f.samples, f.stats)
+    let create = |d: &Descriptor, absent: u8| -> Result<ExportWriter<BufWriter<File>>> {
+        exportable(to, absent)?;
+        let f = File::create(output).with_context(|| format!("creating {}", output.display()))?;
+        Ok(ExportWriter::new(to, d, BufWriter::new(f))?)
     };
-    if to == ExportFormat::Csv {
-        csvio::write_csv(output, &samples)?;
+    let written =
+        |r: std::io::Result<()>| r.with_context(|| format!("writing {}", output.display()));
+    let (samples, stats) = if imports {
+        let pc = for_import(&pc, log.proto.protocol.is_some());
+        let (d, samples, stats) = crate::report::imported_log(log, &pc, &log.import, &log.flags())?;
+        let d = d.unwrap_or_default();
+        let mut w = create(&d, samples.iter().fold(d.absent, |m, s| m | s.absent))?;
+        for s in &samples {
+            written(w.push(s))?;
+        }
+        written(w.finish().map(drop))?;
+        (samples.len(), stats)
     } else {
-        let d = descriptor.unwrap_or_default();
-        let b = encode_stream(to, &d, &samples)?;
-        std::fs::write(output, &b).with_context(|| format!("writing {}", output.display()))?;
-    }
+        let mut seen = Survey::default();
+        let f = decode_file_into(log, &pc, &mut seen)?;
+        check_input(log, seen.samples as u64, &f.stats)?;
+        let d = f.descriptor.unwrap_or_default();
+        let mut w = Writing {
+            w: create(&d, seen.absent | d.absent)?,
+            failed: None,
+        };
+        decode_file_into(log, &pc, &mut w)?;
+        if let Some(e) = w.failed {
+            written(Err(e))?;
+        }
+        // The same bytes decode to the same samples: a file changed under the export is said.
+        ensure!(
+            w.w.samples() == seen.samples as u64,
+            "{} changed while it was exported ({} samples, then {}): {} is not a copy of it",
+            log.display(),
+            seen.samples,
+            w.w.samples(),
+            output.display()
+        );
+        written(w.w.finish().map(drop))?;
+        (seen.samples, f.stats)
+    };
     Ok(ExportReport {
         output: output.to_path_buf(),
-        samples: samples.len(),
+        samples,
         crc_errors: stats.crc_errors,
         resyncs: stats.resyncs,
     })
+}
+
+/// What the first pass of an export learns: how many samples, and the channels any lacks.
+#[derive(Default)]
+struct Survey {
+    samples: usize,
+    absent: u8,
+}
+
+impl SampleSink for Survey {
+    fn expect(&mut self, _: usize) {}
+    fn push(&mut self, s: Sample) {
+        self.samples += 1;
+        self.absent |= s.absent;
+    }
+}
+
+/// The second pass: each sample written; the first write error kept (and nothing more written).
+struct Writing {
+    w: ExportWriter<BufWriter<File>>,
+    failed: Option<std::io::Error>,
+}
+
+impl SampleSink for Writing {
+    fn expect(&mut self, _: usize) {}
+    fn push(&mut self, s: Sample) {
+        if self.failed.is_none()
+            && let Err(e) = self.w.push(&s)
+        {
+            self.failed = Some(e);
+        }
+    }
 }
 
 impl fmt::Display for ExportReport {
