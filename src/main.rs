@@ -414,7 +414,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             output,
             import,
         } => {
-            let r = report::convert::load_with(&input, &proto, &import)?.write(&output)?;
+            let r = report::convert::import(&input, &proto, &import, &output)?;
             eprint!("{r}");
             Ok(ExitCode::SUCCESS)
         }

@@ -104,67 +104,132 @@ impl std::fmt::Display for TimeFaults {
 
 /// Set every sample's `seq` from its time stamp and flag the time faults (see the module docs).
 pub fn derive_sequence(samples: &mut [Sample]) -> TimeFaults {
-    let mut tf = TimeFaults {
-        samples: samples.len() as u64,
-        ..TimeFaults::default()
-    };
-    let mut pos: Vec<u64> = samples
-        .windows(2)
-        .filter(|w| w[1].t_ns > w[0].t_ns)
-        .map(|w| w[1].t_ns - w[0].t_ns)
-        .collect();
-    if pos.is_empty() {
-        // No time base: sequence by row; every repeat of a time stamp is still a duplicate.
-        for (i, s) in samples.iter_mut().enumerate() {
-            s.seq = 0;
-            if i > 0 {
-                s.flags |= flags::DUPLICATE;
-                tf.duplicates += 1;
-            }
-        }
-        return tf;
+    let mut stamps = Stamps::default();
+    for s in samples.iter() {
+        stamps.push(s.t_ns);
     }
-    let mean = pos.iter().map(|&d| d as f64).sum::<f64>() / pos.len() as f64;
-    let mid = pos.len() / 2;
-    let median = *pos.select_nth_unstable(mid).1 as f64;
-    // Span covered by forward time, and how much of it median-spaced samples would fill. A
-    // pause that would be a gap even for bursty stamps (beyond BURSTY_GAP_FACTOR mean intervals)
-    // is left out of the span: a logger that stopped for longer than it ran is not bursty.
-    let long = BURSTY_GAP_FACTOR * mean;
-    let (span, n_span) = pos
-        .iter()
-        .map(|&d| d as f64)
-        .filter(|&d| d <= long)
-        .fold((0.0, 0usize), |(s, n), d| (s + d, n + 1));
-    let coverage = if span > 0.0 {
-        median * n_span as f64 / span
-    } else {
-        1.0
-    };
-    tf.bursty = coverage < BURSTY_COVERAGE;
-    tf.median_interval_s = median * 1e-9;
-    tf.mean_interval_s = mean * 1e-9;
-    let (period, gap_at) = if tf.bursty {
-        (mean, BURSTY_GAP_FACTOR * mean)
-    } else {
-        // The mean of the intervals near the median: gaps (≥ 2 medians) cannot move it, and
-        // one-sided jitter of millisecond host stamps (6, 7, 8, 9 ms at a median of 6) does not
-        // bias it as it biases the median (the rtklibexplorer walk: 152 Hz, not 166.7 Hz).
-        let (sum, n) = pos
+    let mut q = stamps.sequencer();
+    for s in samples.iter_mut() {
+        q.next(s);
+    }
+    q.faults()
+}
+
+/// What [`derive_sequence`] learns from a recording's time stamps before it sequences any
+/// sample: their count and the positive intervals between consecutive ones (8 bytes a sample,
+/// so a recording streamed twice need not be held: [`Stamps::sequencer`]).
+#[derive(Debug, Default)]
+pub struct Stamps {
+    samples: u64,
+    last: Option<u64>,
+    positive: Vec<u64>,
+}
+
+impl Stamps {
+    /// The next sample's stamp, ns.
+    pub fn push(&mut self, t_ns: u64) {
+        if let Some(l) = self.last
+            && t_ns > l
+        {
+            self.positive.push(t_ns - l);
+        }
+        self.last = Some(t_ns);
+        self.samples += 1;
+    }
+
+    /// The nominal interval learned from the stamps (the module docs' rule), and a sequencer
+    /// that applies it to the same samples in the same order.
+    pub fn sequencer(mut self) -> Sequencer {
+        let mut tf = TimeFaults {
+            samples: self.samples,
+            ..TimeFaults::default()
+        };
+        let pos = &mut self.positive;
+        if pos.is_empty() {
+            // No time base: sequence by row; every repeat of a time stamp is still a duplicate.
+            return Sequencer {
+                tf,
+                period: None,
+                gap_at: 0.0,
+                seq: 0,
+                last: None,
+            };
+        }
+        let mean = pos.iter().map(|&d| d as f64).sum::<f64>() / pos.len() as f64;
+        let mid = pos.len() / 2;
+        let median = *pos.select_nth_unstable(mid).1 as f64;
+        // Span covered by forward time, and how much of it median-spaced samples would fill. A
+        // pause that would be a gap even for bursty stamps (beyond BURSTY_GAP_FACTOR mean
+        // intervals) is left out of the span: a logger that stopped for longer than it ran is
+        // not bursty.
+        let long = BURSTY_GAP_FACTOR * mean;
+        let (span, n_span) = pos
             .iter()
             .map(|&d| d as f64)
-            .filter(|&d| d > 0.5 * median && d < 2.0 * median)
+            .filter(|&d| d <= long)
             .fold((0.0, 0usize), |(s, n), d| (s + d, n + 1));
-        let period = if n > 0 { sum / n as f64 } else { median };
-        (period, 1.5 * period)
-    };
-    tf.nominal_rate_hz = 1e9 / period;
+        let coverage = if span > 0.0 {
+            median * n_span as f64 / span
+        } else {
+            1.0
+        };
+        tf.bursty = coverage < BURSTY_COVERAGE;
+        tf.median_interval_s = median * 1e-9;
+        tf.mean_interval_s = mean * 1e-9;
+        let (period, gap_at) = if tf.bursty {
+            (mean, BURSTY_GAP_FACTOR * mean)
+        } else {
+            // The mean of the intervals near the median: gaps (≥ 2 medians) cannot move it, and
+            // one-sided jitter of millisecond host stamps (6, 7, 8, 9 ms at a median of 6) does
+            // not bias it as it biases the median (the rtklibexplorer walk: 152 Hz, not 166.7 Hz).
+            let (sum, n) = pos
+                .iter()
+                .map(|&d| d as f64)
+                .filter(|&d| d > 0.5 * median && d < 2.0 * median)
+                .fold((0.0, 0usize), |(s, n), d| (s + d, n + 1));
+            let period = if n > 0 { sum / n as f64 } else { median };
+            (period, 1.5 * period)
+        };
+        tf.nominal_rate_hz = 1e9 / period;
+        Sequencer {
+            tf,
+            period: Some(period),
+            gap_at,
+            seq: 0,
+            last: None,
+        }
+    }
+}
 
-    let mut seq: u32 = 0;
-    let mut last = samples[0].t_ns;
-    samples[0].seq = 0;
-    for s in samples.iter_mut().skip(1) {
+/// [`derive_sequence`]'s rule applied one sample at a time ([`Stamps::sequencer`]): each
+/// sample's `seq` set and its time faults flagged and counted.
+#[derive(Debug)]
+pub struct Sequencer {
+    tf: TimeFaults,
+    /// The nominal interval, ns (`None`: no time base, the stamps never advance).
+    period: Option<f64>,
+    gap_at: f64,
+    seq: u32,
+    /// The latest stamp (`None` before the first sample).
+    last: Option<u64>,
+}
+
+impl Sequencer {
+    /// Sequence and flag the next sample.
+    pub fn next(&mut self, s: &mut Sample) {
         let t = s.t_ns;
+        let Some(last) = self.last else {
+            s.seq = 0;
+            self.last = Some(t);
+            return;
+        };
+        let tf = &mut self.tf;
+        let Some(period) = self.period else {
+            s.seq = 0;
+            s.flags |= flags::DUPLICATE;
+            tf.duplicates += 1;
+            return;
+        };
         if t == last {
             s.flags |= flags::DUPLICATE;
             tf.duplicates += 1;
@@ -177,24 +242,28 @@ pub fn derive_sequence(samples: &mut [Sample]) -> TimeFaults {
                 s.flags |= flags::GAP;
                 tf.restarts += 1;
                 // A restart: a clear jump in the sequence, which the decoder reads as a gap too.
-                seq = seq.wrapping_add(2);
-                last = t;
+                self.seq = self.seq.wrapping_add(2);
+                self.last = Some(t);
             }
         } else {
             let dt = (t - last) as f64;
             let mut step = 1u64;
-            if dt > gap_at {
+            if dt > self.gap_at {
                 step = ((dt / period).round() as u64).max(2);
                 s.flags |= flags::GAP;
                 tf.gaps += 1;
                 tf.missing += step - 1;
             }
-            seq = seq.wrapping_add(step.min(u32::MAX as u64 / 2) as u32);
-            last = t;
+            self.seq = self.seq.wrapping_add(step.min(u32::MAX as u64 / 2) as u32);
+            self.last = Some(t);
         }
-        s.seq = seq;
+        s.seq = self.seq;
     }
-    tf
+
+    /// The faults found so far, with the rate and intervals learned.
+    pub fn faults(&self) -> TimeFaults {
+        self.tf
+    }
 }
 
 /// [`derive_sequence`] over a whole recording a streaming decoder has already sequenced from its

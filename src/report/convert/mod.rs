@@ -4,6 +4,7 @@
 
 mod args;
 mod export;
+mod streamed;
 
 pub use args::{ImportArgs, for_import, parse_columns, parse_positions, protocol_config};
 pub use export::{ExportReport, SimulateReport, export, simulate};
@@ -126,10 +127,61 @@ impl Loaded {
 /// the protocol (a file is then never read as a table); its options pick the stream (a bag's
 /// topic, a ULog instance, …).
 pub fn load(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Result<Loaded> {
+    match load_or_leave(input, pc, o, false)? {
+        Read::Whole(r) => Ok(r),
+        // Only with `leave_protocol_file`.
+        Read::ProtocolFile => Err(anyhow::anyhow!(
+            "{}: left to be streamed, not read",
+            input.display()
+        )),
+    }
+}
+
+/// `imuprep import`: `input` read as [`load_with`] reads it, written to `output` as a native
+/// log. A single file the protocol decoders read (a native log, UBX, MAVLink, ULog, MCAP) is
+/// streamed to the log ([`streamed::import_file`], the same log [`Loaded::write`] writes, never
+/// held whole); anything else (a table, a bag, a bag directory) is read whole and written.
+pub fn import(
+    input: &Path,
+    proto: &ProtocolArgs,
+    a: &ImportArgs,
+    output: &Path,
+) -> Result<ImportReport> {
+    let pc = protocol_config(proto);
+    let o = a.options()?;
+    if a.accel_file.is_none() {
+        match load_or_leave(input, &pc, &o, true)? {
+            Read::Whole(r) => r.write(output),
+            Read::ProtocolFile => streamed::import_file(input, &pc, &o, output),
+        }
+    } else {
+        load_as(input, &pc, a)?.write(output)
+    }
+}
+
+/// What [`read_recording`] did with a recording.
+enum Read {
+    /// Read it whole.
+    Whole(Loaded),
+    /// Left it, a single file the protocol decoders read, to be streamed (when asked to).
+    ProtocolFile,
+}
+
+/// [`load`], or with `leave_protocol_file` [`Read::ProtocolFile`] for a single file the
+/// protocol decoders read.
+fn load_or_leave(
+    input: &Path,
+    pc: &ProtocolConfig,
+    o: &ImportOptions,
+    leave_protocol_file: bool,
+) -> Result<Read> {
     if let Some(r) = o.time_from_index_hz {
         ensure!(r.is_finite() && r > 0.0, "--rate must be > 0 Hz");
     }
-    let mut r = read_recording(input, pc, o)?;
+    let mut r = match read_recording(input, pc, o, leave_protocol_file)? {
+        Read::Whole(r) => r,
+        left => return Ok(left),
+    };
     // `--rebase-time` for every input (a table's reader has already done it: then a no-op):
     // the earliest stamp, the first in any record whose time does not run backwards.
     if o.rebase_time
@@ -139,7 +191,7 @@ pub fn load(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Result<Load
             s.t_ns -= t0;
         }
     }
-    Ok(r)
+    Ok(Read::Whole(r))
 }
 
 /// The flags set in `o` that only a text table's reader reads (its columns, units, rows and
@@ -170,8 +222,13 @@ fn no_table_flags(input: &Path, label: &str, o: &ImportOptions) -> Result<()> {
     Ok(())
 }
 
-/// [`load`] before `--rebase-time`.
-fn read_recording(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Result<Loaded> {
+/// [`load_or_leave`] before `--rebase-time`.
+fn read_recording(
+    input: &Path,
+    pc: &ProtocolConfig,
+    o: &ImportOptions,
+    leave_protocol_file: bool,
+) -> Result<Read> {
     // A bag compressed whole (rosbag2's file compression): inflated, then read as what it is.
     #[cfg(any(feature = "ros2", feature = "ros2-sqlite"))]
     if let Some((dir, inflated, said)) = inflate_whole(input)? {
@@ -191,7 +248,7 @@ fn read_recording(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Resul
             Some(d) => format!("{said}; {d}"),
             None => said,
         });
-        return Ok(r);
+        return Ok(Read::Whole(r));
     }
     // Bags read whole by their own readers (each behind its feature).
     #[cfg(feature = "ros1")]
@@ -203,13 +260,14 @@ fn read_recording(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Resul
             "a ROS 1 bag that cannot be imported",
             "ROS 1 bag",
             bag,
-        );
+        )
+        .map(Read::Whole);
     }
     #[cfg(feature = "ros2-sqlite")]
     if crate::io::ros2_db3::is_db3(input) {
         let bag = crate::io::ros2_db3::read_db3(input, &pc.mcap);
         let what = "an SQLite file that cannot be imported as a ROS 2 bag";
-        return import_bag(input, o, what, "ROS 2 bag (SQLite)", bag);
+        return import_bag(input, o, what, "ROS 2 bag (SQLite)", bag).map(Read::Whole);
     }
     // A directory (a rosbag2 bag is one): its MCAP file, or its files split as rosbag2 splits a
     // long recording, read as one; anything else is said.
@@ -217,7 +275,7 @@ fn read_recording(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Resul
         let files = bag_dir_files(input)?;
         // One file, or a build that reads no MCAP (its first file then says so).
         if files.len() == 1 || !cfg!(feature = "ros2") {
-            return load(&files[0], pc, o);
+            return load(&files[0], pc, o).map(Read::Whole);
         }
         let (d, samples, decoded, timing) = decoded(input, read_files_whole(&files, pc)?, o)?;
         let decoded = format!(
@@ -225,7 +283,13 @@ fn read_recording(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Resul
             files.len(),
             names(&files)
         );
-        return Ok(loaded(input, None, (d, samples), Some(decoded), timing));
+        return Ok(Read::Whole(loaded(
+            input,
+            None,
+            (d, samples),
+            Some(decoded),
+            timing,
+        )));
     }
     // A text table by its name (.csv, .csv.gz: read as one whatever its content, as always), or
     // by its content (any other name: text with a consistent delimiter; a binary file goes to
@@ -256,13 +320,21 @@ fn read_recording(input: &Path, pc: &ProtocolConfig, o: &ImportOptions) -> Resul
             .into());
         }
         (d, s, None, Some(report.to_string()))
+    } else if leave_protocol_file {
+        return Ok(Read::ProtocolFile);
     } else {
         // The whole file is at hand: time faults and rate derived over all of it, as for a CSV
         // (`read_any_whole`), not as the streaming decoder learned them.
         let (d, s, decoded, timing) = decoded(input, read_any_whole(input, pc)?, o)?;
         (d, s, Some(decoded), timing)
     };
-    Ok(loaded(input, None, (d, samples), decoded, timing))
+    Ok(Read::Whole(loaded(
+        input,
+        None,
+        (d, samples),
+        decoded,
+        timing,
+    )))
 }
 
 /// A protocol decoder's whole-file result as an import: checked for input that decodes to
@@ -283,21 +355,42 @@ fn decoded(
     ),
     o: &ImportOptions,
 ) -> Result<Imported> {
-    check_input(input, f.samples.len() as u64, &f.stats)?;
+    let (f, samples) = f.split();
+    let d = checked(input, &f, samples.len() as u64, o)?;
+    Ok((d, samples, first_line(&f), Some(timing(&f.stats, time))))
+}
+
+/// A protocol decoder's file checked as an import (nothing decoded, mostly garbage, flags only
+/// a table's reader reads), and its descriptor with the ranges the options set.
+fn checked(
+    input: &Path,
+    f: &crate::frame::detect::FileDecoding,
+    samples: u64,
+    o: &ImportOptions,
+) -> Result<crate::frame::Descriptor> {
+    check_input(input, samples, &f.stats)?;
     no_table_flags(input, &format!("a {} recording", f.protocol), o)?;
     let mut d = f.descriptor.unwrap_or_default();
     d.gyro_range_rad_s = o.gyro_range_rad_s;
     d.accel_range_m_s2 = o.accel_range_m_s2;
-    let timing = Some(match time {
-        Some(tf) => format!("{tf}{}", frame_faults(&f.stats)),
-        None => protocol_faults(&f.stats),
-    });
-    Ok((
-        d,
-        f.samples,
-        format!("{} input: {}", f.protocol, f.found),
-        timing,
-    ))
+    Ok(d)
+}
+
+/// The import's first line for a protocol decoder's file: "<protocol> input: <what was found>".
+fn first_line(f: &crate::frame::detect::FileDecoding) -> String {
+    format!("{} input: {}", f.protocol, f.found)
+}
+
+/// What the import says of the time stamps: the time faults derived over the whole file, or
+/// (a native log, sequenced by its frame counter) the decoder's own.
+fn timing(
+    stats: &crate::frame::DecoderStats,
+    time: Option<crate::io::timing::TimeFaults>,
+) -> String {
+    match time {
+        Some(tf) => format!("{tf}{}", frame_faults(stats)),
+        None => protocol_faults(stats),
+    }
 }
 
 /// The files' names, comma separated.
