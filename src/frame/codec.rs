@@ -8,7 +8,7 @@
 
 use super::*;
 use bytes::{Buf, BytesMut};
-use tokio_util::codec::{Decoder, Encoder};
+use tokio_util::codec::Decoder;
 
 /// Every fault and every frame the decoder has seen, since it was created.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -312,26 +312,6 @@ impl Decoder for FrameDecoder {
                 return Ok(None);
             }
         }
-    }
-}
-
-/// Encoder for output streams: samples (plain or with bias) and descriptors.
-#[derive(Debug, Default, Clone, Copy)]
-pub struct FrameEncoder;
-
-impl Encoder<&Sample> for FrameEncoder {
-    type Error = std::io::Error;
-    fn encode(&mut self, s: &Sample, dst: &mut BytesMut) -> Result<(), std::io::Error> {
-        encode_sample(s, dst);
-        Ok(())
-    }
-}
-
-impl Encoder<&Descriptor> for FrameEncoder {
-    type Error = std::io::Error;
-    fn encode(&mut self, d: &Descriptor, dst: &mut BytesMut) -> Result<(), std::io::Error> {
-        encode_descriptor(d, dst);
-        Ok(())
     }
 }
 

@@ -38,7 +38,7 @@ use crate::sample::{Sample, flags};
 use bytes::{BufMut, BytesMut};
 use crc::{CRC_16_IBM_3740, Crc, Table};
 
-pub use codec::{DecoderStats, FrameDecoder, FrameEncoder};
+pub use codec::{DecoderStats, FrameDecoder};
 pub use protocol::{Carrier, Codec, Decoded, Protocol, ProtocolDecoder, TimeTracker};
 
 /// Two sync bytes that open every frame.
