@@ -12,7 +12,7 @@ use crate::frame::{
     check_log_header, encode_log_header, encode_sample,
 };
 use crate::sample::{Sample, SampleSink};
-use bytes::BytesMut;
+use bytes::{Buf, BytesMut};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use tokio_util::codec::Decoder;
@@ -144,6 +144,44 @@ pub fn decode_log(bytes: &[u8]) -> Result<LogContents, LogHeaderError> {
         }
     }
     Ok((desc, out, dec.stats()))
+}
+
+/// `samples` as the log [`write_log`] would write of them (with `d`) reads back: what
+/// [`decode_log`] gives for [`encode_log`]'s bytes (single-precision values, the decoder's
+/// flags), with the descriptor read back and the decoder's counters — converted in place, one
+/// frame at a time, so neither the log's bytes nor a second set of samples is held.
+pub fn through_log(
+    d: &Descriptor,
+    samples: &mut Vec<Sample>,
+) -> (Option<Descriptor>, DecoderStats) {
+    let mut buf = BytesMut::with_capacity(256);
+    encode_log_header(d, &mut buf);
+    buf.advance(LOG_HEADER_LEN);
+    let mut dec = FrameDecoder::new();
+    let mut desc = None;
+    // Decoded samples overwrite the ones already encoded: a frame gives at most one, so the
+    // write position never passes the read one.
+    let mut w = 0;
+    let mut drain = |buf: &mut BytesMut, samples: &mut Vec<Sample>, w: &mut usize| {
+        // `decode_eof` never fails for the native decoder: bad bytes are counted, not errors.
+        while let Ok(Some(m)) = dec.decode_eof(buf) {
+            match m {
+                Message::Sample(s) => {
+                    samples[*w] = s;
+                    *w += 1;
+                }
+                Message::Descriptor(d) => desc = desc.or(Some(d)),
+                Message::Health(_) => {}
+            }
+        }
+    };
+    drain(&mut buf, samples, &mut w);
+    for r in 0..samples.len() {
+        encode_sample(&samples[r], &mut buf);
+        drain(&mut buf, samples, &mut w);
+    }
+    samples.truncate(w);
+    (desc, dec.stats())
 }
 
 /// Read every sample of a recorded log (through the live decoder), with its decoder counters.
@@ -330,6 +368,45 @@ mod tests {
                 s
             })
             .collect()
+    }
+
+    #[test]
+    fn a_round_trip_in_place_is_the_whole_log_decoded() {
+        let d = Descriptor {
+            sample_rate_hz: 100.0,
+            absent: 0b100000,
+            ..Descriptor::default()
+        };
+        let mut rng = crate::rng::Rng::new(7);
+        let mut s = samples(3000);
+        for (i, x) in s.iter_mut().enumerate() {
+            // Values f32 cannot hold, sequence faults the decoder flags (repeats, jumps,
+            // steps back), a removed bias (the longer frame), NaN and an absent channel.
+            x.set_channels(&std::array::from_fn(|_| rng.normal()));
+            x.seq = match i % 97 {
+                5 => x.seq - 1,
+                6 => x.seq + 40,
+                7 => x.seq.saturating_sub(3000),
+                _ => x.seq,
+            };
+            if i % 3 == 0 {
+                x.flags |= crate::sample::flags::BIAS_REMOVED;
+                x.bias = [1e-3; 6];
+            }
+            if i % 50 == 0 {
+                x.gyro[1] = f64::NAN;
+            }
+            x.absent = 0b100000;
+        }
+        let mut whole = BytesMut::new();
+        encode_log(&d, &s, &mut whole);
+        let (want_d, want, want_st) = decode_log(&whole).unwrap();
+        let (got_d, got_st) = through_log(&d, &mut s);
+        assert_eq!((got_d, got_st), (want_d, want_st));
+        assert!(want_st.duplicates > 0 && want_st.gaps > 0, "{want_st:?}");
+        let bits = |v: &[Sample]| format!("{v:?}");
+        assert_eq!(s.len(), want.len());
+        assert_eq!(bits(&s), bits(&want));
     }
 
     #[test]

@@ -233,21 +233,19 @@ fn imported_span(
 
 /// `path` read as `imuprep import` reads it with the protocol options `pc` and the import flags
 /// `import`, what the import found said ([`say_imported`], naming the `flags` given), and the
-/// samples encoded as a log in memory and decoded again: to the bit what the log `import` writes
-/// would give (single-precision values, the decoder's flags), with that decoder's counters.
+/// samples taken through the log's frames and decoded again, in place
+/// ([`crate::io::log::through_log`]): to the bit what the log `import` writes would give
+/// (single-precision values, the decoder's flags), with that decoder's counters.
 pub(crate) fn imported_log(
     path: &Path,
     pc: &ProtocolConfig,
     import: &ImportArgs,
     flags: &[&str],
 ) -> Result<crate::io::log::LogContents> {
-    let loaded = convert::load_as(path, pc, import)?;
+    let mut loaded = convert::load_as(path, pc, import)?;
     say_imported(path, &loaded, flags);
-    let mut bytes = bytes::BytesMut::new();
-    crate::io::log::encode_log(&loaded.descriptor, &loaded.samples, &mut bytes);
-    drop(loaded);
-    crate::io::log::decode_log(&bytes)
-        .with_context(|| format!("{}: the import as a log", path.display()))
+    let (d, stats) = crate::io::log::through_log(&loaded.descriptor, &mut loaded.samples);
+    Ok((d, loaded.samples, stats))
 }
 
 /// What an import of `path` made for a command that takes a log found, said on the log (stderr):
