@@ -44,12 +44,16 @@ fn faulty() -> (imuprep::frame::Descriptor, Vec<Sample>) {
 fn a_streamed_import_writes_the_log_the_whole_import_writes() {
     let (d, s) = faulty();
     let dir = tempfile::tempdir().unwrap();
-    for to in [
+    let mut formats = vec![
         ExportFormat::Ulog,
         ExportFormat::Ubx,
         ExportFormat::Mavlink,
         ExportFormat::Native,
-    ] {
+    ];
+    if cfg!(feature = "ros2") {
+        formats.push(ExportFormat::Mcap);
+    }
+    for to in formats {
         let input = dir.path().join(format!("in.{to:?}"));
         std::fs::write(&input, encode_stream(to, &d, &s).unwrap()).unwrap();
         for rebase in [false, true] {
@@ -153,4 +157,60 @@ fn an_export_ulog_cannot_carry_is_refused_before_a_file_is_written() {
     let e = export(&log, &out, ExportFormat::Ulog).unwrap_err();
     assert!(format!("{e:#}").contains("export --to ulog"), "{e:#}");
     assert!(!out.exists(), "nothing written");
+}
+
+#[test]
+fn an_import_or_export_onto_its_own_input_replaces_it_whole() {
+    let (d, s) = faulty();
+    let dir = tempfile::tempdir().unwrap();
+    let ulg = encode_stream(ExportFormat::Ulog, &d, &s).unwrap();
+    let (p, a) = (ProtocolArgs::default(), ImportArgs::default());
+    // Imported elsewhere, then onto itself: the same log.
+    let (input, other) = (dir.path().join("x.ulg"), dir.path().join("other.log"));
+    std::fs::write(&input, &ulg).unwrap();
+    import(&input, &p, &a, &other).unwrap();
+    let r = import(&input, &p, &a, &input).unwrap();
+    assert_eq!(r.samples, s.len());
+    assert_eq!(
+        std::fs::read(&input).unwrap(),
+        std::fs::read(&other).unwrap()
+    );
+    // Exported elsewhere, then onto itself: the same CSV.
+    let log = Recording {
+        path: input.clone(),
+        ..Recording::default()
+    };
+    let csv = dir.path().join("other.csv");
+    export(&log, &csv, ExportFormat::Csv).unwrap();
+    export(&log, &input, ExportFormat::Csv).unwrap();
+    assert_eq!(std::fs::read(&input).unwrap(), std::fs::read(&csv).unwrap());
+    // No temporary file is left beside them.
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".part"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
+
+#[test]
+fn a_failed_import_or_export_leaves_an_existing_output_as_it_was() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.log");
+    std::fs::write(&out, b"keep me").unwrap();
+    // Garbage: nothing to import or export.
+    let bad = dir.path().join("bad.bin");
+    std::fs::write(&bad, vec![0x5Au8; 100_000]).unwrap();
+    assert!(import(&bad, &ProtocolArgs::default(), &ImportArgs::default(), &out).is_err());
+    let log = Recording {
+        path: bad,
+        ..Recording::default()
+    };
+    assert!(export(&log, &out, ExportFormat::Native).is_err());
+    assert_eq!(std::fs::read(&out).unwrap(), b"keep me");
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        2,
+        "no file left"
+    );
 }

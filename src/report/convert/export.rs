@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, ensure};
 use serde::Serialize;
 
-use super::{for_import, protocol_config, through_import};
+use super::{Replacing, for_import, protocol_config, through_import};
 use crate::frame::Descriptor;
 use crate::frame::detect::decode_file_into;
 use crate::io::convert::{ExportFormat, ExportWriter, exportable};
@@ -31,8 +31,9 @@ pub struct ExportReport {
 ///
 /// A recording the decoders read (a native log, UBX, MAVLink, ULog, MCAP) is streamed, never
 /// held: a first pass decodes it for its checks (input problems, the descriptor, the channels it
-/// lacks, which ULog must be able to mark) before `output` is created, a second writes each
-/// sample as it is decoded ([`ExportWriter`]). A recording read as `import` reads it is held
+/// lacks, which ULog must be able to mark) before anything is written, a second writes each
+/// sample as it is decoded ([`ExportWriter`]). `output` is written beside itself and put in
+/// place when complete ([`Replacing`]): it may be the input. A recording read as `import` reads it is held
 /// whole, as the import needs it (time faults derived over the whole file).
 pub fn export(
     log: &crate::report::Recording,
@@ -44,32 +45,32 @@ pub fn export(
     crate::report::no_import_flags_on_a_log(log, &import_flags)?;
     // Import flags given: the file is read as `import` reads it with them, whatever it is.
     let imports = !import_flags.is_empty() || through_import(log, pc.protocol);
-    let create = |d: &Descriptor, absent: u8| -> Result<ExportWriter<BufWriter<File>>> {
-        exportable(to, absent)?;
-        let f = File::create(output).with_context(|| format!("creating {}", output.display()))?;
-        Ok(ExportWriter::new(to, d, BufWriter::new(f))?)
-    };
+    let create =
+        |d: &Descriptor, absent: u8| -> Result<(ExportWriter<BufWriter<File>>, Replacing)> {
+            exportable(to, absent)?;
+            let (file, f) = Replacing::new(output)?;
+            Ok((ExportWriter::new(to, d, BufWriter::new(f))?, file))
+        };
     let written =
         |r: std::io::Result<()>| r.with_context(|| format!("writing {}", output.display()));
     let (samples, stats) = if imports {
         let pc = for_import(&pc, log.proto.protocol.is_some());
         let (d, samples, stats) = crate::report::imported_log(log, &pc, &log.import, &log.flags())?;
         let d = d.unwrap_or_default();
-        let mut w = create(&d, samples.iter().fold(d.absent, |m, s| m | s.absent))?;
+        let (mut w, file) = create(&d, samples.iter().fold(d.absent, |m, s| m | s.absent))?;
         for s in &samples {
             written(w.push(s))?;
         }
         written(w.finish().map(drop))?;
+        file.done()?;
         (samples.len(), stats)
     } else {
         let mut seen = Survey::default();
         let f = decode_file_into(log, &pc, &mut seen)?;
         check_input(log, seen.samples as u64, &f.stats)?;
         let d = f.descriptor.unwrap_or_default();
-        let mut w = Writing {
-            w: create(&d, seen.absent | d.absent)?,
-            failed: None,
-        };
+        let (w, file) = create(&d, seen.absent | d.absent)?;
+        let mut w = Writing { w, failed: None };
         decode_file_into(log, &pc, &mut w)?;
         if let Some(e) = w.failed {
             written(Err(e))?;
@@ -84,6 +85,7 @@ pub fn export(
             output.display()
         );
         written(w.w.finish().map(drop))?;
+        file.done()?;
         (seen.samples, f.stats)
     };
     Ok(ExportReport {

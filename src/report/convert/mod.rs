@@ -107,7 +107,18 @@ pub struct Loaded {
 impl Loaded {
     /// The samples written to `output` as a native log, and the report of it.
     pub fn write(self, output: &Path) -> Result<ImportReport> {
-        csvio::write_log(output, &self.descriptor, &self.samples)?;
+        let (file, f) = Replacing::new(output)?;
+        let mut w = crate::io::log::LogWriter::new(
+            std::io::BufWriter::with_capacity(1 << 16, f),
+            &self.descriptor,
+        );
+        let written =
+            |r: std::io::Result<()>| r.with_context(|| format!("writing {}", output.display()));
+        for s in &self.samples {
+            written(w.sample(s))?;
+        }
+        written(w.finish().map(drop))?;
+        file.done()?;
         Ok(ImportReport {
             output: output.to_path_buf(),
             samples: self.samples.len(),
@@ -536,6 +547,53 @@ fn loaded(
         timing,
         descriptor,
         samples,
+    }
+}
+
+/// A file written beside `output` (a temporary one in its folder) and put in its place only once
+/// it is complete ([`Replacing::done`]): a failed import or export leaves no partial file and an
+/// existing `output` as it was, and `output` may be the input itself, which a streamed import or
+/// export reads twice and must still be there for the second pass.
+pub(super) struct Replacing {
+    tmp: tempfile::NamedTempFile,
+    output: PathBuf,
+}
+
+impl Replacing {
+    /// The temporary file, and a handle to write it through.
+    pub(super) fn new(output: &Path) -> Result<(Self, std::fs::File)> {
+        let dir = output
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let mut b = tempfile::Builder::new();
+        b.prefix(".imuprep-").suffix(".part");
+        // As `File::create` makes it: read and write for all, less the umask.
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            b.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let made = || format!("creating {} (first as a file beside it)", output.display());
+        let tmp = b.tempfile_in(dir).with_context(made)?;
+        let f = tmp.as_file().try_clone().with_context(made)?;
+        Ok((
+            Replacing {
+                tmp,
+                output: output.to_path_buf(),
+            },
+            f,
+        ))
+    }
+
+    /// The complete file put in `output`'s place.
+    pub(super) fn done(self) -> Result<()> {
+        let output = self.output;
+        self.tmp
+            .persist(&output)
+            .map_err(|e| e.error)
+            .with_context(|| format!("writing {}", output.display()))?;
+        Ok(())
     }
 }
 

@@ -13,7 +13,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, ensure};
 
-use super::{ImportReport, checked, first_line, timing};
+use super::{ImportReport, Replacing, checked, first_line, timing};
 use crate::frame::Protocol;
 use crate::frame::detect::{ProtocolConfig, decode_file_into};
 use crate::io::convert::time_counters_from;
@@ -42,9 +42,10 @@ pub(super) fn import_file(
         }
     }
     let (lo, hi) = seen.span;
-    let file = File::create(output).with_context(|| format!("creating {}", output.display()))?;
+    // Written beside `output` and put in place when complete: `output` may be the input.
+    let (file, out) = Replacing::new(output)?;
     let mut w = Writing {
-        w: LogWriter::new(BufWriter::with_capacity(1 << 16, file), &d),
+        w: LogWriter::new(BufWriter::with_capacity(1 << 16, out), &d),
         sequencer: sequencer.as_mut(),
         // `--rebase-time`: the earliest stamp.
         t0: if o.rebase_time { lo } else { 0 },
@@ -66,6 +67,7 @@ pub(super) fn import_file(
         seen.samples,
         output.display()
     );
+    file.done()?;
     let mut stats = f.stats;
     let time = sequencer.map(|q| {
         let tf = q.faults();
