@@ -510,3 +510,28 @@ fn clipping_is_counted_by_simulate_and_warned_by_replay() {
     let summary = run(&["replay", log]);
     assert!(!summary.contains("clipped"), "{summary}");
 }
+
+#[test]
+fn a_replay_whose_output_is_its_own_recording_is_refused_and_the_recording_kept() {
+    // The sink creates its file before the source reads: the recording would be erased.
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("d.log");
+    std::fs::copy("replay/drive.log", &log).unwrap();
+    let before = std::fs::read(&log).unwrap();
+    for out in [
+        format!("file:{}", log.display()),
+        format!("csv:{}/./d.log", dir.path().display()),
+    ] {
+        let o = common::imuprep(&["replay", log.to_str().unwrap(), "--out", &out]);
+        assert_eq!(o.status.code(), Some(3), "{out}");
+        common::assert_says(
+            &String::from_utf8_lossy(&o.stderr),
+            &["is the recording being replayed", "write to another file"],
+        );
+        assert_eq!(
+            std::fs::read(&log).unwrap(),
+            before,
+            "{out}: recording kept"
+        );
+    }
+}

@@ -104,6 +104,7 @@ pub fn replay_source(
 
 /// Build the pipeline and run the daemon on a two-thread runtime until its source ends.
 pub fn run(cfg: &Config) -> Result<Health> {
+    no_sink_onto_the_replayed_file(cfg)?;
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -114,6 +115,35 @@ pub fn run(cfg: &Config) -> Result<Health> {
     // A stuck sink may still sit in a blocking write (stdout nobody reads): do not wait for it.
     rt.shutdown_timeout(std::time::Duration::from_secs(1));
     health
+}
+
+/// Refuses a sink whose file is the recording a replay source reads: the sink creates (so
+/// truncates) its file before the source has read a byte, and the recording would be lost.
+fn no_sink_onto_the_replayed_file(cfg: &Config) -> Result<()> {
+    use crate::config::Sink;
+    let SourceConfig::Replay { path: input, .. } = &cfg.source else {
+        return Ok(());
+    };
+    let Ok(input) = std::fs::canonicalize(input) else {
+        return Ok(());
+    };
+    for sink in &cfg.sinks {
+        let path = match sink {
+            Sink::File { path, .. } | Sink::Mcap { path, .. } => Some(path),
+            Sink::Inline { path } => path.as_ref(),
+            _ => None,
+        };
+        if let Some(p) = path
+            && std::fs::canonicalize(p).is_ok_and(|p| p == input)
+        {
+            return Err(super::InputProblem(format!(
+                "the output {} is the recording being replayed: writing it would erase the recording before it is read; write to another file",
+                p.display()
+            ))
+            .into());
+        }
+    }
+    Ok(())
 }
 
 /// Write the health summary as JSON when asked.
