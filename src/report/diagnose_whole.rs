@@ -5,7 +5,6 @@
 use std::io::Write;
 
 use anyhow::{Result, anyhow};
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::diagnose::{
@@ -63,12 +62,7 @@ pub fn diagnose_whole_samples(
         channels: vec![],
         warnings,
     };
-    let bar = ProgressBar::new(7 * p.chans.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
-            .map_err(|e| anyhow!(e.to_string()))?
-            .progress_chars("=> "),
-    );
+    let bar = super::progress::bar(7 * p.chans.len() as u64);
     for &c in &p.chans {
         let name = CHANNEL_NAMES[c];
         let others = others_of(&p.series, c);

@@ -70,8 +70,14 @@ pub fn export(
         check_input(log, seen.samples as u64, &f.stats)?;
         let d = f.descriptor.unwrap_or_default();
         let (w, file) = create(&d, seen.absent | d.absent)?;
-        let mut w = Writing { w, failed: None };
+        let bar = crate::report::progress::samples_bar(seen.samples as u64, "samples exported");
+        let mut w = Writing {
+            w,
+            failed: None,
+            bar,
+        };
         decode_file_into(log, &pc, &mut w)?;
+        w.bar.finish_and_clear();
         if let Some(e) = w.failed {
             written(Err(e))?;
         }
@@ -115,6 +121,7 @@ impl SampleSink for Survey {
 struct Writing {
     w: ExportWriter<BufWriter<File>>,
     failed: Option<std::io::Error>,
+    bar: indicatif::ProgressBar,
 }
 
 impl SampleSink for Writing {
@@ -124,6 +131,13 @@ impl SampleSink for Writing {
             && let Err(e) = self.w.push(&s)
         {
             self.failed = Some(e);
+        }
+        if self
+            .w
+            .samples()
+            .is_multiple_of(crate::report::progress::SAMPLE_STEP)
+        {
+            self.bar.inc(crate::report::progress::SAMPLE_STEP);
         }
     }
 }

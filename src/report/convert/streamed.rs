@@ -51,8 +51,10 @@ pub(super) fn import_file(
         t0: if o.rebase_time { lo } else { 0 },
         samples: 0,
         failed: None,
+        bar: crate::report::progress::samples_bar(seen.samples, "samples imported"),
     };
     decode_file_into(input, pc, &mut w)?;
+    w.bar.finish_and_clear();
     let written = w.samples;
     let failed = w.failed.take();
     let finished = w.w.finish();
@@ -122,12 +124,19 @@ struct Writing<'a> {
     t0: u64,
     samples: u64,
     failed: Option<std::io::Error>,
+    bar: indicatif::ProgressBar,
 }
 
 impl SampleSink for Writing<'_> {
     fn expect(&mut self, _: usize) {}
     fn push(&mut self, mut s: Sample) {
         self.samples += 1;
+        if self
+            .samples
+            .is_multiple_of(crate::report::progress::SAMPLE_STEP)
+        {
+            self.bar.inc(crate::report::progress::SAMPLE_STEP);
+        }
         if self.failed.is_some() {
             return;
         }
