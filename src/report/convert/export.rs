@@ -32,9 +32,9 @@ pub struct ExportReport {
 /// A recording the decoders read (a native log, UBX, MAVLink, ULog, MCAP) is streamed, never
 /// held: a first pass decodes it for its checks (input problems, the descriptor, the channels it
 /// lacks, which ULog must be able to mark) before anything is written, a second writes each
-/// sample as it is decoded ([`ExportWriter`]). `output` is written beside itself and put in
-/// place when complete ([`Replacing`]): it may be the input. A recording read as `import` reads it is held
-/// whole, as the import needs it (time faults derived over the whole file).
+/// sample as it is decoded ([`ExportWriter`]). A recording read as `import` reads it is held
+/// whole, as the import needs it (time faults derived over the whole file). `output` is
+/// written beside itself and put in place when complete ([`Replacing`]): it may be the input.
 pub fn export(
     log: &crate::report::Recording,
     output: &Path,
