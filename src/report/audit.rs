@@ -220,18 +220,23 @@ pub fn audit_dir(dir: &Path, seeds: Seeds, cfg: &Config) -> std::io::Result<Audi
         recordings: Vec::new(),
         skipped: Vec::new(),
     };
-    for p in find_recordings(dir)? {
+    let files = find_recordings(dir)?;
+    let bar = super::progress::bar(files.len() as u64);
+    for p in files {
         let name = p
             .strip_prefix(dir)
             .unwrap_or(&p)
             .to_string_lossy()
             .into_owned();
+        bar.set_message(name.clone());
         let res =
             load_recording(&p).and_then(|(d, s)| audit_recording(&name, &p, &d, &s, seeds, cfg));
         match res {
             Ok(r) => report.recordings.push(r),
             Err(reason) => report.skipped.push(Skipped { path: p, reason }),
         }
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     Ok(report)
 }

@@ -76,6 +76,11 @@ pub fn run_config(
     cfg.stages
         .set_sample_rate(desc.sample_rate_hz)
         .map_err(|e| e.to_string())?;
-    let mut p = cfg.stages.build()?;
-    Ok(crate::stage::run_through(&mut p, samples))
+    // The stages' own messages (lines found, model-health alarms: hundreds over an audit's
+    // runs, most of them on the injected copies) are the daemon's, not the audit's report.
+    let quiet = tracing::subscriber::NoSubscriber::default();
+    tracing::subscriber::with_default(quiet, || {
+        let mut p = cfg.stages.build()?;
+        Ok(crate::stage::run_through(&mut p, samples))
+    })
 }
