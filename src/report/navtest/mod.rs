@@ -367,6 +367,12 @@ pub struct NavtestReport {
 /// Variant (c) on each record uses the models `fit` made on its own fit stretch and on the
 /// other records of the same sensor, for each of [`MIN_STILL_CHOICES_S`].
 pub fn navtest(data: &Path, cfg: &Config, with_static: bool) -> NavtestReport {
+    // The fits' and the stages' own messages (lines found, …) are not the test's report.
+    let quiet = tracing::subscriber::NoSubscriber::default();
+    tracing::subscriber::with_default(quiet, || run_navtest(data, cfg, with_static))
+}
+
+fn run_navtest(data: &Path, cfg: &Config, with_static: bool) -> NavtestReport {
     let mut rep = NavtestReport {
         records: vec![],
         record_errors: vec![],
@@ -376,6 +382,9 @@ pub fn navtest(data: &Path, cfg: &Config, with_static: bool) -> NavtestReport {
     let mut loaded = vec![];
     let mut specs = default_records(&data.join("rtklibexplorer_drive_walk"));
     specs.push(comma_record(&data.join("comma2k19_car_segment")));
+    // One step a record fitted, one a record run, one a static bench.
+    let benches = if with_static { 2 } else { 0 };
+    let bar = super::progress::bar(2 * specs.len() as u64 + benches);
     for spec in specs {
         match load(&spec) {
             Ok(l) => loaded.push(l),
@@ -385,12 +394,14 @@ pub fn navtest(data: &Path, cfg: &Config, with_static: bool) -> NavtestReport {
     let mut models = vec![];
     let mut fit_errors = vec![];
     for l in &loaded {
+        bar.set_message(format!("{}: fitting", l.spec.name));
         for m in MIN_STILL_CHOICES_S {
             match fit_models(&l.spec, &l.desc, &l.raw, m) {
                 Ok(f) => models.push(f),
                 Err(e) => fit_errors.push((l.spec.name.clone(), m, e)),
             }
         }
+        bar.inc(1);
     }
     for l in &loaded {
         // This record's own models first.
@@ -407,7 +418,10 @@ pub fn navtest(data: &Path, cfg: &Config, with_static: bool) -> NavtestReport {
                     .any(|o| o.spec.name == m.record && o.spec.sensor == l.spec.sensor)
         };
         mine.extend(models.iter().filter(same_sensor).cloned());
-        match run_record(l, cfg, &mine) {
+        bar.set_message(format!("{}: the filter's runs", l.spec.name));
+        let run = run_record(l, cfg, &mine);
+        bar.inc(1);
+        match run {
             Ok(mut r) => {
                 r.fit_errors = fit_errors
                     .iter()
@@ -432,11 +446,15 @@ pub fn navtest(data: &Path, cfg: &Config, with_static: bool) -> NavtestReport {
                 5.0,
             ),
         ] {
-            match run_bench(name, &p, cfg, skip) {
+            bar.set_message(format!("{name}: free-inertial drift"));
+            let run = run_bench(name, &p, cfg, skip);
+            bar.inc(1);
+            match run {
                 Ok(r) => rep.drift.extend(r),
                 Err(e) => rep.drift_errors.push((name.into(), e)),
             }
         }
     }
+    bar.finish_and_clear();
     rep
 }
