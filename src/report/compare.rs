@@ -135,7 +135,9 @@ pub fn bias_models(
     let settings = CompareSettings::paper(rate);
     let exo: Vec<&[f64]> = temp.into_iter().collect();
     let mut out = Vec::new();
+    let bar = super::progress::bar(chans.len() as u64);
     for c in chans {
+        bar.set_message(CHANNEL_NAMES[c]);
         let y = &samples.values[c];
         let kind = if c < 3 {
             SensorKind::Gyro
@@ -153,7 +155,9 @@ pub fn bias_models(
                 )
             })?,
         );
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     Ok(BiasCompareReport {
         channels: out,
         skipped,
