@@ -214,3 +214,35 @@ fn a_failed_import_or_export_leaves_an_existing_output_as_it_was() {
         "no file left"
     );
 }
+
+#[cfg(unix)]
+#[test]
+fn an_output_that_is_a_link_or_a_device_is_written_through() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = Recording {
+        path: "replay/drive.log".into(),
+        ..Recording::default()
+    };
+    // A link keeps being a link; the file it names gets the export.
+    let (real, link) = (dir.path().join("real.csv"), dir.path().join("link.csv"));
+    std::fs::write(&real, b"old").unwrap();
+    std::os::unix::fs::symlink(&real, &link).unwrap();
+    let r = export(&log, &link, ExportFormat::Csv).unwrap();
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    let text = std::fs::read_to_string(&real).unwrap();
+    assert_eq!(text.lines().count(), r.samples + 1, "header and rows");
+    // A device cannot be replaced by a file: written directly (`-o /dev/stdout` is this case).
+    let null = Path::new("/dev/null");
+    export(&log, null, ExportFormat::Native).unwrap();
+    let (p, a) = (ProtocolArgs::default(), ImportArgs::default());
+    import(Path::new("replay/drive.log"), &p, &a, null).unwrap();
+    assert!(
+        !std::fs::metadata(null).unwrap().is_file(),
+        "still a device"
+    );
+}

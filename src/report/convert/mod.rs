@@ -553,16 +553,37 @@ fn loaded(
 /// A file written beside `output` (a temporary one in its folder) and put in its place only once
 /// it is complete ([`Replacing::done`]): a failed import or export leaves no partial file and an
 /// existing `output` as it was, and `output` may be the input itself, which a streamed import or
-/// export reads twice and must still be there for the second pass.
+/// export reads twice and must still be there for the second pass. A link to a file has the file
+/// it names replaced; an `output` that is no file (a device or a pipe: `-o /dev/stdout`) cannot
+/// be replaced and is written directly, as before.
 pub(super) struct Replacing {
-    tmp: tempfile::NamedTempFile,
+    /// The temporary file and the path it is renamed to (`None`: written directly).
+    tmp: Option<(tempfile::NamedTempFile, PathBuf)>,
     output: PathBuf,
 }
 
 impl Replacing {
-    /// The temporary file, and a handle to write it through.
+    /// The temporary file (or `output` itself), and a handle to write it through.
     pub(super) fn new(output: &Path) -> Result<(Self, std::fs::File)> {
-        let dir = output
+        let made = || format!("creating {}", output.display());
+        if std::fs::metadata(output).is_ok_and(|m| !m.is_file()) {
+            let f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(output)
+                .with_context(made)?;
+            let direct = Replacing {
+                tmp: None,
+                output: output.to_path_buf(),
+            };
+            return Ok((direct, f));
+        }
+        let target = match std::fs::symlink_metadata(output) {
+            Ok(m) if m.file_type().is_symlink() => {
+                std::fs::canonicalize(output).unwrap_or_else(|_| output.to_path_buf())
+            }
+            _ => output.to_path_buf(),
+        };
+        let dir = target
             .parent()
             .filter(|p| !p.as_os_str().is_empty())
             .unwrap_or(Path::new("."));
@@ -574,25 +595,24 @@ impl Replacing {
             use std::os::unix::fs::PermissionsExt;
             b.permissions(std::fs::Permissions::from_mode(0o666));
         }
-        let made = || format!("creating {} (first as a file beside it)", output.display());
-        let tmp = b.tempfile_in(dir).with_context(made)?;
-        let f = tmp.as_file().try_clone().with_context(made)?;
-        Ok((
-            Replacing {
-                tmp,
-                output: output.to_path_buf(),
-            },
-            f,
-        ))
+        let beside = || format!("creating {} (first as a file beside it)", output.display());
+        let tmp = b.tempfile_in(dir).with_context(beside)?;
+        let f = tmp.as_file().try_clone().with_context(beside)?;
+        let r = Replacing {
+            tmp: Some((tmp, target)),
+            output: output.to_path_buf(),
+        };
+        Ok((r, f))
     }
 
     /// The complete file put in `output`'s place.
     pub(super) fn done(self) -> Result<()> {
-        let output = self.output;
-        self.tmp
-            .persist(&output)
-            .map_err(|e| e.error)
-            .with_context(|| format!("writing {}", output.display()))?;
+        if let Some((tmp, target)) = self.tmp {
+            let output = self.output;
+            tmp.persist(&target)
+                .map_err(|e| e.error)
+                .with_context(|| format!("writing {}", output.display()))?;
+        }
         Ok(())
     }
 }
