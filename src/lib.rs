@@ -19,6 +19,7 @@ pub mod frame;
 pub mod io;
 pub mod model;
 pub mod nav;
+pub mod progress;
 pub mod report;
 pub mod rng;
 pub mod runtime;

@@ -318,7 +318,7 @@ fn main() -> ExitCode {
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
     tracing_subscriber::fmt()
         .with_env_filter(filter)
-        .with_writer(std::io::stderr)
+        .with_writer(|| AboveBars)
         // Colour codes only for a terminal: a log file or a pipe gets plain text.
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .with_target(false)
@@ -333,6 +333,19 @@ fn main() -> ExitCode {
             eprintln!("imuprep: error: {e:#}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// stderr for the log: each line written with the progress bars taken off the screen, so it
+/// lands above them instead of inside one.
+struct AboveBars;
+
+impl std::io::Write for AboveBars {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        imuprep::progress::suspend(|| std::io::stderr().write_all(buf)).map(|()| buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        std::io::stderr().flush()
     }
 }
 

@@ -226,6 +226,8 @@ pub fn read_log_span_into(
     let mut head = [0u8; crate::frame::LOG_HEADER_LEN];
     let got = read_full(&mut f, &mut head).map_err(io)?;
     check_log_header(&head[..got]).map_err(header_error(path))?;
+    // A bar over the frames' bytes once the read has taken a second (a long log read whole).
+    let mut f = crate::progress::ReadBar::new(f, file_len.saturating_sub(got as u64), "read");
     const CHUNK: usize = 64 * 1024;
     let mut buf = BytesMut::with_capacity(2 * CHUNK);
     let mut dec = FrameDecoder::new();

@@ -40,8 +40,13 @@ pub fn write_sim_log(
         std::io::BufWriter::with_capacity(1 << 16, std::fs::File::create(log).map_err(at(log))?);
     let mut lw = LogWriter::new(out, &descriptor(&sim));
     let mut sum = SimLogSummary::default();
+    let mut bar = crate::progress::Delayed::steps(sim.len() as u64, "instants simulated");
     while let Some(r) = sim.next_record() {
         sum.instants += 1;
+        // A move costs more than an instant: one per 2¹⁴.
+        if sum.instants.is_multiple_of(1 << 14) {
+            bar.inc(1 << 14);
+        }
         sum.clipped += u64::from((r.sample.flags & crate::sample::flags::SAT_ANY).count_ones());
         let copies = match r.emission {
             Emission::Normal => 1,

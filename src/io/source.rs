@@ -254,6 +254,14 @@ pub async fn replay_with(
     tx: mpsc::Sender<SourceEvent>,
 ) {
     let pace = (speed > 0.0).then_some(speed);
+    // A bar over the bytes still to replay, once the replay has taken a second.
+    let mut file = file;
+    let left = match (file.metadata().await, file.stream_position().await) {
+        (Ok(m), Ok(at)) => m.len().saturating_sub(at),
+        _ => 0,
+    };
+    let mut bar = crate::progress::Delayed::bytes(left, "replayed");
+    let file = tokio_util::io::InspectReader::new(file, move |b: &[u8]| bar.inc(b.len() as u64));
     let (dec, err, alive) = pump(file, Codec(decoder), &tx, pace, side).await;
     if let Some(e) = err {
         tracing::error!("replay read failed: {e}");

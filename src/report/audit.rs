@@ -221,7 +221,7 @@ pub fn audit_dir(dir: &Path, seeds: Seeds, cfg: &Config) -> std::io::Result<Audi
         skipped: Vec::new(),
     };
     let files = find_recordings(dir)?;
-    let bar = super::progress::bar(files.len() as u64);
+    let bar = crate::progress::bar(files.len() as u64);
     for p in files {
         let name = p
             .strip_prefix(dir)

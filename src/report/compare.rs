@@ -135,7 +135,7 @@ pub fn bias_models(
     let settings = CompareSettings::paper(rate);
     let exo: Vec<&[f64]> = temp.into_iter().collect();
     let mut out = Vec::new();
-    let bar = super::progress::bar(chans.len() as u64);
+    let bar = crate::progress::bar(chans.len() as u64);
     for c in chans {
         bar.set_message(CHANNEL_NAMES[c]);
         let y = &samples.values[c];

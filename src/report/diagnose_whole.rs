@@ -62,7 +62,7 @@ pub fn diagnose_whole_samples(
         channels: vec![],
         warnings,
     };
-    let bar = super::progress::bar(7 * p.chans.len() as u64);
+    let bar = crate::progress::bar(7 * p.chans.len() as u64);
     for &c in &p.chans {
         let name = CHANNEL_NAMES[c];
         let others = others_of(&p.series, c);

@@ -17,7 +17,6 @@ pub mod fit;
 pub mod flag_review;
 pub mod gate_sweep;
 pub mod navtest;
-pub mod progress;
 
 use std::path::{Path, PathBuf};
 

@@ -57,6 +57,15 @@ pub async fn run(cfg: &Config, mut pipeline: Pipeline) -> anyhow::Result<Health>
         #[cfg(feature = "zenoh")]
         stop: Some(stop_rx.clone()),
     };
+    // Samples on stdout, in the terminal the bars draw on: no bars, or they would tear the lines.
+    if cfg
+        .sinks
+        .iter()
+        .any(|s| matches!(s, crate::config::Sink::Stdout { .. }))
+        && std::io::IsTerminal::is_terminal(&std::io::stdout())
+    {
+        crate::progress::hide();
+    }
     // Sinks first: a bad address or path fails before any data is read.
     let mut sinks = Vec::new();
     for s in &cfg.sinks {

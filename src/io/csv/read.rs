@@ -138,10 +138,14 @@ pub(super) struct Table<'a> {
 }
 
 fn open_text(path: &Path) -> Result<Box<dyn BufRead>, CsvError> {
-    let f = std::fs::File::open(path).map_err(|err| CsvError::Io {
+    let io_err = |err| CsvError::Io {
         path: path.into(),
         err,
-    })?;
+    };
+    let f = std::fs::File::open(path).map_err(io_err)?;
+    // A bar over the file's bytes (compressed, for a .gz) once the read has taken a second.
+    let len = f.metadata().map_err(io_err)?.len();
+    let f = crate::progress::ReadBar::new(f, len, "read");
     let r: Box<dyn Read> = if path.extension().is_some_and(|e| e == "gz") {
         Box::new(flate2::read::MultiGzDecoder::new(f))
     } else {

@@ -70,7 +70,7 @@ pub fn export(
         check_input(log, seen.samples as u64, &f.stats)?;
         let d = f.descriptor.unwrap_or_default();
         let (w, file) = create(&d, seen.absent | d.absent)?;
-        let bar = crate::report::progress::samples_bar(seen.samples as u64, "samples exported");
+        let bar = crate::progress::samples_bar(seen.samples as u64, "samples exported");
         let mut w = Writing {
             w,
             failed: None,
@@ -135,9 +135,9 @@ impl SampleSink for Writing {
         if self
             .w
             .samples()
-            .is_multiple_of(crate::report::progress::SAMPLE_STEP)
+            .is_multiple_of(crate::progress::SAMPLE_STEP)
         {
-            self.bar.inc(crate::report::progress::SAMPLE_STEP);
+            self.bar.inc(crate::progress::SAMPLE_STEP);
         }
     }
 }

@@ -51,7 +51,7 @@ pub(super) fn import_file(
         t0: if o.rebase_time { lo } else { 0 },
         samples: 0,
         failed: None,
-        bar: crate::report::progress::samples_bar(seen.samples, "samples imported"),
+        bar: crate::progress::samples_bar(seen.samples, "samples imported"),
     };
     decode_file_into(input, pc, &mut w)?;
     w.bar.finish_and_clear();
@@ -131,11 +131,8 @@ impl SampleSink for Writing<'_> {
     fn expect(&mut self, _: usize) {}
     fn push(&mut self, mut s: Sample) {
         self.samples += 1;
-        if self
-            .samples
-            .is_multiple_of(crate::report::progress::SAMPLE_STEP)
-        {
-            self.bar.inc(crate::report::progress::SAMPLE_STEP);
+        if self.samples.is_multiple_of(crate::progress::SAMPLE_STEP) {
+            self.bar.inc(crate::progress::SAMPLE_STEP);
         }
         if self.failed.is_some() {
             return;

@@ -384,7 +384,7 @@ fn run_navtest(data: &Path, cfg: &Config, with_static: bool) -> NavtestReport {
     specs.push(comma_record(&data.join("comma2k19_car_segment")));
     // One step a record fitted, one a record run, one a static bench.
     let benches = if with_static { 2 } else { 0 };
-    let bar = super::progress::bar(2 * specs.len() as u64 + benches);
+    let bar = crate::progress::bar(2 * specs.len() as u64 + benches);
     for spec in specs {
         match load(&spec) {
             Ok(l) => loaded.push(l),
