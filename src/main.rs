@@ -399,13 +399,15 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             // A replay source is read as `imuprep replay` reads its file; the config's
             // `protocol` counts as named unless it is the default, "native" (as `replay`
             // without --protocol, a file that decodes as a sensor protocol is then detected).
-            let cfg = load_daemon_config(&config)?;
+            // The outputs are added first: a bad one, or one that is the recording, is refused
+            // before anything is read or imported.
+            let mut cfg = load_daemon_config(&config)?;
+            report::daemon::add_outs(&mut cfg, &out)?;
             let named = !matches!(
                 cfg.protocol.protocol,
                 imuprep::frame::detect::ProtocolChoice::Native
             );
-            let mut replay = report::daemon::replay_source(cfg, named, &Default::default())?;
-            report::daemon::add_outs(&mut replay.cfg, &out)?;
+            let replay = report::daemon::replay_source(cfg, named, &Default::default())?;
             // `replay.imported` (a CSV's or bag's log) lives until the run has ended.
             daemon(replay.cfg, summary_json)
         }
@@ -416,8 +418,9 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
             speed,
             summary_json,
         } => {
-            let mut replay = report::daemon::replay_config(load_config(&config)?, &log, speed)?;
-            report::daemon::add_outs(&mut replay.cfg, &out)?;
+            let mut cfg = load_config(&config)?;
+            report::daemon::add_outs(&mut cfg, &out)?;
+            let replay = report::daemon::replay_config(cfg, &log, speed)?;
             // `replay.imported` (a CSV's or bag's log) lives until the run has ended.
             daemon(replay.cfg, summary_json)
         }

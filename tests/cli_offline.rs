@@ -535,3 +535,48 @@ fn a_replay_whose_output_is_its_own_recording_is_refused_and_the_recording_kept(
         );
     }
 }
+
+#[test]
+fn an_imported_recording_is_refused_as_its_replays_output_before_it_is_read() {
+    // A CSV is imported into a temporary log and that replayed: the check must be made on the
+    // recording named, or the cleaned samples overwrite it (they did). A bad output is refused
+    // before the import as well, naming the output.
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("d.csv");
+    let o = common::imuprep(&[
+        "export",
+        "replay/static_bench.log",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let before = std::fs::read(&csv).unwrap();
+    let out = format!("csv:{}", csv.display());
+    // `run` with a config whose source replays the CSV and whose file sink is the CSV.
+    let cfg = dir.path().join("run.toml");
+    std::fs::write(
+        &cfg,
+        format!(
+            "[source]\nkind = \"replay\"\npath = {:?}\n[[sinks]]\nkind = \"file\"\npath = {:?}\nformat = \"csv\"\n",
+            csv.display().to_string(),
+            csv.display().to_string()
+        ),
+    )
+    .unwrap();
+    for args in [
+        vec!["replay", csv.to_str().unwrap(), "--out", &out],
+        vec!["run", "--config", cfg.to_str().unwrap()],
+    ] {
+        let o = common::imuprep(&args);
+        assert_eq!(o.status.code(), Some(3), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        common::assert_says(&err, &["is the recording being replayed"]);
+        assert!(!err.contains("import:"), "refused before the import: {err}");
+        assert_eq!(std::fs::read(&csv).unwrap(), before, "recording kept");
+    }
+    let o = common::imuprep(&["replay", csv.to_str().unwrap(), "--out", "null"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    common::assert_says(&err, &["--out null: unknown output"]);
+    assert!(!err.contains("import:"), "refused before the import: {err}");
+}

@@ -64,6 +64,10 @@ pub fn replay_source(
             imported: None,
         });
     };
+    // Before anything is read: a CSV or a bag is imported whole and then replayed from a
+    // temporary log, so an output onto the recording would otherwise pass the check in [`run`]
+    // and overwrite it with the cleaned samples.
+    no_sink_onto_the_replayed_file(&cfg)?;
     let errs = cfg.protocol.validate();
     ensure!(errs.is_empty(), "{errs:?}");
     ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
@@ -118,7 +122,8 @@ pub fn run(cfg: &Config) -> Result<Health> {
 }
 
 /// Refuses a sink whose file is the recording a replay source reads: the sink creates (so
-/// truncates) its file before the source has read a byte, and the recording would be lost.
+/// truncates) its file before the source has read a byte (or, for an imported recording, writes
+/// the cleaned samples over it), and the recording would be lost.
 fn no_sink_onto_the_replayed_file(cfg: &Config) -> Result<()> {
     use crate::config::Sink;
     let SourceConfig::Replay { path: input, .. } = &cfg.source else {
