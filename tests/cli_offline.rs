@@ -580,3 +580,46 @@ fn an_imported_recording_is_refused_as_its_replays_output_before_it_is_read() {
     common::assert_says(&err, &["--out null: unknown output"]);
     assert!(!err.contains("import:"), "refused before the import: {err}");
 }
+
+#[test]
+fn simulate_refuses_two_of_its_files_being_one() {
+    // `--truth` naming the log wrote both into one file (59 MB that decoded as 94 % garbage,
+    // reported as a success); `-o` naming the scenario replaced it.
+    let dir = tempfile::tempdir().unwrap();
+    let scn = dir.path().join("s.toml");
+    std::fs::copy("replay/static_bench.toml", &scn).unwrap();
+    let before = std::fs::read(&scn).unwrap();
+    let (s, log) = (scn.to_str().unwrap(), dir.path().join("x.log"));
+    let log = log.to_str().unwrap();
+    let same_log = format!("{}/./x.log", dir.path().display());
+    for (args, says) in [
+        (
+            vec![s, "-o", log, "--truth", &same_log],
+            "-o and --truth are one file",
+        ),
+        (vec![s, "-o", s], "the scenario and -o are one file"),
+        (
+            vec![s, "-o", log, "--truth", s],
+            "the scenario and --truth are one file",
+        ),
+    ] {
+        let o = common::imuprep(&[&["simulate"], &args[..]].concat());
+        assert_eq!(o.status.code(), Some(3), "{args:?}");
+        common::assert_says(
+            &String::from_utf8_lossy(&o.stderr),
+            &[says, "give each its own"],
+        );
+        assert!(
+            !std::path::Path::new(log).exists(),
+            "{args:?}: nothing written"
+        );
+        assert_eq!(
+            std::fs::read(&scn).unwrap(),
+            before,
+            "{args:?}: scenario kept"
+        );
+    }
+    let truth = dir.path().join("t.csv");
+    let o = common::imuprep(&["simulate", s, "-o", log, "--truth", truth.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -129,9 +129,10 @@ fn no_sink_onto_the_replayed_file(cfg: &Config) -> Result<()> {
     let SourceConfig::Replay { path: input, .. } = &cfg.source else {
         return Ok(());
     };
-    let Ok(input) = std::fs::canonicalize(input) else {
+    // A recording that is not there is said as such where it is opened.
+    if !input.exists() {
         return Ok(());
-    };
+    }
     for sink in &cfg.sinks {
         let path = match sink {
             Sink::File { path, .. } | Sink::Mcap { path, .. } => Some(path),
@@ -139,7 +140,7 @@ fn no_sink_onto_the_replayed_file(cfg: &Config) -> Result<()> {
             _ => None,
         };
         if let Some(p) = path
-            && std::fs::canonicalize(p).is_ok_and(|p| p == input)
+            && super::same_file(p, input)
         {
             return Err(super::InputProblem(format!(
                 "the output {} is the recording being replayed: writing it would erase the recording before it is read; write to another file",

@@ -173,6 +173,26 @@ pub fn simulate(
     output: &Path,
     truth: Option<&Path>,
 ) -> Result<SimulateReport> {
+    // Two of the files one: the log and the truth written into one file (unreadable), or the
+    // scenario replaced by what was made of it.
+    let files = [
+        ("the scenario", Some(scenario)),
+        ("-o", Some(output)),
+        ("--truth", truth),
+    ];
+    for (i, (what, a)) in files.iter().enumerate() {
+        for (other, b) in &files[i + 1..] {
+            if let (Some(a), Some(b)) = (a, b)
+                && crate::report::same_file(a, b)
+            {
+                return Err(crate::report::InputProblem(format!(
+                    "{what} and {other} are one file ({}): give each its own",
+                    b.display()
+                ))
+                .into());
+            }
+        }
+    }
     let scn = crate::report::read_scenario(scenario, sets)?;
     let seed = crate::sim::log::effective_seed(&scn, seed);
     let written = crate::io::sim_log::write_sim_log(&scn, seed, output, truth)?;
