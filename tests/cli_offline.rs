@@ -582,6 +582,41 @@ fn an_imported_recording_is_refused_as_its_replays_output_before_it_is_read() {
 }
 
 #[test]
+fn two_outputs_onto_one_file_are_refused_before_anything_is_written() {
+    // Both sinks created the file and wrote: a CSV with 35 727 JSON lines inside, reported as
+    // two successes. Devices may be shared (two outputs to /dev/null run).
+    let dir = tempfile::tempdir().unwrap();
+    let o_csv = dir.path().join("o.csv");
+    let (a, b) = (
+        format!("csv:{}", o_csv.display()),
+        format!("jsonl:{}/./o.csv", dir.path().display()),
+    );
+    let o = common::imuprep(&[
+        "replay",
+        "replay/static_bench.log",
+        "--out",
+        &a,
+        "--out",
+        &b,
+    ]);
+    assert_eq!(o.status.code(), Some(3));
+    common::assert_says(
+        &String::from_utf8_lossy(&o.stderr),
+        &["two outputs write one file", "give each its own"],
+    );
+    assert!(!o_csv.exists(), "nothing written");
+    let o = common::imuprep(&[
+        "replay",
+        "replay/static_bench.log",
+        "--out",
+        "csv:/dev/null",
+        "--out",
+        "jsonl:/dev/null",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
 fn simulate_refuses_two_of_its_files_being_one() {
     // `--truth` naming the log wrote both into one file (59 MB that decoded as 94 % garbage,
     // reported as a success); `-o` naming the scenario replaced it.

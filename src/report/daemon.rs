@@ -67,7 +67,7 @@ pub fn replay_source(
     // Before anything is read: a CSV or a bag is imported whole and then replayed from a
     // temporary log, so an output onto the recording would otherwise pass the check in [`run`]
     // and overwrite it with the cleaned samples.
-    no_sink_onto_the_replayed_file(&cfg)?;
+    no_output_overwrites(&cfg)?;
     let errs = cfg.protocol.validate();
     ensure!(errs.is_empty(), "{errs:?}");
     ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
@@ -108,7 +108,7 @@ pub fn replay_source(
 
 /// Build the pipeline and run the daemon on a two-thread runtime until its source ends.
 pub fn run(cfg: &Config) -> Result<Health> {
-    no_sink_onto_the_replayed_file(cfg)?;
+    no_output_overwrites(cfg)?;
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -124,8 +124,31 @@ pub fn run(cfg: &Config) -> Result<Health> {
 /// Refuses a sink whose file is the recording a replay source reads: the sink creates (so
 /// truncates) its file before the source has read a byte (or, for an imported recording, writes
 /// the cleaned samples over it), and the recording would be lost.
-fn no_sink_onto_the_replayed_file(cfg: &Config) -> Result<()> {
+/// Two sinks onto one file are refused too: each creates it and both write, so the file holds
+/// a mix of the two (it did, reported as two successes).
+fn no_output_overwrites(cfg: &Config) -> Result<()> {
     use crate::config::Sink;
+    let paths: Vec<&Path> = cfg
+        .sinks
+        .iter()
+        .filter_map(|sink| match sink {
+            Sink::File { path, .. } | Sink::Mcap { path, .. } => Some(path.as_path()),
+            Sink::Inline { path } => path.as_deref(),
+            _ => None,
+        })
+        .collect();
+    // A device or a pipe (`/dev/null`, `/dev/stdout`) is not overwritten: two may share one.
+    let file = |p: &Path| std::fs::metadata(p).map_or(true, |m| m.is_file());
+    for (i, a) in paths.iter().enumerate().filter(|(_, p)| file(p)) {
+        if let Some(b) = paths[i + 1..].iter().find(|b| super::same_file(a, b)) {
+            return Err(super::InputProblem(format!(
+                "two outputs write one file ({} and {}): each would overwrite the other's samples; give each its own",
+                a.display(),
+                b.display()
+            ))
+            .into());
+        }
+    }
     let SourceConfig::Replay { path: input, .. } = &cfg.source else {
         return Ok(());
     };
@@ -133,15 +156,8 @@ fn no_sink_onto_the_replayed_file(cfg: &Config) -> Result<()> {
     if !input.exists() {
         return Ok(());
     }
-    for sink in &cfg.sinks {
-        let path = match sink {
-            Sink::File { path, .. } | Sink::Mcap { path, .. } => Some(path),
-            Sink::Inline { path } => path.as_ref(),
-            _ => None,
-        };
-        if let Some(p) = path
-            && super::same_file(p, input)
-        {
+    for p in paths {
+        if super::same_file(p, input) {
             return Err(super::InputProblem(format!(
                 "the output {} is the recording being replayed: writing it would erase the recording before it is read; write to another file",
                 p.display()
