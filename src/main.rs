@@ -407,7 +407,12 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
                 cfg.protocol.protocol,
                 imuprep::frame::detect::ProtocolChoice::Native
             );
-            let replay = report::daemon::replay_source(cfg, named, &Default::default())?;
+            let replay = report::daemon::replay_source(
+                cfg,
+                named,
+                &Default::default(),
+                summary_json.as_deref(),
+            )?;
             // `replay.imported` (a CSV's or bag's log) lives until the run has ended.
             daemon(replay.cfg, summary_json)
         }
@@ -420,7 +425,7 @@ fn run(cmd: Cmd) -> Result<ExitCode> {
         } => {
             let mut cfg = load_config(&config)?;
             report::daemon::add_outs(&mut cfg, &out)?;
-            let replay = report::daemon::replay_config(cfg, &log, speed)?;
+            let replay = report::daemon::replay_config(cfg, &log, speed, summary_json.as_deref())?;
             // `replay.imported` (a CSV's or bag's log) lives until the run has ended.
             daemon(replay.cfg, summary_json)
         }

@@ -584,7 +584,8 @@ fn an_imported_recording_is_refused_as_its_replays_output_before_it_is_read() {
 #[test]
 fn two_outputs_onto_one_file_are_refused_before_anything_is_written() {
     // Both sinks created the file and wrote: a CSV with 35 727 JSON lines inside, reported as
-    // two successes. Devices may be shared (two outputs to /dev/null run).
+    // two successes; the summary's JSON replaced a file whole. Devices may be shared (two
+    // outputs to /dev/null run).
     let dir = tempfile::tempdir().unwrap();
     let o_csv = dir.path().join("o.csv");
     let (a, b) = (
@@ -605,6 +606,33 @@ fn two_outputs_onto_one_file_are_refused_before_anything_is_written() {
         &["two outputs write one file", "give each its own"],
     );
     assert!(!o_csv.exists(), "nothing written");
+    // The health summary's JSON, written when the run ends, replaced a sink's file or the
+    // recording itself whole.
+    let log = dir.path().join("r.log");
+    std::fs::copy("replay/static_bench.log", &log).unwrap();
+    let before = std::fs::read(&log).unwrap();
+    let l = log.to_str().unwrap();
+    let csv = o_csv.to_str().unwrap();
+    for (args, says) in [
+        (
+            vec!["replay", l, "--out", &a, "--summary-json", csv],
+            "two outputs write one file",
+        ),
+        (
+            vec!["replay", l, "--summary-json", l],
+            "is the recording being replayed",
+        ),
+    ] {
+        let o = common::imuprep(&args);
+        assert_eq!(o.status.code(), Some(3), "{args:?}");
+        common::assert_says(&String::from_utf8_lossy(&o.stderr), &[says]);
+        assert!(!o_csv.exists(), "{args:?}: nothing written");
+        assert_eq!(
+            std::fs::read(&log).unwrap(),
+            before,
+            "{args:?}: recording kept"
+        );
+    }
     let o = common::imuprep(&[
         "replay",
         "replay/static_bench.log",

@@ -34,13 +34,18 @@ pub struct Replay {
 /// flags applied, then made ready as [`replay_source`] says. With `--protocol` naming a sensor
 /// protocol the file is that protocol's, as ever; `--protocol native` keeps the refusal of a
 /// file that is no native log.
-pub fn replay_config(mut cfg: Config, log: &super::Recording, speed: f64) -> Result<Replay> {
+pub fn replay_config(
+    mut cfg: Config,
+    log: &super::Recording,
+    speed: f64,
+    summary: Option<&Path>,
+) -> Result<Replay> {
     log.proto.apply(&mut cfg.protocol);
     cfg.source = SourceConfig::Replay {
         path: log.path.clone(),
         speed,
     };
-    replay_source(cfg, log.proto.protocol.is_some(), &log.import)
+    replay_source(cfg, log.proto.protocol.is_some(), &log.import, summary)
 }
 
 /// A config whose source replays a file (`imuprep replay`, or `imuprep run` with `[source]
@@ -53,21 +58,24 @@ pub fn replay_config(mut cfg: Config, log: &super::Recording, speed: f64) -> Res
 /// Unless `protocol_named`, a native source whose file is no native log but decodes as a
 /// sensor protocol is replayed as that protocol, said. The log's declared rate is given to the
 /// stages. Any other source is returned as it is.
+///
+/// First of all the outputs are checked ([`outputs_apart`], with `summary`, the health
+/// summary's JSON file): a CSV or a bag is imported whole and then replayed from a temporary
+/// log, so an output onto the recording would otherwise pass the check in [`run`] and
+/// overwrite it with the cleaned samples.
 pub fn replay_source(
     mut cfg: Config,
     protocol_named: bool,
     import: &super::convert::ImportArgs,
+    summary: Option<&Path>,
 ) -> Result<Replay> {
+    outputs_apart(&cfg, summary)?;
     let SourceConfig::Replay { path: log, speed } = cfg.source.clone() else {
         return Ok(Replay {
             cfg,
             imported: None,
         });
     };
-    // Before anything is read: a CSV or a bag is imported whole and then replayed from a
-    // temporary log, so an output onto the recording would otherwise pass the check in [`run`]
-    // and overwrite it with the cleaned samples.
-    no_output_overwrites(&cfg)?;
     let errs = cfg.protocol.validate();
     ensure!(errs.is_empty(), "{errs:?}");
     ensure!(speed.is_finite() && speed >= 0.0, "--speed must be ≥ 0");
@@ -127,6 +135,13 @@ pub fn run(cfg: &Config) -> Result<Health> {
 /// Two sinks onto one file are refused too: each creates it and both write, so the file holds
 /// a mix of the two (it did, reported as two successes).
 fn no_output_overwrites(cfg: &Config) -> Result<()> {
+    outputs_apart(cfg, None)
+}
+
+/// [`no_output_overwrites`] with the health summary's JSON file (`--summary-json`, written when
+/// the run ends) counted as one more output: onto the recording or a sink's file it replaced
+/// them whole (it did).
+fn outputs_apart(cfg: &Config, summary: Option<&Path>) -> Result<()> {
     use crate::config::Sink;
     let paths: Vec<&Path> = cfg
         .sinks
@@ -136,6 +151,7 @@ fn no_output_overwrites(cfg: &Config) -> Result<()> {
             Sink::Inline { path } => path.as_deref(),
             _ => None,
         })
+        .chain(summary)
         .collect();
     // A device or a pipe (`/dev/null`, `/dev/stdout`) is not overwritten: two may share one.
     let file = |p: &Path| std::fs::metadata(p).map_or(true, |m| m.is_file());
