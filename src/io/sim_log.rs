@@ -43,9 +43,8 @@ pub fn write_sim_log(
     let mut bar = crate::progress::Delayed::steps(sim.len() as u64, "instants simulated");
     while let Some(r) = sim.next_record() {
         sum.instants += 1;
-        // A move costs more than an instant: one per 2¹⁴.
-        if sum.instants.is_multiple_of(1 << 14) {
-            bar.inc(1 << 14);
+        if sum.instants.is_multiple_of(crate::progress::SAMPLE_STEP) {
+            bar.inc(crate::progress::SAMPLE_STEP);
         }
         sum.clipped += u64::from((r.sample.flags & crate::sample::flags::SAT_ANY).count_ones());
         let copies = match r.emission {

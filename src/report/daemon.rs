@@ -156,7 +156,7 @@ fn outputs_apart(cfg: &Config, summary: Option<&Path>) -> Result<()> {
     // A device or a pipe (`/dev/null`, `/dev/stdout`) is not overwritten: two may share one.
     let file = |p: &Path| std::fs::metadata(p).map_or(true, |m| m.is_file());
     for (i, a) in paths.iter().enumerate().filter(|(_, p)| file(p)) {
-        if let Some(b) = paths[i + 1..].iter().find(|b| super::same_file(a, b)) {
+        if let Some(b) = paths[i + 1..].iter().find(|b| crate::io::same_file(a, b)) {
             return Err(super::InputProblem(format!(
                 "two outputs write one file ({} and {}): each would overwrite the other's samples; give each its own",
                 a.display(),
@@ -173,7 +173,7 @@ fn outputs_apart(cfg: &Config, summary: Option<&Path>) -> Result<()> {
         return Ok(());
     }
     for p in paths {
-        if super::same_file(p, input) {
+        if crate::io::same_file(p, input) {
             return Err(super::InputProblem(format!(
                 "the output {} is the recording being replayed: writing it would erase the recording before it is read; write to another file",
                 p.display()

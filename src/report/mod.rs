@@ -42,23 +42,6 @@ impl std::fmt::Display for InputProblem {
 
 impl std::error::Error for InputProblem {}
 
-/// Whether two paths name one file: the same file when both exist (links followed), or an
-/// output not made yet that would land on the other (its folder resolved, its name compared).
-pub(crate) fn same_file(a: &Path, b: &Path) -> bool {
-    fn resolved(p: &Path) -> Option<std::path::PathBuf> {
-        if let Ok(c) = std::fs::canonicalize(p) {
-            return Some(c);
-        }
-        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
-        Some(
-            std::fs::canonicalize(dir.unwrap_or(Path::new(".")))
-                .ok()?
-                .join(p.file_name()?),
-        )
-    }
-    matches!((resolved(a), resolved(b)), (Some(x), Some(y)) if x == y)
-}
-
 /// Fail with [`InputProblem`] when `samples` decoded from `what` with `stats` say the input
 /// held nothing usable.
 pub fn check_input(what: &Path, samples: u64, stats: &crate::frame::DecoderStats) -> Result<()> {

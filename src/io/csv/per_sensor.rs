@@ -84,7 +84,7 @@ pub fn read_per_sensor_report(
                 .into(),
         ));
     }
-    if gyro.canonicalize().ok() == accel.canonicalize().ok() {
+    if crate::io::same_file(gyro, accel) {
         return Err(problem(
             "--accel-file names the input itself: give the accelerometer's own table".into(),
         ));

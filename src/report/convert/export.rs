@@ -183,7 +183,7 @@ pub fn simulate(
     for (i, (what, a)) in files.iter().enumerate() {
         for (other, b) in &files[i + 1..] {
             if let (Some(a), Some(b)) = (a, b)
-                && crate::report::same_file(a, b)
+                && crate::io::same_file(a, b)
             {
                 return Err(crate::report::InputProblem(format!(
                     "{what} and {other} are one file ({}): give each its own",
