@@ -313,6 +313,7 @@ enum Cmd {
 }
 
 fn main() -> ExitCode {
+    imuprep::progress::begin();
     let cli = Cli::parse();
     let filter = tracing_subscriber::EnvFilter::try_new(&cli.log_level)
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));

@@ -6,8 +6,9 @@
 //! the bars instead of through them: the binary's log writer goes through [`suspend`].
 //!
 //! Work whose length is not known to be long (a file read, a replay) gets a [`Delayed`] bar: it
-//! keeps count from the start but appears only once the work has taken a second, so a short run
-//! prints nothing more than before.
+//! keeps count from the start but appears only once the command has run a second ([`begin`]
+//! marks its start), so a short run prints nothing more than before, and a command of several
+//! parts under a second each still shows one once it is past the second.
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::Read;
@@ -16,6 +17,14 @@ use std::time::{Duration, Instant};
 
 /// The one place every bar draws (stderr; hidden when it is not a terminal).
 static BARS: LazyLock<MultiProgress> = LazyLock::new(MultiProgress::new);
+
+/// When the command started ([`begin`]; else when the first [`Delayed`] bar was made).
+static START: LazyLock<Instant> = LazyLock::new(Instant::now);
+
+/// Mark the command's start: [`Delayed`] bars count their second from here.
+pub fn begin() {
+    LazyLock::force(&START);
+}
 
 /// Run `f` (a write to stderr) with the bars taken off the screen, and draw them again after:
 /// a log line lands above the bars instead of inside one.
@@ -65,14 +74,13 @@ pub fn samples_bar(samples: u64, what: &str) -> ProgressBar {
 /// Samples between two moves of a [`samples_bar`] (a move costs more than a sample).
 pub const SAMPLE_STEP: u64 = 1 << 16;
 
-/// How long work runs before its [`Delayed`] bar appears.
+/// How long a command runs before its [`Delayed`] bars appear.
 pub const DELAY: Duration = Duration::from_secs(1);
 
-/// A bar over `total` steps or bytes that appears only once the work has run for [`DELAY`] (kept hidden
-/// until then, its count kept all the same), and leaves the screen when dropped.
+/// A bar over `total` steps or bytes that appears only once the command has run for [`DELAY`]
+/// (kept hidden until then, its count kept all the same), and leaves the screen when dropped.
 pub struct Delayed {
     bar: ProgressBar,
-    start: Instant,
     delay: Duration,
     shown: bool,
 }
@@ -93,18 +101,18 @@ impl Delayed {
         let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
         bar.set_style(style(template));
         bar.set_message(what.to_string());
+        LazyLock::force(&START);
         Delayed {
             bar,
-            start: Instant::now(),
             delay,
             shown: false,
         }
     }
 
-    /// `n` more steps (bytes) done; the bar appears if the work has now run for [`DELAY`].
+    /// `n` more steps (bytes) done; the bar appears if the command has now run for [`DELAY`].
     pub fn inc(&mut self, n: u64) {
         self.bar.inc(n);
-        if !self.shown && self.start.elapsed() >= self.delay {
+        if !self.shown && START.elapsed() >= self.delay {
             self.shown = true;
             BARS.add(self.bar.clone());
         }
@@ -115,7 +123,7 @@ impl Delayed {
         self.bar.position()
     }
 
-    /// Whether the bar has appeared (the work ran past [`DELAY`]).
+    /// Whether the bar has appeared (the command ran past [`DELAY`]).
     pub fn shown(&self) -> bool {
         self.shown
     }
@@ -175,8 +183,8 @@ mod tests {
 
     #[test]
     fn a_delayed_bar_appears_only_after_its_delay() {
-        // Delays of zero and of a year stand for "work past its delay" and "work inside it", so
-        // the test does not hang on the machine's speed.
+        // Delays of zero and of a year stand for "a command past its delay" and "one inside
+        // it", so the test does not hang on the machine's speed.
         let mut late = Delayed::after(Duration::ZERO, BYTES, 10, "read");
         assert!(!late.shown(), "nothing shows before the first byte");
         late.inc(4);

@@ -114,9 +114,14 @@ impl Loaded {
         );
         let written =
             |r: std::io::Result<()>| r.with_context(|| format!("writing {}", output.display()));
-        for s in &self.samples {
+        let mut bar = crate::progress::Delayed::steps(self.samples.len() as u64, "samples written");
+        for (k, s) in self.samples.iter().enumerate() {
             written(w.sample(s))?;
+            if (k as u64 + 1).is_multiple_of(crate::progress::SAMPLE_STEP) {
+                bar.inc(crate::progress::SAMPLE_STEP);
+            }
         }
+        drop(bar);
         written(w.finish().map(drop))?;
         file.done()?;
         Ok(ImportReport {
