@@ -118,6 +118,13 @@ impl Delayed {
         }
     }
 
+    /// The `done`-th sample (counted from 1) done: the bar moves once every [`SAMPLE_STEP`].
+    pub fn sample_done(&mut self, done: u64) {
+        if done.is_multiple_of(SAMPLE_STEP) {
+            self.inc(SAMPLE_STEP);
+        }
+    }
+
     /// Steps (bytes) done so far.
     pub fn position(&self) -> u64 {
         self.bar.position()

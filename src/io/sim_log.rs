@@ -43,9 +43,7 @@ pub fn write_sim_log(
     let mut bar = crate::progress::Delayed::steps(sim.len() as u64, "instants simulated");
     while let Some(r) = sim.next_record() {
         sum.instants += 1;
-        if sum.instants.is_multiple_of(crate::progress::SAMPLE_STEP) {
-            bar.inc(crate::progress::SAMPLE_STEP);
-        }
+        bar.sample_done(sum.instants);
         sum.clipped += u64::from((r.sample.flags & crate::sample::flags::SAT_ANY).count_ones());
         let copies = match r.emission {
             Emission::Normal => 1,

@@ -140,7 +140,9 @@ pub fn still_stretches(samples: &[Sample], rate_hz: f64, s: &StillSettings) -> V
             });
         }
     };
+    let mut bar = crate::progress::Delayed::steps(samples.len() as u64, "samples judged");
     for (i, x) in samples.iter().enumerate() {
+        bar.sample_done(i as u64 + 1);
         let g = [x.gyro[0], x.gyro[1], x.gyro[2]];
         let a = [x.accel[0], x.accel[1], x.accel[2]];
         // A gyro-less sensor is judged on its accelerometers (absent axes take no part).

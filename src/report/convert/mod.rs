@@ -117,9 +117,7 @@ impl Loaded {
         let mut bar = crate::progress::Delayed::steps(self.samples.len() as u64, "samples written");
         for (k, s) in self.samples.iter().enumerate() {
             written(w.sample(s))?;
-            if (k as u64 + 1).is_multiple_of(crate::progress::SAMPLE_STEP) {
-                bar.inc(crate::progress::SAMPLE_STEP);
-            }
+            bar.sample_done(k as u64 + 1);
         }
         drop(bar);
         written(w.finish().map(drop))?;
