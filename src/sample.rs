@@ -273,6 +273,31 @@ impl Channels {
             .fold(0, |m, c| m | 1 << c)
     }
 
+    /// Sample `i`'s sensor time, s ([`Sample::t_s`]).
+    pub fn t_s(&self, i: usize) -> f64 {
+        self.t_ns[i] as f64 * 1e-9
+    }
+
+    /// Sample `i`'s angular rate, rad/s ([`Sample::gyro`]).
+    pub fn gyro(&self, i: usize) -> Vector3<f64> {
+        Vector3::new(self.values[0][i], self.values[1][i], self.values[2][i])
+    }
+
+    /// Sample `i`'s specific force, m/s² ([`Sample::accel`]).
+    pub fn accel(&self, i: usize) -> Vector3<f64> {
+        Vector3::new(self.values[3][i], self.values[4][i], self.values[5][i])
+    }
+
+    /// The channels absent in sample `i` ([`Sample::absent`]): of the channels absent in any
+    /// sample, those holding NaN here (an absent channel holds NaN). A channel present in every
+    /// sample is never absent; one absent in only some samples (a descriptor changed mid-log)
+    /// is taken as absent wherever it holds NaN, not flagged non-finite there.
+    pub fn absent_at(&self, i: usize) -> u8 {
+        (0..N_CHANNELS)
+            .filter(|&c| self.absent_in[c] > 0 && self.values[c][i].is_nan())
+            .fold(0, |m, c| m | 1 << c)
+    }
+
     /// The first `n` samples only.
     pub fn truncate(&mut self, n: usize) {
         self.t_ns.truncate(n);
@@ -328,5 +353,43 @@ impl<'a> FromIterator<&'a Sample> for Channels {
             c.push(*s);
         }
         c
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(t_ns: u64, v: [f64; 6], absent: u8) -> Sample {
+        Sample {
+            t_ns,
+            gyro: Vector3::new(v[0], v[1], v[2]),
+            accel: Vector3::new(v[3], v[4], v[5]),
+            absent,
+            ..Sample::default()
+        }
+    }
+
+    #[test]
+    fn channels_give_back_each_samples_vectors_time_and_absent_channels() {
+        let nan = f64::NAN;
+        let v = [
+            // A gyro-only sample, a whole one with a non-finite gx, one whose gz is absent.
+            sample(1_000, [1.0, 2.0, 3.0, nan, nan, nan], 0b111000),
+            sample(2_000, [nan, 5.0, 6.0, 7.0, 8.0, 9.0], 0),
+            sample(3_000, [1.5, 2.5, nan, 4.5, 5.5, 6.5], 0b000100),
+        ];
+        let ch: Channels = v.iter().collect();
+        for (i, s) in v.iter().enumerate() {
+            assert_eq!(ch.t_s(i), s.t_s());
+            for c in 0..3 {
+                assert_eq!(ch.gyro(i)[c].to_bits(), s.gyro[c].to_bits());
+                assert_eq!(ch.accel(i)[c].to_bits(), s.accel[c].to_bits());
+            }
+        }
+        // gx is absent nowhere, so its NaN in sample 1 is a non-finite value, not an absence.
+        assert_eq!(ch.absent_at(0), 0b111000);
+        assert_eq!(ch.absent_at(1), 0);
+        assert_eq!(ch.absent_at(2), 0b000100);
     }
 }

@@ -10,7 +10,7 @@ use imuprep::analysis::calib::still::{StillSettings, still_stretches};
 use imuprep::config::Config;
 use imuprep::io::log::write_log;
 use imuprep::rng::Rng;
-use imuprep::sample::Sample;
+use imuprep::sample::{Channels, Sample};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use std::path::Path;
 
@@ -95,7 +95,7 @@ fn write(dir: &Path, samples: &[Sample]) -> String {
 #[test]
 fn the_finder_returns_one_stretch_per_stop_with_its_mean() {
     let (samples, truth) = tumbling(12, 10.0, 21, &NO_ERRORS);
-    let st = still_stretches(&samples, RATE, &StillSettings::default());
+    let st = still_stretches(&samples.iter().collect(), RATE, &StillSettings::default());
     assert_eq!(st.len(), truth.len(), "{st:#?}");
     for (s, stop) in st.iter().zip(&truth) {
         // Inside its stop (no motion sample), and most of it (≥ 7 of 10 s: the detector needs
@@ -241,6 +241,7 @@ fn no_gyro_calibration_is_added_on_twenty_clean_tumbles() {
     };
     for seed in 0..20 {
         let (samples, _) = tumbling(12, 8.0, 300 + seed, &e);
+        let samples: Channels = samples.iter().collect();
         let st = still_stretches(&samples, RATE, &StillSettings::default());
         let ivs = gyro_intervals(&samples, &st, None, RATE, 30.0, 10.0);
         // 70° about a random axis tilts gravity by less than 10° only when the axis is

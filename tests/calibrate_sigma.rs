@@ -16,6 +16,7 @@ use imuprep::analysis::calib::gyro::{
     GyroCalibration, GyroInterval, NoiseParts, calibrate_gyro, gyro_intervals,
 };
 use imuprep::analysis::calib::still::{StillSettings, still_stretches};
+use imuprep::sample::Channels;
 use imuprep::sim::Simulator;
 use imuprep::stage::bias::settings::CalibrationSettings;
 use nalgebra::{Matrix3, Rotation3, Vector3};
@@ -110,9 +111,11 @@ fn each_part_of_the_gyro_noise_model_and_the_sigma_it_gives() {
     let (mut r2, mut model2, mut n) = (0.0, 0.0, 0.0);
     let (mut cross, mut c1, mut c2) = (0.0, 0.0, 0.0);
     for seed in 1..=SEEDS {
-        let samples: Vec<_> = Simulator::new(&scn, seed)
+        let samples: Channels = Simulator::new(&scn, seed)
             .unwrap()
             .map(|r| r.sample)
+            .collect::<Vec<_>>()
+            .iter()
             .collect();
         let st = still_stretches(&samples, RATE, &StillSettings::default());
         let acc = calibrate_accel(st, None, &CalibSettings::default()).unwrap();

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, ensure};
 use serde::Serialize;
 
-use super::{load_span_to, present_channels};
+use super::{load_channels_to, present_channels_of};
 use crate::analysis::calib::course::{CourseEpoch, CourseScale, CourseSettings, course_scale};
 use crate::analysis::calib::fit::{
     AccelCalibration, CalibSettings, Candidate, NotIdentifiable, calibrate_accel,
@@ -19,7 +19,7 @@ use crate::analysis::calib::fit::{
 use crate::analysis::calib::gyro::{GyroCalibration, calibrate_gyro, gyro_intervals};
 use crate::analysis::calib::still::{StillSettings, still_stretches};
 use crate::analysis::quantisation::quantisation;
-use crate::sample::Sample;
+use crate::sample::Channels;
 
 /// What `calibrate` runs on.
 #[derive(Clone, Debug)]
@@ -68,12 +68,12 @@ const MAX_INTERVAL_S: f64 = 30.0;
 
 /// The largest LSB of the three accelerometer axes over the still samples (None: none visibly
 /// quantised, or too few samples).
-fn accel_lsb(samples: &[Sample], ranges: &[(usize, usize)]) -> Option<f64> {
-    (0..3)
-        .filter_map(|a| {
+fn accel_lsb(ch: &Channels, ranges: &[(usize, usize)]) -> Option<f64> {
+    (3..6)
+        .filter_map(|c| {
             let x: Vec<f64> = ranges
                 .iter()
-                .flat_map(|&(s, n)| samples[s..s + n].iter().map(move |v| v.accel[a]))
+                .flat_map(|&(s, n)| ch.values[c][s..s + n].iter().copied())
                 .collect();
             quantisation(&x).ok().and_then(|q| q.lsb)
         })
@@ -97,8 +97,9 @@ pub fn calibrate(log: &super::Recording, o: &CalibrateOptions) -> Result<Calibra
     if let Some(p) = &o.gnss {
         std::fs::File::open(p).with_context(|| format!("--gnss {}", p.display()))?;
     }
-    let (rate, samples) = load_span_to(log, o.from_s, span)?;
-    let (present, left_out) = present_channels(log, &samples, &[3, 4, 5])?;
+    // Held by channel (64 bytes a sample, not a `Sample`'s 136): a long log fits.
+    let (rate, ch) = load_channels_to(log, o.from_s, span)?;
+    let (present, left_out) = present_channels_of(log, &ch, &[3, 4, 5])?;
     ensure!(
         present.len() == 3,
         "{}: calibration needs all three accelerometer axes ({})",
@@ -110,9 +111,9 @@ pub fn calibrate(log: &super::Recording, o: &CalibrateOptions) -> Result<Calibra
             .join("; ")
     );
     let still = StillSettings::default();
-    let stretches = still_stretches(&samples, rate, &still);
+    let stretches = still_stretches(&ch, rate, &still);
     let ranges: Vec<(usize, usize)> = stretches.iter().map(|s| (s.start, s.len)).collect();
-    let lsb = accel_lsb(&samples, &ranges);
+    let lsb = accel_lsb(&ch, &ranges);
     let settings = CalibSettings {
         gravity_m_s2: o.gravity_m_s2,
         group_deg: still.group_deg,
@@ -120,14 +121,14 @@ pub fn calibrate(log: &super::Recording, o: &CalibrateOptions) -> Result<Calibra
     };
     let accel = calibrate_accel(stretches, lsb, &settings)
         .with_context(|| format!("{}: calibration fit", log.display()))?;
-    let (gyro, gyro_skipped) = if samples.iter().any(|x| x.absent & 0b111 != 0) {
+    let (gyro, gyro_skipped) = if ch.absent_in[..3].iter().any(|&n| n > 0) {
         (
             None,
             Some("the log has no (or not every) gyro channel".to_string()),
         )
     } else {
         let ivs = gyro_intervals(
-            &samples,
+            &ch,
             &accel.stretches,
             accel.fitted.as_ref(),
             rate,
@@ -140,7 +141,7 @@ pub fn calibrate(log: &super::Recording, o: &CalibrateOptions) -> Result<Calibra
     };
     let (course, course_skipped) = match &o.gnss {
         None => (None, None),
-        Some(p) => match course_from(&samples, p) {
+        Some(p) => match course_from(&ch, p) {
             Ok(c) => (Some(c), None),
             Err(why) => (None, Some(why)),
         },
@@ -149,7 +150,7 @@ pub fn calibrate(log: &super::Recording, o: &CalibrateOptions) -> Result<Calibra
         "{} [{} s .. +{:.1} s at {rate} Hz]",
         log.display(),
         o.from_s,
-        samples.len() as f64 / rate
+        ch.len() as f64 / rate
     );
     let mut report = CalibrateReport {
         source,
@@ -177,8 +178,9 @@ pub fn calibrate(log: &super::Recording, o: &CalibrateOptions) -> Result<Calibra
     Ok(report)
 }
 
-/// The course fit of `samples` against the `.pos` file at `path` (Err: why there is none).
-fn course_from(samples: &[Sample], path: &Path) -> std::result::Result<CourseScale, String> {
+/// The course fit of the samples of `ch` against the `.pos` file at `path` (Err: why there is
+/// none).
+fn course_from(ch: &Channels, path: &Path) -> std::result::Result<CourseScale, String> {
     let epochs = crate::nav::pos::read(path).map_err(|e| e.to_string())?;
     let gnss: Vec<CourseEpoch> = epochs
         .iter()
@@ -187,9 +189,9 @@ fn course_from(samples: &[Sample], path: &Path) -> std::result::Result<CourseSca
             v_ne: e.sdv.map(|_| [e.v_neu[0], e.v_neu[1]]),
         })
         .collect();
-    let t: Vec<f64> = samples.iter().map(|x| x.t_ns as f64 * 1e-9).collect();
-    let gyro: Vec<[f64; 3]> = samples.iter().map(|x| x.gyro.into()).collect();
-    let accel: Vec<[f64; 3]> = samples.iter().map(|x| x.accel.into()).collect();
+    let t: Vec<f64> = (0..ch.len()).map(|i| ch.t_s(i)).collect();
+    let gyro: Vec<[f64; 3]> = (0..ch.len()).map(|i| ch.gyro(i).into()).collect();
+    let accel: Vec<[f64; 3]> = (0..ch.len()).map(|i| ch.accel(i).into()).collect();
     course_scale(&t, &gyro, &accel, &gnss, &CourseSettings::default())
         .map_err(|e| format!("{}: {e}", path.display()))
 }

@@ -44,7 +44,7 @@ use super::gyro_noise::{
 use super::still::AccelStretch;
 use crate::analysis::AnalysisError;
 use crate::analysis::diagnose::blocks::{GainNoise, held_out_test};
-use crate::sample::Sample;
+use crate::sample::Channels;
 use crate::stage::bias::settings::CalibrationSettings;
 
 /// Parameters: K row-major.
@@ -127,21 +127,21 @@ impl GyroInterval {
     }
 }
 
-/// The motions between consecutive `stretches` of `samples` that last at most
+/// The motions between consecutive `stretches` of the samples of `ch` that last at most
 /// `max_interval_s`, have no gap (a step over 2.5 nominal intervals) and change the gravity
 /// direction by at least `min_tilt_deg` (the attitude-group angle: between two stretches of one
 /// attitude there is no rotation to check, only noise, whose random columns would pass any
 /// condition-number test); `accel` the kept accelerometer calibration, if any (the directions
 /// go through it, and its covariance into the gyro's σ).
 pub fn gyro_intervals(
-    samples: &[Sample],
+    ch: &Channels,
     stretches: &[AccelStretch],
     accel: Option<&FittedCalibration>,
     rate_hz: f64,
     max_interval_s: f64,
     min_tilt_deg: f64,
 ) -> Vec<GyroInterval> {
-    let st = stretch_noise(samples, stretches, accel);
+    let st = stretch_noise(ch, stretches, accel);
     let mut out: Vec<GyroInterval> = stretches
         .windows(2)
         .enumerate()
@@ -156,8 +156,8 @@ pub fn gyro_intervals(
             let bias = (st[k].gyro_mean * na + st[k + 1].gyro_mean * nb) / (na + nb);
             let mut rates = Vec::with_capacity(to - from);
             for i in from..to {
-                let dt = (samples[i].t_ns.saturating_sub(samples[i - 1].t_ns)) as f64 * 1e-9;
-                let w = samples[i].gyro - bias;
+                let dt = (ch.t_ns[i].saturating_sub(ch.t_ns[i - 1])) as f64 * 1e-9;
+                let w = ch.gyro(i) - bias;
                 if !(dt > 0.0 && dt < 2.5 / rate_hz && w.iter().all(|v| v.is_finite())) {
                     return None;
                 }

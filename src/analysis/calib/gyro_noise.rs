@@ -47,7 +47,7 @@ use nalgebra::{
 
 use super::fit::{Cov9, FittedCalibration, direction, nominal};
 use super::still::{AccelStretch, mean_var};
-use crate::sample::Sample;
+use crate::sample::Channels;
 
 /// Smallest per-sample variances used, (m/s²)² and (rad/s)²: a stretch whose samples are all one
 /// code (sample variance 0) still gets a positive-definite covariance. Far below any real
@@ -84,7 +84,7 @@ fn sqrt_cov(c: &Cov9) -> Cov9 {
 /// [`StretchNoise`] of every stretch; `accel` the kept accelerometer calibration, if any
 /// (without one the raw directions, with no frame error).
 pub(crate) fn stretch_noise(
-    samples: &[Sample],
+    ch: &Channels,
     stretches: &[AccelStretch],
     accel: Option<&FittedCalibration>,
 ) -> Vec<StretchNoise> {
@@ -92,9 +92,8 @@ pub(crate) fn stretch_noise(
     stretches
         .iter()
         .map(|st| {
-            let x = &samples[st.start..st.start + st.len];
-            let n = x.len().max(1) as f64;
-            let (mean, var) = mean_var(x, |v| v.gyro);
+            let n = st.len.max(1) as f64;
+            let (mean, var) = mean_var(st.start..st.start + st.len, |i| ch.gyro(i));
             let f_cov = Matrix3::from_diagonal(
                 &Vector3::from(st.sd_m_s2).map(|v| (v * v).max(ACCEL_VAR_FLOOR) / n),
             );
@@ -108,7 +107,7 @@ pub(crate) fn stretch_noise(
                 u_accel: du_dth * s,
                 gyro_mean: mean,
                 gyro_var: var.map(|v| v.max(GYRO_VAR_FLOOR)),
-                n: x.len(),
+                n: st.len,
             }
         })
         .collect()

@@ -28,10 +28,12 @@
 //! (1/K) Σ u_k u_kᵀ (they sum to 1; ⅓ each for directions that fill the sphere evenly, one
 //! eigenvalue ≈ 1 for a single attitude).
 
+use std::ops::Range;
+
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::Serialize;
 
-use crate::sample::Sample;
+use crate::sample::Channels;
 use crate::stage::bias::stillness::{StillnessDetector, StillnessSettings};
 
 /// Settings of the stretch finder.
@@ -86,68 +88,65 @@ impl AccelStretch {
     }
 }
 
-/// Mean and sample variance per axis of `v` over `samples`.
+/// Mean and sample variance per axis of `v(i)` over the samples `i` of `range`.
 pub(crate) fn mean_var(
-    samples: &[Sample],
-    v: impl Fn(&Sample) -> Vector3<f64>,
+    range: Range<usize>,
+    v: impl Fn(usize) -> Vector3<f64>,
 ) -> (Vector3<f64>, Vector3<f64>) {
-    let n = samples.len().max(1) as f64;
-    let mean = samples.iter().map(&v).sum::<Vector3<f64>>() / n;
-    let var = samples
-        .iter()
-        .map(|s| (v(s) - mean).component_mul(&(v(s) - mean)))
+    let n = range.len().max(1) as f64;
+    let mean = range.clone().map(&v).sum::<Vector3<f64>>() / n;
+    let var = range
+        .map(|i| (v(i) - mean).component_mul(&(v(i) - mean)))
         .sum::<Vector3<f64>>()
         / (n - 1.0).max(1.0);
     (mean, var)
 }
 
-/// Mean, per-axis sd and the white-noise σ of the mean norm over `samples`.
-fn stretch_stats(samples: &[Sample]) -> ([f64; 3], [f64; 3], f64) {
-    let n = samples.len().max(1) as f64;
-    let (mean, var) = mean_var(samples, |s| s.accel);
-    let norm_mean = samples.iter().map(|s| s.accel.norm()).sum::<f64>() / n;
-    let norm_var = samples
-        .iter()
-        .map(|s| (s.accel.norm() - norm_mean).powi(2))
+/// Mean, per-axis sd and the white-noise σ of the mean norm over the samples `range` of `ch`.
+fn stretch_stats(ch: &Channels, range: Range<usize>) -> ([f64; 3], [f64; 3], f64) {
+    let n = range.len().max(1) as f64;
+    let (mean, var) = mean_var(range.clone(), |i| ch.accel(i));
+    let norm_mean = range.clone().map(|i| ch.accel(i).norm()).sum::<f64>() / n;
+    let norm_var = range
+        .map(|i| (ch.accel(i).norm() - norm_mean).powi(2))
         .sum::<f64>()
         / (n - 1.0).max(1.0);
     let sd = var.map(f64::sqrt);
     (mean.into(), sd.into(), (norm_var / n).sqrt())
 }
 
-/// The still stretches of `samples` (sample rate `rate_hz`) by the bias stage's detector. The
-/// accelerometer axes must be present (the caller checks); samples with a non-finite channel
-/// end a stretch.
-pub fn still_stretches(samples: &[Sample], rate_hz: f64, s: &StillSettings) -> Vec<AccelStretch> {
+/// The still stretches of the samples of `ch` (sample rate `rate_hz`) by the bias stage's
+/// detector. The accelerometer axes must be present (the caller checks); samples with a
+/// non-finite channel end a stretch.
+pub fn still_stretches(ch: &Channels, rate_hz: f64, s: &StillSettings) -> Vec<AccelStretch> {
     let mut det = StillnessDetector::new(&StillnessSettings::default(), rate_hz);
     let trim = (s.trim_s * rate_hz).round() as usize;
     let min_len = ((s.min_still_s * rate_hz).ceil() as usize).max(2);
-    let t0 = samples.first().map(|x| x.t_s()).unwrap_or(0.0);
+    let t0 = if ch.is_empty() { 0.0 } else { ch.t_s(0) };
     let mut out = Vec::new();
     let mut run_start: Option<usize> = None;
     let close = |from: usize, to: usize, out: &mut Vec<AccelStretch>| {
         // [from, to): the still run; trimmed at both ends.
         let (a, b) = (from + trim, to.saturating_sub(trim));
         if b > a && b - a >= min_len {
-            let (mean_m_s2, sd_m_s2, norm_mean_sd_m_s2) = stretch_stats(&samples[a..b]);
+            let (mean_m_s2, sd_m_s2, norm_mean_sd_m_s2) = stretch_stats(ch, a..b);
             out.push(AccelStretch {
                 start: a,
                 len: b - a,
-                t0_s: samples[a].t_s() - t0,
+                t0_s: ch.t_s(a) - t0,
                 mean_m_s2,
                 sd_m_s2,
                 norm_mean_sd_m_s2,
             });
         }
     };
-    let mut bar = crate::progress::Delayed::steps(samples.len() as u64, "samples judged");
-    for (i, x) in samples.iter().enumerate() {
+    let mut bar = crate::progress::Delayed::steps(ch.len() as u64, "samples judged");
+    for i in 0..ch.len() {
         bar.sample_done(i as u64 + 1);
-        let g = [x.gyro[0], x.gyro[1], x.gyro[2]];
-        let a = [x.accel[0], x.accel[1], x.accel[2]];
+        let (g, a) = (ch.gyro(i), ch.accel(i));
         // A gyro-less sensor is judged on its accelerometers (absent axes take no part).
-        let still = det.update_present(&g, &a, &[None; 3], x.absent)
-            && x.accel.iter().all(|v| v.is_finite());
+        let still = det.update_present(&g.into(), &a.into(), &[None; 3], ch.absent_at(i))
+            && a.iter().all(|v| v.is_finite());
         match (still, run_start) {
             (true, None) => run_start = Some(i),
             (false, Some(st)) => {
@@ -158,7 +157,7 @@ pub fn still_stretches(samples: &[Sample], rate_hz: f64, s: &StillSettings) -> V
         }
     }
     if let Some(st) = run_start {
-        close(st, samples.len(), &mut out);
+        close(st, ch.len(), &mut out);
     }
     out
 }

@@ -266,7 +266,7 @@ fn a_static_bench_record_is_one_stretch_and_not_identifiable() {
             ..Sample::default()
         })
         .collect();
-    let st = still_stretches(&samples, 100.0, &StillSettings::default());
+    let st = still_stretches(&samples.iter().collect(), 100.0, &StillSettings::default());
     assert_eq!(st.len(), 1);
     let c = calibrate_accel(st, None, &CalibSettings::default()).unwrap();
     assert!(c.verdict.starts_with("not identifiable"), "{}", c.verdict);
