@@ -152,7 +152,7 @@ impl Loaded for Vec<Sample> {
 
 impl Loaded for Channels {
     fn from_samples(v: Vec<Sample>) -> Self {
-        v.iter().collect()
+        v.into()
     }
     fn count(&self) -> usize {
         self.len()
