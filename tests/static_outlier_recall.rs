@@ -1,18 +1,20 @@
-//! Why the audit's 2 % static gyro outliers are caught less often on the MPU6050 bench
-//! (recall 0.849) than on the ADIS16405 (0.924): the audit sizes them in the channel's robust
-//! σ (spread of the values), the stage judges them in σ̂ (white-noise-equivalent roughness
-//! from second differences, `confirm::roughness`). On white noise the two agree; on noise
-//! correlated from sample to sample (ADIS16405, lag-1 autocorrelation 0.16–0.20) σ̂ is smaller,
-//! so the same "8–30 robust σ" outliers are larger in the stage's own units.
-//! `docs/gross_error_results.md` quotes the printout:
+//! Why the audit's 2 % static gyro outliers were caught less often on the MPU6050 bench
+//! (recall 0.849) than on the ADIS16405 (0.924) while the shape tests judged them alone: the
+//! audit sizes them in the channel's robust σ (spread of the values), the shape tests in σ̂
+//! (white-noise-equivalent roughness from second differences, `confirm::roughness`). On white
+//! noise the two agree; on noise correlated from sample to sample (ADIS16405, lag-1
+//! autocorrelation 0.16–0.20) σ̂ is smaller, so the same "8–30 robust σ" outliers are larger in
+//! those units. At rest the stage now also judges an event against the channel's resting level
+//! in its spread (`rest_k`, `rest::at_rest`), the audit's own units: the MPU6050 0.935, the
+//! ADIS16405 0.928. `docs/gross_error_results.md` quotes the printout:
 //!
 //! ```sh
 //! cargo test --release --test static_outlier_recall -- --nocapture
 //! ```
 //!
-//! `white_noise_costs_recall_at_the_audits_scale` needs no data: the same injection on
-//! synthetic benches of equal marginal σ, white and AR(1). The second test measures the real
-//! benches (skipped visibly when `../shared/data/real` is absent).
+//! `at_rest_white_noise_costs_no_recall` needs no data: the same injection on synthetic benches
+//! of equal marginal σ, white and AR(1). The second test measures the real benches (skipped
+//! visibly when `../shared/data/real` is absent).
 
 mod common;
 
@@ -72,19 +74,19 @@ fn bench(phi: f64, seed: u64) -> Vec<Sample> {
 }
 
 #[test]
-fn white_noise_costs_recall_at_the_audits_scale() {
+fn at_rest_white_noise_costs_no_recall() {
     let white = recall(&bench(0.0, 1), 100.0);
     let ar = recall(&bench(0.18, 1), 100.0);
     eprintln!(
         "synthetic bench, 2 % outliers of 8-30 robust σ: white recall {white:.4}, AR(1) 0.18 recall {ar:.4}"
     );
-    // On white noise the stage misses what the MPU6050 bench loses (0.849): the recording's
-    // whiteness, not its sensor, sets the recall. A clean white bench stays below the target.
-    assert!(white < 0.9, "white {white}");
-    // The same injection on noise with the ADIS16405's lag-1 correlation is caught as on the
-    // ADIS16405 (0.924). The gap (≈ 0.05 over 3 seeds tried: 0.86–0.87 vs 0.91) is ten times
-    // the seed-to-seed spread (≤ 0.01).
-    assert!(ar > white + 0.03, "white {white}, AR {ar}");
+    // Measured 2026-12-02: white 0.9445, AR(1) 0.9416; before the rest test (this test, stop 24,
+    // docs/gross_error_results.md) 0.8699 and 0.9124, a gap of 0.04, ten times the seed-to-seed
+    // spread (≤ 0.01). At
+    // rest the spike is judged in the spread about the level, which whiteness does not change:
+    // both meet the issue's 0.9, and the gap is within that spread.
+    assert!(white >= 0.9 && ar >= 0.9, "white {white}, AR {ar}");
+    assert!((white - ar).abs() < 0.015, "white {white}, AR {ar}");
 }
 
 /// Lag-1 autocorrelation of `x` about its 201-sample running mean.

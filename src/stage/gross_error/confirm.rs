@@ -57,7 +57,7 @@
 //! the caller passes such events unchanged, flagged suspect.
 
 /// Least jaggedness of a gross event of three samples or more (see [`Evidence::jaggedness`]).
-const JAGGED: f64 = 0.45;
+pub(super) const JAGGED: f64 = 0.45;
 /// Fewest samples on which the smoothness test judges an event (module docs: a half-sine of
 /// three samples is as jagged as a glitch can be smooth). A shorter event's shape cannot tell
 /// motion from a glitch; the stage then asks for the level test as well (`verdict.rs`).

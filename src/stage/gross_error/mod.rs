@@ -24,7 +24,9 @@
 //!    judged part shorter than the smoothness test needs (`confirm::SMOOTH_MIN` = 4 samples)
 //!    must also lie at least `level_k` robust σ from the level the channel held over the last
 //!    `level_window_s` of its own time stamps (the *level test*; measured in
-//!    `docs/real-data.md`).
+//!    `docs/real-data.md`). At rest (`rest.rs`, `rest_k`): an event these shape tests let pass
+//!    is still a gross error when it lies `rest_k` spreads off the channel's resting level,
+//!    this channel and every other one at rest around it and the others still during it.
 //! 3. **Output.** A confirmed event is replaced (default: by the two-sided interpolation) and
 //!    flagged `REPLACED` + per-channel bit. An unconfirmed one passes unchanged, flagged
 //!    per-channel `SUSPECT`: weak evidence never changes a value. Bad values are always
@@ -57,6 +59,7 @@ pub mod identify;
 mod line;
 use line::ChannelLine;
 mod repeat;
+pub mod rest;
 mod search;
 use repeat::RepeatDetector;
 pub mod settings;

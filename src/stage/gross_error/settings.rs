@@ -117,6 +117,16 @@ pub struct GrossErrorSettings {
     /// is what `stand_out = 2` has always meant for the edges; 2 would be the same bar as the
     /// interpolation's, and is measured as a trade-off in `docs/gross_error_results.md`).
     pub edge_stand_out: f64,
+    /// Confirmation at rest: an event that fails the shape tests above is still a gross error
+    /// when the channel is at rest around it and every other channel is at rest and undisturbed
+    /// (`rest::at_rest`), and its samples lie a median of at least `rest_k` spreads off the
+    /// channel's resting level (default 6, as `confirm_k`; 0 = off). At rest the level is
+    /// known, so a spike is `A` spreads off it where the interpolation sees `A/√1.5` σ̂.
+    pub rest_k: f64,
+    /// "At rest": the context's spread about its median at most `rest_ratio` times its
+    /// white-noise-equivalent roughness (default 1.5: equal for white noise, 1.16 for the
+    /// ADIS16405's lag-1 correlation of 0.2; a trend or a slow manoeuvre inflates the spread).
+    pub rest_ratio: f64,
     /// Confirmation: the interpolation across an event of m samples uses the nearest
     /// `clamp(m, 3, run_fit_side)` samples on each side (default 3: three for every event;
     /// at most 10; see `confirm.rs`).
@@ -176,6 +186,8 @@ impl Default for GrossErrorSettings {
             edge_k: 2.5,
             stand_out: 2.0,
             edge_stand_out: 4.0,
+            rest_k: 6.0,
+            rest_ratio: 1.5,
             run_fit_side: 3,
             context_samples: 32,
             post_samples: 4,
@@ -231,6 +243,18 @@ impl GrossErrorSettings {
             if !(v > 0.0 && v <= 1.0) {
                 e.push(format!("{name} = {v} must be in (0, 1]"));
             }
+        }
+        if !(self.rest_k.is_finite() && (0.0..=50.0).contains(&self.rest_k)) {
+            e.push(format!(
+                "rest_k = {} must be in [0, 50] (0 = off)",
+                self.rest_k
+            ));
+        }
+        if !(self.rest_ratio.is_finite() && (1.0..=10.0).contains(&self.rest_ratio)) {
+            e.push(format!(
+                "rest_ratio = {} must be in [1, 10]",
+                self.rest_ratio
+            ));
         }
         if self.max_run == 0 {
             e.push("max_run must be ≥ 1".into());

@@ -4,10 +4,10 @@
 //! the channel itself held within the last `level_window_s` (the level test), and write the
 //! verdict — replaced or suspect — into the held samples.
 
-use super::confirm;
 use super::gate::{Mode, RAW_KEEP};
 use super::{GrossErrorStage, MAX_EVENT, RING, Replacement, SHOCK_MEMORY, at_ring};
 use super::{MAX_CONTEXT, MAX_POST};
+use super::{confirm, rest};
 use crate::sample::flags;
 use crate::stats::robust::{median, sigma_from_abs_dev, upper_median};
 
@@ -42,6 +42,15 @@ pub struct EventVerdict {
     pub gross: bool,
 }
 
+/// At rest (`rest_k`), the break is the span of the event from its first to its last sample
+/// beyond this many spreads of the level: a sample of Gaussian rest noise lies there with
+/// probability 7e-6 (at 3 it was 2.7e-3, and an ordinary 3.2 σ sample next to a spike was
+/// replaced with it in `tests/gross_error_stage.rs`).
+const REST_SPAN_K: f64 = 4.5;
+/// At rest (`rest_k`), every other channel's samples during the event each lie fewer than
+/// this many of its spreads off its own level: a sample of ordinary rest noise does, and a
+/// touch, a tap or the start of a motion that moves another axis does not.
+const OTHERS_REST_K: f64 = 4.0;
 /// A partner channel of the several-axes test is sharp beyond this many times its roughness.
 const SHOCK_K: f64 = 4.0;
 /// Time constant of a channel's rate of confirmed gross errors (samples).
@@ -100,7 +109,7 @@ impl GrossErrorStage {
         // break out of it, and one second difference of roughness), or it stays unconfirmed.
         let eligible = m_judged == m && n_post >= 3;
         // Leading and trailing samples that continue the signal are not part of the break.
-        let (lead, keep) = if eligible {
+        let (mut lead, mut keep) = if eligible {
             confirm::trim(
                 &pre[..n_pre],
                 &event[..m],
@@ -169,10 +178,34 @@ impl GrossErrorStage {
             None
         };
         let level_veto = level.is_some_and(|d| d < self.s.level_k);
-        let gross = !shock
-            && !motion_break
-            && !level_veto
-            && evidence.is_some_and(|e| e.gross(keep - lead, &self.s.thresholds()));
+        let shape_gross = evidence.is_some_and(|e| e.gross(keep - lead, &self.s.thresholds()));
+        // At rest the channel's level is known: the samples of the event off it by more than
+        // `REST_SPAN_K` spreads are the break, judged against `rest_k` (`settings.rs`), when every other
+        // channel is at rest and undisturbed too.
+        let mut rest_gross = false;
+        if !shape_gross && eligible && self.s.rest_k > 0.0 {
+            let floor = self.sigma_floor(c);
+            if let Some(rest) =
+                rest::at_rest(&pre[..n_pre], &post[..n_post], floor, self.s.rest_ratio)
+            {
+                let off = |x: &f64| rest.z(*x) > REST_SPAN_K;
+                if let (Some(a), Some(b)) = (
+                    event[..m].iter().position(off),
+                    event[..m].iter().rposition(off),
+                ) {
+                    let before = if a > 0 { event[a - 1] } else { pre[n_pre - 1] };
+                    let after = if b + 1 < m { event[b + 1] } else { post[0] };
+                    if rest.is_break(before, &event[a..=b], after, self.s.rest_k)
+                        && self.others_at_rest(c, ev.start, end, n_pre, n_post)
+                    {
+                        (lead, keep) = (a, b + 1);
+                        interp[..keep - lead].fill(rest.level);
+                        rest_gross = true;
+                    }
+                }
+            }
+        }
+        let gross = !shock && !motion_break && !level_veto && (shape_gross || rest_gross);
         if let Some(log) = self.verdicts.as_mut() {
             log.push(EventVerdict {
                 channel: c,
@@ -242,6 +275,40 @@ impl GrossErrorStage {
             }
             self.ch[c].gate.resume_from(&recent);
         }
+    }
+
+    /// Every other channel with values is at rest around the event (`rest::at_rest` on its
+    /// own context) and undisturbed during it (each sample within `OTHERS_REST_K` spreads of its
+    /// level).
+    fn others_at_rest(&self, c: usize, start: u64, end: u64, n_pre: usize, n_post: usize) -> bool {
+        let ratio = self.s.rest_ratio;
+        let mut pre = [0.0f64; MAX_CONTEXT];
+        let mut event = [0.0f64; MAX_EVENT];
+        let mut post = [0.0f64; MAX_POST];
+        let m = ((end - start) as usize).min(MAX_EVENT);
+        for o in (0..self.ch.len()).filter(|&o| o != c) {
+            // Raw values, as the several-axes test reads them: a partner replaced first
+            // still moved.
+            let at = |i: u64| at_ring(&self.ch[o].raw, i);
+            for (j, p) in pre[..n_pre].iter_mut().enumerate() {
+                *p = at(start - n_pre as u64 + j as u64);
+            }
+            for (j, e) in event[..m].iter_mut().enumerate() {
+                *e = at(start + j as u64);
+            }
+            for (j, p) in post[..n_post].iter_mut().enumerate() {
+                *p = at(end + j as u64);
+            }
+            if pre[..n_pre].iter().filter(|v| v.is_finite()).count() < 16 {
+                continue; // an absent channel (or one without a context) casts no vote
+            }
+            let floor = self.sigma_floor(o);
+            match rest::at_rest(&pre[..n_pre], &post[..n_post], floor, ratio) {
+                Some(rest) if event[..m].iter().all(|&x| rest.z_robust(x) < OTHERS_REST_K) => {}
+                _ => return false,
+            }
+        }
+        true
     }
 
     /// The level window in measurements: `level_window_s` of the stream's own time (its mean
