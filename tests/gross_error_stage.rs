@@ -279,23 +279,30 @@ fn saturated_stretches_pass_flagged_and_never_become_the_forecast() {
     assert!(!run_through(&mut st, &[s])[0].has(flags::REPLACED));
 }
 
+/// The default gz stage's output on 900 samples of white noise (σ `sigma`, seeded) carrying a
+/// 6-sample half-sine of `height` σ at 300 (a knock, a twitch) and a 6-sample square glitch of
+/// the same height at 600.
+fn knock_and_glitch(seed: u64, height: f64, sigma: f64) -> Vec<Sample> {
+    let mut rng = Rng::new(seed);
+    let mut x = noise(&mut rng, 0, 900, sigma);
+    for k in 0..6 {
+        let bump = height * sigma * (std::f64::consts::PI * (k as f64 + 1.0) / 7.0).sin();
+        let v = x[300 + k].channel(GZ) + bump;
+        x[300 + k].set_channel(GZ, v);
+        let v = x[600 + k].channel(GZ) + height * sigma;
+        x[600 + k].set_channel(GZ, v);
+    }
+    let mut st = stage(GrossErrorSettings::default(), sigma);
+    run_through(&mut st, &x)
+}
+
 #[test]
 fn a_smooth_knock_passes_and_a_square_glitch_of_the_same_size_is_replaced() {
     // Both 30σ high and 6 samples long. The knock is a half-sine — smooth at the sample scale,
     // as anything a rigid body does through the sensor's own filter — and passes flagged
     // suspect; the glitch breaks in and out and is replaced.
-    let mut rng = Rng::new(21);
     let sigma = 0.01;
-    let mut x = noise(&mut rng, 0, 900, sigma);
-    for k in 0..6 {
-        let bump = 30.0 * sigma * (std::f64::consts::PI * (k as f64 + 1.0) / 7.0).sin();
-        let v = x[300 + k].channel(GZ) + bump;
-        x[300 + k].set_channel(GZ, v);
-        let v = x[600 + k].channel(GZ) + 30.0 * sigma;
-        x[600 + k].set_channel(GZ, v);
-    }
-    let mut st = stage(GrossErrorSettings::default(), sigma);
-    let out = run_through(&mut st, &x);
+    let out = knock_and_glitch(21, 30.0, sigma);
     assert!(out[300..306].iter().all(|o| !replaced(o)), "knock replaced");
     assert!(out[600..606].iter().all(replaced), "glitch passed");
     assert!(
@@ -948,18 +955,7 @@ fn at_rest_outliers_are_judged_against_the_level_unless_another_axis_moves_with_
 fn at_rest_a_smooth_twitch_is_motion_and_a_square_glitch_is_not() {
     // A 6-sample half-sine of 12 σ on gz alone (a yaw twitch moves no accelerometer) passes the
     // rest test as it passes the shape tests; a 6-sample square glitch of 12 σ is replaced.
-    let mut rng = Rng::new(22);
-    let sigma = 0.01;
-    let mut x = noise(&mut rng, 0, 900, sigma);
-    for k in 0..6 {
-        let bump = 12.0 * sigma * (std::f64::consts::PI * (k as f64 + 1.0) / 7.0).sin();
-        let v = x[300 + k].channel(GZ) + bump;
-        x[300 + k].set_channel(GZ, v);
-        let v = x[600 + k].channel(GZ) + 12.0 * sigma;
-        x[600 + k].set_channel(GZ, v);
-    }
-    let mut st = stage(GrossErrorSettings::default(), sigma);
-    let out = run_through(&mut st, &x);
+    let out = knock_and_glitch(22, 12.0, 0.01);
     assert!(
         out[300..306].iter().all(|o| !replaced(o)),
         "twitch replaced"

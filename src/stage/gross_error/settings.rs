@@ -244,12 +244,6 @@ impl GrossErrorSettings {
                 e.push(format!("{name} = {v} must be in (0, 1]"));
             }
         }
-        if !(self.rest_k.is_finite() && (0.0..=50.0).contains(&self.rest_k)) {
-            e.push(format!(
-                "rest_k = {} must be in [0, 50] (0 = off)",
-                self.rest_k
-            ));
-        }
         if !(self.rest_ratio.is_finite() && (1.0..=10.0).contains(&self.rest_ratio)) {
             e.push(format!(
                 "rest_ratio = {} must be in [1, 10]",
@@ -259,11 +253,10 @@ impl GrossErrorSettings {
         if self.max_run == 0 {
             e.push("max_run must be ≥ 1".into());
         }
-        if !(self.release_k.is_finite() && (0.0..=50.0).contains(&self.release_k)) {
-            e.push(format!(
-                "release_k = {} must be in [0, 50] (0 = off)",
-                self.release_k
-            ));
+        for (name, v) in [("release_k", self.release_k), ("rest_k", self.rest_k)] {
+            if !(v.is_finite() && (0.0..=50.0).contains(&v)) {
+                e.push(format!("{name} = {v} must be in [0, 50] (0 = off)"));
+            }
         }
         if !(self.median_window == 3 || self.median_window == 5) {
             e.push(format!(
