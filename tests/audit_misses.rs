@@ -141,6 +141,9 @@ fn why_missed(verdicts: &[&EventVerdict], k: u64, k_th: &Thresholds) -> String {
     if v.gross {
         return if (v.lead..v.keep).contains(&j) {
             "replaced, then overwritten (cannot happen)".into()
+        } else if v.rest {
+            "outside the break of an event confirmed at rest (within 4.5 spreads of the level)"
+                .into()
         } else {
             "handed back by the trim of a confirmed event".into()
         };

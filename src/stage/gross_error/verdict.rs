@@ -38,6 +38,8 @@ pub struct EventVerdict {
     pub level: Option<f64>,
     /// The level test vetoed it (`level` < `level_k`).
     pub level_veto: bool,
+    /// Confirmed by the test against the resting level (`rest_k`; the shape tests let it pass).
+    pub rest: bool,
     /// Confirmed gross (the judged part replaced).
     pub gross: bool,
 }
@@ -48,7 +50,7 @@ pub struct EventVerdict {
 /// replaced with it in `tests/gross_error_stage.rs`).
 const REST_SPAN_K: f64 = 4.5;
 /// At rest (`rest_k`), every other channel's samples during the event each lie fewer than
-/// this many of its spreads off its own level: a sample of ordinary rest noise does, and a
+/// this many of its MAD σ (`rest::Rest::z_robust`) off its own level: a sample of ordinary rest noise does, and a
 /// touch, a tap or the start of a motion that moves another axis does not.
 const OTHERS_REST_K: f64 = 4.0;
 /// A partner channel of the several-axes test is sharp beyond this many times its roughness.
@@ -178,34 +180,24 @@ impl GrossErrorStage {
             None
         };
         let level_veto = level.is_some_and(|d| d < self.s.level_k);
+        let vetoed = shock || motion_break || level_veto;
         let shape_gross = evidence.is_some_and(|e| e.gross(keep - lead, &self.s.thresholds()));
-        // At rest the channel's level is known: the samples of the event off it by more than
-        // `REST_SPAN_K` spreads are the break, judged against `rest_k` (`settings.rs`), when every other
-        // channel is at rest and undisturbed too.
-        let mut rest_gross = false;
-        if !shape_gross && eligible && self.s.rest_k > 0.0 {
-            let floor = self.sigma_floor(c);
-            if let Some(rest) =
-                rest::at_rest(&pre[..n_pre], &post[..n_post], floor, self.s.rest_ratio)
-            {
-                let off = |x: &f64| rest.z(*x) > REST_SPAN_K;
-                if let (Some(a), Some(b)) = (
-                    event[..m].iter().position(off),
-                    event[..m].iter().rposition(off),
-                ) {
-                    let before = if a > 0 { event[a - 1] } else { pre[n_pre - 1] };
-                    let after = if b + 1 < m { event[b + 1] } else { post[0] };
-                    if rest.is_break(before, &event[a..=b], after, self.s.rest_k)
-                        && self.others_at_rest(c, ev.start, end, n_pre, n_post)
-                    {
-                        (lead, keep) = (a, b + 1);
-                        interp[..keep - lead].fill(rest.level);
-                        rest_gross = true;
-                    }
-                }
-            }
+        let rest_break = if !vetoed && !shape_gross && eligible && self.s.rest_k > 0.0 {
+            self.rest_break(
+                c,
+                (ev.start, end),
+                &pre[..n_pre],
+                &event[..m],
+                &post[..n_post],
+            )
+        } else {
+            None
+        };
+        if let Some((a, b, level)) = rest_break {
+            (lead, keep) = (a, b);
+            interp[..b - a].fill(level);
         }
-        let gross = !shock && !motion_break && !level_veto && (shape_gross || rest_gross);
+        let gross = !vetoed && (shape_gross || rest_break.is_some());
         if let Some(log) = self.verdicts.as_mut() {
             log.push(EventVerdict {
                 channel: c,
@@ -218,6 +210,7 @@ impl GrossErrorStage {
                 motion_break,
                 level,
                 level_veto,
+                rest: rest_break.is_some(),
                 gross,
             });
         }
@@ -277,8 +270,36 @@ impl GrossErrorStage {
         }
     }
 
+    /// At rest the channel's level is known: the event's samples from the first to the last
+    /// beyond `REST_SPAN_K` spreads of it are a break (`rest::Rest::is_break` at `rest_k`) when
+    /// channel `c` is at rest around the event (`pre`, `post`) and every other channel is too
+    /// and still during it ([`Self::others_at_rest`]). Returns the break's span in `event` and
+    /// the level that replaces it.
+    fn rest_break(
+        &self,
+        c: usize,
+        (start, end): (u64, u64),
+        pre: &[f64],
+        event: &[f64],
+        post: &[f64],
+    ) -> Option<(usize, usize, f64)> {
+        let rest = rest::at_rest(pre, post, self.sigma_floor(c), self.s.rest_ratio)?;
+        let off = |x: &f64| rest.z(*x) > REST_SPAN_K;
+        let a = event.iter().position(off)?;
+        let b = event.iter().rposition(off)?;
+        let before = if a > 0 {
+            event[a - 1]
+        } else {
+            pre[pre.len() - 1]
+        };
+        let after = event.get(b + 1).copied().unwrap_or(post[0]);
+        (rest.is_break(before, &event[a..=b], after, self.s.rest_k)
+            && self.others_at_rest(c, start, end, pre.len(), post.len()))
+        .then_some((a, b + 1, rest.level))
+    }
+
     /// Every other channel with values is at rest around the event (`rest::at_rest` on its
-    /// own context) and undisturbed during it (each sample within `OTHERS_REST_K` spreads of its
+    /// own context) and undisturbed during it (each sample within `OTHERS_REST_K` MAD σ of its
     /// level).
     fn others_at_rest(&self, c: usize, start: u64, end: u64, n_pre: usize, n_post: usize) -> bool {
         let ratio = self.s.rest_ratio;
