@@ -106,11 +106,16 @@ impl Blocks {
 
     /// Mean of `x²` over the held-out samples.
     pub fn held_out_mse(&self, x: &[f64]) -> f64 {
+        self.held_out_mse_of(|i| x[i])
+    }
+
+    /// Mean of `x(i)²` over the held-out samples `i`, for a series computed on the fly.
+    pub fn held_out_mse_of(&self, x: impl Fn(usize) -> f64) -> f64 {
         let (mut s, mut k) = (0.0, 0usize);
         for b in (0..self.count).filter(|b| Self::held_out(*b)) {
             let r = self.range(b);
             k += r.len();
-            s += x[r].iter().map(|v| v * v).sum::<f64>();
+            s += r.map(&x).map(|v| v * v).sum::<f64>();
         }
         s / k.max(1) as f64
     }

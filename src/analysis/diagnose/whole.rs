@@ -210,41 +210,65 @@ fn ar_aic(x: &[f64], max: usize) -> Result<ArFit, AnalysisError> {
         .ok_or_else(|| AnalysisError::singular("no AR fit"))
 }
 
-/// One-step AR errors of `x` (mean `ar.mean`) at every sample.
-fn ar_innovations(x: &[f64], ar: &ArFit) -> Vec<f64> {
+/// One-step AR error of `x` (mean `ar.mean`) at sample `i`.
+fn ar_innovation(x: &[f64], ar: &ArFit, i: usize) -> f64 {
     let p = ar.coeffs.len();
     let m = ar.mean;
-    (0..x.len())
-        .map(|i| {
-            let mut pred = m;
-            for (j, phi) in ar.coeffs.iter().enumerate().take(i.min(p)) {
-                pred += phi * (x[i - 1 - j] - m);
-            }
-            x[i] - pred
-        })
-        .collect()
+    let mut pred = m;
+    for (j, phi) in ar.coeffs.iter().enumerate().take(i.min(p)) {
+        pred += phi * (x[i - 1 - j] - m);
+    }
+    x[i] - pred
 }
 
-/// Full-rate columns of a slow term (step at full-rate index `at`).
-fn full_columns(t: &SlowTerm, at: usize, input: &ChannelInput) -> Vec<Vec<f64>> {
-    let n = input.values.len();
+/// Mean squared one-step AR error of `x` over the held-out blocks (no full-length copy).
+fn held_out_ar_mse(blocks: &Blocks, x: &[f64], ar: &ArFit) -> f64 {
+    blocks.held_out_mse_of(|i| ar_innovation(x, ar, i))
+}
+
+/// Subtract `beta ·` the full-rate columns of a slow term (step at full-rate index `at`) from
+/// `r` in place; returns the number of columns. Only a lagged temperature allocates (its lag).
+fn subtract_term(
+    r: &mut [f64],
+    t: &SlowTerm,
+    at: usize,
+    input: &ChannelInput,
+    beta: &[f64],
+) -> usize {
     match t {
-        SlowTerm::Step { .. } => vec![(0..n).map(|i| f64::from(u8::from(i >= at))).collect()],
+        SlowTerm::Step { .. } => {
+            for (i, o) in r.iter_mut().enumerate() {
+                *o -= beta[0] * f64::from(u8::from(i >= at));
+            }
+            1
+        }
         SlowTerm::Temperature { lag_s, t0_c } => {
             let tl = lagged(
                 input.exogenous.temperature_c.unwrap_or(&[]),
                 1.0 / input.rate_hz,
                 *lag_s,
             );
-            let d: Vec<f64> = tl.iter().map(|v| v - t0_c).collect();
-            let d2 = d.iter().map(|v| v * v).collect();
-            vec![d, d2]
+            let (b1, b2) = (beta[0], beta[1]);
+            for (o, v) in r.iter_mut().zip(&tl) {
+                *o -= b1 * (v - t0_c);
+            }
+            for (o, v) in r.iter_mut().zip(&tl) {
+                let d = v - t0_c;
+                *o -= b2 * (d * d);
+            }
+            2
         }
-        SlowTerm::GSensitivity => input
-            .exogenous
-            .specific_force_m_s2
-            .map(|f| f.iter().map(|c| c.to_vec()).collect())
-            .unwrap_or_default(),
+        SlowTerm::GSensitivity => match input.exogenous.specific_force_m_s2 {
+            Some(f) => {
+                for (c, col) in f.iter().enumerate() {
+                    for (o, v) in r.iter_mut().zip(col.iter()) {
+                        *o -= beta[c] * v;
+                    }
+                }
+                3
+            }
+            None => 0,
+        },
     }
 }
 
@@ -295,18 +319,31 @@ pub fn diagnose_whole(
     let sel = blocks.selection(y);
     let c_a = sel.iter().sum::<f64>() / sel.len() as f64;
     let base: Vec<f64> = y.iter().map(|v| v - c_a).collect();
+    // What the model is scored against, taken now so that `base` can become the working series
+    // (memory: a handful of full-length series at most are alive at once).
+    let ar0 = ar_aic(&blocks.selection(&base), s.max_ar_order)?;
+    let one_step_before = held_out_ar_mse(&blocks, &base, &ar0);
+    let open_loop_before = blocks.held_out_mse(&base);
+    let dec = blocks.dec;
+    let dt = dec as f64 / fs;
+    let seg = (n / 64).clamp(256, 8192);
+    let spectrum_before = crate::analysis::spectrum::welch(&base, fs, seg).ok();
+    let allan_before = crate::analysis::allan::oadev_octaves(&step_means(&base, dec), 1.0 / dt);
     // 1. Lines.
     progress("lines");
-    let mut d_sel = base.clone();
-    let mut line_dep = vec![0.0; n];
+    // The kept lines' in-sample fit, allocated with the first kept line.
+    let mut line_dep: Option<Vec<f64>> = None;
     let mut effects: Vec<FoundEffect> = Vec::new();
     let mut rejected: Vec<HeldOutTest> = Vec::new();
     let cands = line_candidates(&base, &blocks, fs, s.alpha, s.max_lines);
+    let mut d_sel = base;
     let level = s.alpha / cands.len().max(1) as f64;
     for c in &cands {
         let tr = track(&d_sel, &blocks, fs, c, s.alpha);
-        let pred = contribution(&tr, &blocks, fs);
-        let e1: Vec<f64> = d_sel.iter().zip(&pred).map(|(a, b)| a - b).collect();
+        let mut e1 = contribution(&tr, &blocks, fs);
+        for (o, a) in e1.iter_mut().zip(&d_sel) {
+            *o = a - *o;
+        }
         let desc = format!("line near {:.4} Hz", c.freq_hz);
         let t = held_out_test(
             "vibration_line",
@@ -340,8 +377,14 @@ pub fn diagnose_whole(
         let span = [first.t_s - half, present[present.len() - 1].t_s + half];
         d_sel = e1;
         let dep = contribution_in_sample(&tr, &blocks, fs);
-        for (o, v) in line_dep.iter_mut().zip(&dep) {
-            *o += v;
+        match line_dep.as_mut() {
+            Some(l) => {
+                for (o, v) in l.iter_mut().zip(&dep) {
+                    *o += v;
+                }
+            }
+            // `0.0 + v` as the sum into zeros gave (−0 becomes +0).
+            None => line_dep = Some(dep.into_iter().map(|v| 0.0 + v).collect()),
         }
         // Phase: the first present block's (it only seeds the online canceller, which tracks
         // the phase of a drifting line).
@@ -359,15 +402,16 @@ pub fn diagnose_whole(
     }
     // 2. Slow effects on 1-s means.
     progress("slow effects");
-    let dec = blocks.dec;
-    let y_sel: Vec<f64> = d_sel.iter().map(|v| v + c_a).collect();
+    let mut y_sel = d_sel;
+    for v in &mut y_sel {
+        *v += c_a;
+    }
     let z = step_means(&y_sel, dec);
     let zt = exo.temperature_c.map(|t| step_means(t, dec));
     let zf = exo
         .specific_force_m_s2
         .map(|f| f.map(|c| step_means(c, dec)));
     let held = blocks.dec_held_out();
-    let dt = dec as f64 / fs;
     let ctx = SlowCtx {
         z: &z,
         temp: zt.as_deref(),
@@ -417,7 +461,7 @@ pub fn diagnose_whole(
     });
     // 4. Full-rate residual of the selection model; AR before/after.
     progress("AR");
-    let mut r_sel = y_sel.clone();
+    let mut r_sel = y_sel;
     let mut j = 0;
     let mut at: Vec<usize> = Vec::new();
     for t in &slow.terms {
@@ -427,14 +471,7 @@ pub fn diagnose_whole(
             0
         };
         at.push(a);
-        let cols = full_columns(t, a, input);
-        for (ci, col) in cols.iter().enumerate() {
-            let b = slow.fit.beta[j + ci];
-            for (o, v) in r_sel.iter_mut().zip(col) {
-                *o -= b * v;
-            }
-        }
-        j += cols.len();
+        j += subtract_term(&mut r_sel, t, a, input, &slow.fit.beta[j..]);
     }
     // The intercept of the open-loop residual: its selection-block mean (the GLS intercept
     // under a wander is another estimate of the level; the open-loop error wants the mean).
@@ -445,25 +482,31 @@ pub fn diagnose_whole(
     for v in &mut r_sel {
         *v -= c_sel;
     }
-    let ar0 = ar_aic(&blocks.selection(&base), s.max_ar_order)?;
     let ar1 = ar_aic(&blocks.selection(&r_sel), s.max_ar_order)?;
-    let i0 = ar_innovations(&base, &ar0);
-    let i1 = ar_innovations(&r_sel, &ar1);
     let held_out = HeldOutErrors {
         samples: (0..blocks.count)
             .filter(|b| Blocks::held_out(*b))
             .map(|b| blocks.range(b).len())
             .sum(),
-        open_loop_before: blocks.held_out_mse(&base),
+        open_loop_before,
         open_loop_after: blocks.held_out_mse(&r_sel),
         ar_order_before: ar0.order(),
         ar_order_after: ar1.order(),
-        one_step_before: blocks.held_out_mse(&i0),
-        one_step_after: blocks.held_out_mse(&i1),
+        one_step_before,
+        one_step_after: held_out_ar_mse(&blocks, &r_sel, &ar1),
     };
+    drop(r_sel);
     // 5. Deployment refit on every block.
     progress("refit");
-    let y_dep: Vec<f64> = y.iter().zip(&line_dep).map(|(a, b)| a - b).collect();
+    let y_dep = match line_dep {
+        Some(mut l) => {
+            for (o, a) in l.iter_mut().zip(y) {
+                *o = a - *o;
+            }
+            l
+        }
+        None => y.iter().map(|a| a - 0.0).collect(),
+    };
     let mut terms = slow.terms.clone();
     let mut dep = ctx_all_fit(&ctx, &terms)?;
     for (ti, t) in slow.terms.iter().enumerate() {
@@ -485,13 +528,7 @@ pub fn diagnose_whole(
                 } else {
                     0
                 };
-                let cols = full_columns(o, oa, input);
-                for (ci, col) in cols.iter().enumerate() {
-                    for (x, v) in r.iter_mut().zip(col) {
-                        *x -= fo.beta[jj + ci] * v;
-                    }
-                }
-                jj += cols.len();
+                jj += subtract_term(&mut r, o, oa, input, &fo.beta[jj..]);
             }
             let w = 2 * blocks.len;
             let (lo, hi) = ((k * dec).saturating_sub(w), (k * dec + w).min(n));
@@ -513,13 +550,8 @@ pub fn diagnose_whole(
     let mut r_dep = y_dep;
     let mut jj = 0;
     for (ti, t) in terms.iter().enumerate() {
-        let cols = full_columns(t, at[ti], input);
-        for (ci, col) in cols.iter().enumerate() {
-            for (x, v) in r_dep.iter_mut().zip(col) {
-                *x -= dep.beta[jj + ci] * v;
-            }
-        }
-        let b = &dep.beta[jj..jj + cols.len()];
+        let ncols = subtract_term(&mut r_dep, t, at[ti], input, &dep.beta[jj..]);
+        let b = &dep.beta[jj..jj + ncols];
         let effect = match t {
             SlowTerm::Step { .. } => Effect::Step {
                 t_s: at[ti] as f64 / fs,
@@ -545,7 +577,7 @@ pub fn diagnose_whole(
             test: slow.tests[ti].clone(),
             track: vec![],
         });
-        jj += cols.len();
+        jj += ncols;
     }
     if let Some(w) = &wander
         && w.written
@@ -569,11 +601,10 @@ pub fn diagnose_whole(
     }
     let ar_dep = burg(&r_dep, ar1.order().max(1))?;
     progress("plots");
-    let seg = (n / 64).clamp(256, 8192);
     let plots = ResidualPlots {
-        spectrum_before: crate::analysis::spectrum::welch(&base, fs, seg).ok(),
+        spectrum_before,
         spectrum_after: crate::analysis::spectrum::welch(&r_dep, fs, seg).ok(),
-        allan_before: crate::analysis::allan::oadev_octaves(&step_means(&base, dec), 1.0 / dt),
+        allan_before,
         allan_after: crate::analysis::allan::oadev_octaves(&step_means(&r_dep, dec), 1.0 / dt),
     };
     Ok(WholeDiagnosis {
