@@ -29,7 +29,7 @@ pub struct WholeReport {
     pub warnings: Vec<String>,
 }
 
-const METHOD: &str = "whole log: effects proposed and fitted on the even blocks, kept only if their held-out gain on the odd blocks beats its noise (z-test at alpha = 0.001 / candidates; for slow effects the noise of the gain from the held-out innovations' autocovariance), then refitted on every block";
+const METHOD: &str = "whole log: effects proposed and fitted on the even blocks, kept only if their held-out gain on the odd blocks beats its noise (z-test at alpha = 0.001 / candidates; for slow effects the noise of the gain from the held-out innovations' autocovariance; a step is placed and fitted on the 1-s points of one parity near its candidate time and scored on the other, both ways round), then refitted on every block";
 
 impl WholeReport {
     /// The text report.

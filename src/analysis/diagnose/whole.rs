@@ -421,6 +421,7 @@ pub fn diagnose_whole(
         dt_s: dt,
         held: &held,
         lsb,
+        block: blocks.len / dec,
     };
     let min_gap = blocks.len / dec;
     let slow = select(&ctx, s.alpha, s.max_slow_terms, min_gap)
