@@ -32,7 +32,7 @@
 //! the full model's wander), both ways round; the smaller z decides. The point of the other
 //! parity between the two fitting points across the step places it (by the level it is nearer)
 //! and is not scored. A smooth wander excursion fitted as a step makes the errors after it worse,
-//! whichever half scores it. With this: 10 of 12 at 700 s, 11 at 800 s, 12 at 1200 s of 30 min,
+//! whichever half scores it. With this: 10 of 12 at 700 s, 10 at 800 s, 12 at 1200 s of 30 min,
 //! and still no step on the clean benches (`tests/diagnose_whole.rs`).
 //!
 //! **Contiguous spans (temperature).** The temperature column is smooth on the block scale
