@@ -99,6 +99,17 @@ fn report_agrees(m: &BiasModelFile, j: &serde_json::Value) {
     }
 }
 
+/// The gz steps of a model file: (time s, size rad/s).
+fn gz_steps(m: &BiasModelFile) -> Vec<(f64, f64)> {
+    effects(m, "gz")
+        .iter()
+        .filter_map(|e| match *e {
+            Effect::Step { t_s, size } => Some((t_s, size)),
+            _ => None,
+        })
+        .collect()
+}
+
 #[test]
 fn a_bias_step_at_two_thirds_of_the_log_is_found() {
     // 150 °/h = 0.041667 °/s on gz at 800 s of 20 min; the bench's own temperature warm-up and
@@ -116,13 +127,7 @@ fn a_bias_step_at_two_thirds_of_the_log_is_found() {
     let (m, j, text) = diagnose(&log, &dir.path().join("out"));
     report_agrees(&m, &j);
     let truth = 0.041666667_f64.to_radians();
-    let steps: Vec<(f64, f64)> = effects(&m, "gz")
-        .iter()
-        .filter_map(|e| match *e {
-            Effect::Step { t_s, size } => Some((t_s, size)),
-            _ => None,
-        })
-        .collect();
+    let steps = gz_steps(&m);
     eprintln!("gz steps: {steps:?} (truth 800 s, {truth:.4e})");
     assert!(
         steps
@@ -156,13 +161,7 @@ fn a_bias_step_anywhere_is_found_over_seeds() {
             simulate(&log, dur, Some(seed), &[&set]);
             let (m, j, _) = diagnose(&log, &dir.path().join(format!("o{seed}_{at}")));
             report_agrees(&m, &j);
-            let steps: Vec<(f64, f64)> = effects(&m, "gz")
-                .iter()
-                .filter_map(|e| match *e {
-                    Effect::Step { t_s, size } => Some((t_s, size)),
-                    _ => None,
-                })
-                .collect();
+            let steps = gz_steps(&m);
             eprintln!("seed {seed}, step at {at} s: {steps:?} (truth {truth:.4e})");
             runs += 1;
             let hit = steps.iter().any(|(t, _)| (t - at).abs() <= 1.0);

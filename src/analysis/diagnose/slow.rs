@@ -491,19 +491,17 @@ fn step_test(
     k: usize,
     level: f64,
 ) -> HeldOutTest {
-    let a = step_test_half(ctx, terms, full, i, k, level, 0);
-    let b = step_test_half(ctx, terms, full, i, k, level, 1);
+    let half = |par| step_test_half(ctx, (terms, i, k), full, level, par);
+    let (a, b) = (half(0), half(1));
     if a.z <= b.z { a } else { b }
 }
 
-/// One half of [`step_test`]: placed and fitted on the points of parity `par`, scored on the
-/// others.
+/// One half of [`step_test`]: step `k` (term `i` of `terms`) placed and fitted on the points of
+/// parity `par`, scored on the others.
 fn step_test_half(
     ctx: &SlowCtx,
-    terms: &[SlowTerm],
+    (terms, i, k): (&[SlowTerm], usize, usize),
     full: &SlowFit,
-    i: usize,
-    k: usize,
     level: f64,
     par: usize,
 ) -> HeldOutTest {
