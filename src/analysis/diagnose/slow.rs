@@ -477,6 +477,22 @@ fn fold_failure(
         })
 }
 
+/// Least-squares location of one mean shift of `x` within `lo..hi` (prefix sums).
+pub fn locate_step(x: &[f64], lo: usize, hi: usize) -> usize {
+    let m = x.len();
+    let mean = x.iter().sum::<f64>() / m as f64;
+    let mut cs = vec![0.0; m + 1];
+    for (k, v) in x.iter().enumerate() {
+        cs[k + 1] = cs[k] + v - mean;
+    }
+    (lo.max(1)..hi.min(m - 1).max(lo.max(1) + 1))
+        .max_by(|&a, &b| {
+            let st = |k: usize| cs[k] * cs[k] / (k as f64 * (m - k) as f64);
+            st(a).total_cmp(&st(b))
+        })
+        .unwrap_or(lo)
+}
+
 /// The step's test (module docs, "Steps"): the 1-s points split by parity, so that wherever the
 /// step lies its signature in the one-step errors falls on both halves. On the even points the
 /// step is placed (least squares within two blocks of the selection's place, `k`) and, with the
@@ -506,13 +522,15 @@ fn step_test_half(
     par: usize,
 ) -> HeldOutTest {
     let n = ctx.z.len();
-    let even = |j: usize| j % 2 == par;
+    let fits = |j: usize| j % 2 == par;
     let p = full.wander.best;
     let mut without = terms.to_vec();
     without.remove(i);
-    let fit = |ts: &[SlowTerm]| -> Option<(f64, Vec<f64>)> {
-        let c = ctx.gls_on(&ctx.all_columns(ts), &p, &even)?;
-        Some((c[0], c[1..].to_vec()))
+    // The residual of a model fitted on the fitting half (every point).
+    let residual = |ts: &[SlowTerm]| -> Option<(Vec<f64>, Vec<f64>)> {
+        let cols = ctx.all_columns(ts);
+        let c = ctx.gls_on(&cols, &p, &fits)?;
+        Some((ctx.open_loop_with(&cols, c[0], &c[1..]), c[1..].to_vec()))
     };
     let refused = |why: &str| HeldOutTest {
         family: terms[i].family().into(),
@@ -527,31 +545,19 @@ fn step_test_half(
         kept: false,
         reason: why.into(),
     };
-    let Some((c0, b0)) = fit(&without) else {
-        return refused("the model without the step is not determined on the even points");
+    let Some((d0, _)) = residual(&without) else {
+        return refused("the model without the step is not determined on the fitting half");
     };
-    // Place the step on the even points of the residual without it.
-    let cols0 = ctx.all_columns(&without);
-    let d0 = ctx.open_loop_with(&cols0, c0, &b0);
+    // Place the step on the fitting half's points of the residual without it.
     let w = 2 * ctx.block_points();
     let (lo, hi) = (k.saturating_sub(w), (k + w).min(n));
-    let ev: Vec<usize> = (lo..hi).filter(|j| even(*j)).collect();
+    let ev: Vec<usize> = (lo..hi).filter(|j| fits(*j)).collect();
     let x: Vec<f64> = ev.iter().map(|j| d0[*j]).collect();
     let m = x.len();
     if m < 4 {
         return refused("too few points around the step");
     }
-    let mean = x.iter().sum::<f64>() / m as f64;
-    let mut cs = vec![0.0; m + 1];
-    for (q, v) in x.iter().enumerate() {
-        cs[q + 1] = cs[q] + v - mean;
-    }
-    let q = (1..m)
-        .max_by(|&a, &b| {
-            let st = |q: usize| cs[q] * cs[q] / (q as f64 * (m - q) as f64);
-            st(a).total_cmp(&st(b))
-        })
-        .unwrap_or(m / 2);
+    let q = locate_step(&x, 1, m);
     // The other half's point between the last fit point before and the first after places the
     // step (by the level it is nearer) and is not scored: it says where, not whether.
     let mid = ev[q] - 1;
@@ -564,18 +570,17 @@ fn step_test_half(
     };
     let mut with = terms.to_vec();
     with[i] = SlowTerm::Step { k: at };
-    let Some((c1, b1)) = fit(&with) else {
-        return refused("the model with the step is not determined on the even points");
+    let Some((d1, b1)) = residual(&with) else {
+        return refused("the model with the step is not determined on the fitting half");
     };
     let e0 = innovations(&d0, &p, &|_| true).0;
-    let d1 = ctx.open_loop_with(&ctx.all_columns(&with), c1, &b1);
     let e1 = innovations(&d1, &p, &|_| true).0;
     let mut t = held_out_test(
         terms[i].family(),
         describe(&with[i], ctx.dt_s),
         &e0,
         &e1,
-        |j| !even(j) && j != mid,
+        |j| !fits(j) && j != mid,
         level,
         GainNoise {
             min_var: 0.0,
@@ -608,6 +613,9 @@ fn test_term(
     // H0 under the full model's wander (GLS: the term judged by its coefficient, so a step is
     // not scored only by the transient of a wander inflated to absorb it) ...
     let f0 = ctx.fit_under(&without, &full.wander)?;
+    if let SlowTerm::Step { k } = terms[i] {
+        return Some(step_test(ctx, terms, full, i, k, level));
+    }
     let e0 = ctx.one_step(&without, &f0, &full.wander.best);
     // ... and, as a guard, the two models each with its own wander fitted: the term must not
     // worsen held-out error then either (measured: without this guard a warm-up was credited
@@ -627,9 +635,6 @@ fn test_term(
             hac_lags: HAC_LAGS,
         },
     );
-    if let SlowTerm::Step { k } = terms[i] {
-        return Some(step_test(ctx, terms, full, i, k, level));
-    }
     if t.kept {
         let (mut g0, mut g1) = (0.0, 0.0);
         for k in (0..e1.len()).filter(|k| ctx.held[*k]) {

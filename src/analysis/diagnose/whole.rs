@@ -32,7 +32,7 @@ use super::blocks::{Blocks, GainNoise, HeldOutTest, held_out_test, step_means};
 use super::lines::{BlockLine, contribution, contribution_in_sample, line_candidates, track};
 use super::paper_split::ChannelInput;
 use super::result::{DeploymentFit, ResidualPlots};
-use super::slow::{SlowCtx, SlowTerm, lagged, select};
+use super::slow::{SlowCtx, SlowTerm, lagged, locate_step, select};
 use super::wander::{WanderKind, WanderParams, classify, innovations};
 use crate::analysis::AnalysisError;
 use crate::analysis::quantisation::{Quantisation, quantisation};
@@ -270,22 +270,6 @@ fn subtract_term(
             None => 0,
         },
     }
-}
-
-/// Least-squares location of one mean shift of `x` within `lo..hi` (prefix sums).
-fn locate_step(x: &[f64], lo: usize, hi: usize) -> usize {
-    let m = x.len();
-    let mean = x.iter().sum::<f64>() / m as f64;
-    let mut cs = vec![0.0; m + 1];
-    for (k, v) in x.iter().enumerate() {
-        cs[k + 1] = cs[k] + v - mean;
-    }
-    (lo.max(1)..hi.min(m - 1).max(lo.max(1) + 1))
-        .max_by(|&a, &b| {
-            let st = |k: usize| cs[k] * cs[k] / (k as f64 * (m - k) as f64);
-            st(a).total_cmp(&st(b))
-        })
-        .unwrap_or(lo)
 }
 
 /// Diagnose one channel over the whole log; `progress` gets a word per stage.
