@@ -277,7 +277,9 @@ impl SlowCtx<'_> {
     }
 
     /// Candidates from the selection points' residual of the current model.
-    fn candidates(&self, terms: &[SlowTerm], f: &SlowFit, min_gap: usize) -> Vec<SlowTerm> {
+    /// Two steps within a block of each other are one.
+    fn candidates(&self, terms: &[SlowTerm], f: &SlowFit) -> Vec<SlowTerm> {
+        let min_gap = self.block;
         let d = self.open_loop(terms, f);
         let idx: Vec<usize> = (0..d.len()).filter(|k| !self.held[*k]).collect();
         let da: Vec<f64> = idx.iter().map(|k| d[*k]).collect();
@@ -678,18 +680,13 @@ fn test_term(
 /// its own wander fitted on the selection points, and the weakest failing term is dropped, until every term passes at α / terms. Candidates that confound each other (a
 /// warm-up and a step fitted in its place) are so judged together. A new round proposes
 /// candidates on what the survivors leave; at most `max_terms` terms, three rounds.
-pub fn select(
-    ctx: &SlowCtx,
-    alpha: f64,
-    max_terms: usize,
-    min_gap: usize,
-) -> Option<SlowSelection> {
+pub fn select(ctx: &SlowCtx, alpha: f64, max_terms: usize) -> Option<SlowSelection> {
     let mut terms: Vec<SlowTerm> = Vec::new();
     let mut fit = ctx.fit(&terms, false)?;
     let mut tests: Vec<HeldOutTest> = Vec::new();
     let mut rejected: Vec<HeldOutTest> = Vec::new();
     for _ in 0..3 {
-        let cands = ctx.candidates(&terms, &fit, min_gap);
+        let cands = ctx.candidates(&terms, &fit);
         if cands.is_empty() {
             break;
         }

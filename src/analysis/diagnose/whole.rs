@@ -407,8 +407,7 @@ pub fn diagnose_whole(
         lsb,
         block: blocks.len / dec,
     };
-    let min_gap = blocks.len / dec;
-    let slow = select(&ctx, s.alpha, s.max_slow_terms, min_gap)
+    let slow = select(&ctx, s.alpha, s.max_slow_terms)
         .ok_or_else(|| AnalysisError::singular("slow model"))?;
     rejected.extend(slow.rejected.iter().cloned());
     // 3. Wander of what the slow model leaves.
